@@ -1,0 +1,122 @@
+"""liftd.toml as frozen pydantic models (`extra="forbid"`, bounded fields).
+
+The keys of DESIGN.md §3.4 are a contract; every other key has a default. Units that are not
+SI are in the key name (`cycle_time_us`, `m_ack_delay_ms`).
+"""
+
+from __future__ import annotations
+
+import ipaddress
+import re
+from typing import Literal
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator
+
+NET_ID = re.compile(r"^(\d{1,3})\.(\d{1,3})\.(\d{1,3})\.(\d{1,3})\.(\d{1,3})\.(\d{1,3})$")
+
+
+def check_net_id(value: str) -> str:
+    match = NET_ID.match(value)
+    if match is None or any(int(part) > 255 for part in match.groups()):
+        raise ValueError("an AMS NetId is six numbers 0..255 joined by dots, e.g. 127.0.0.1.1.1")
+    return value
+
+
+class _Section(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+
+class CncSection(_Section):
+    startup_list: str = "cnc/hochlauf.lis"  # relative to liftd.toml
+    channel: int = Field(1, ge=1, le=12)  # logical channel id
+    lift_axis: str = Field("Z", min_length=1, max_length=1)
+    cycle_time_us: int = Field(1000, ge=250, le=10000)
+
+
+class ProgramSection(_Section):
+    file: str | None = "programs/demo.nc"  # relative to liftd.toml; optional
+    autostart: bool = True
+    repeat: bool = False
+
+
+class AdsSection(_Section):
+    host: str = "127.0.0.1"
+    port: int = Field(48898, ge=0, le=65535)  # 0 = any free port (the real one is logged)
+    net_id: str = "127.0.0.1.1.1"
+    extra_net_ids: tuple[str, ...] = ()  # further NetIds this target answers for
+    ams_ports: tuple[int, ...] = (551,)  # hosted AMS ports; 551 = GEO task
+    max_connections: int = Field(64, ge=1, le=10000)
+    max_frame_bytes: int = Field(1 << 20, ge=1024, le=64 << 20)
+    max_sum_subcommands: int = Field(1000, ge=500, le=100000)
+    max_handles_per_connection: int = Field(1024, ge=1, le=100000)
+    max_notifications_per_connection: int = Field(512, ge=1, le=100000)
+    min_notification_cycle_us: int = Field(1000, ge=100, le=10_000_000)
+    write_queue_frames: int = Field(1024, ge=16, le=1_000_000)
+    incomplete_frame_timeout_s: float = Field(10.0, gt=0.0, le=3600.0)
+    allow_ips: tuple[str, ...] = ("127.0.0.0/8", "::1/128")  # peer IP ranges; empty = all
+    allow_net_ids: tuple[str, ...] = ()  # source NetIds; empty = all
+    write_net_ids: tuple[str, ...] = ()  # NetIds allowed to write; empty = all allowed peers
+    reject: Literal["close", "error"] = "close"  # unknown source: close, or answer 0x723
+
+    @field_validator("net_id")
+    @classmethod
+    def _net_id(cls, value: str) -> str:
+        return check_net_id(value)
+
+    @field_validator("extra_net_ids", "allow_net_ids", "write_net_ids")
+    @classmethod
+    def _net_ids(cls, values: tuple[str, ...]) -> tuple[str, ...]:
+        for value in values:
+            check_net_id(value)
+        return values
+
+    @field_validator("allow_ips")
+    @classmethod
+    def _ips(cls, values: tuple[str, ...]) -> tuple[str, ...]:
+        for value in values:
+            ipaddress.ip_network(value, strict=False)
+        return values
+
+    @field_validator("ams_ports")
+    @classmethod
+    def _ports(cls, values: tuple[int, ...]) -> tuple[int, ...]:
+        if not values or any(not 1 <= p <= 65535 for p in values):
+            raise ValueError("AMS ports are 1..65535, at least one")
+        return values
+
+
+class PlcSection(_Section):
+    """How the emulated CNC waits for the PLC (M-function acknowledge, M00 continue)."""
+
+    m_ack: Literal["auto", "plc"] = "auto"  # auto: acknowledge after m_ack_delay_ms
+    m_ack_delay_ms: float = Field(20.0, ge=0.0, le=60000.0)
+
+
+class RtSection(_Section):
+    """Best-effort real-time settings of the GEO loop process (each reported at start-up)."""
+
+    sched_fifo_priority: int = Field(80, ge=0, le=99)  # 0 = do not ask for SCHED_FIFO
+    cpu: int = Field(-1, ge=-1, le=1023)  # -1 = no pinning
+    lock_memory: bool = True
+    hold_cpu_dma_latency: bool = True
+    timer_slack_ns: int = Field(1, ge=0, le=1_000_000)
+
+
+class LogSection(_Section):
+    level: Literal["debug", "info", "warning", "error"] = "info"
+    format: Literal["auto", "json", "console"] = "auto"  # auto: JSON when not a TTY
+
+
+class MetricsSection(_Section):
+    prometheus_port: int = Field(0, ge=0, le=65535)  # 0 = off
+    prometheus_host: str = "127.0.0.1"
+
+
+class LiftdConfig(_Section):
+    cnc: CncSection = CncSection()
+    program: ProgramSection = ProgramSection()
+    ads: AdsSection = AdsSection()
+    plc: PlcSection = PlcSection()
+    rt: RtSection = RtSection()
+    log: LogSection = LogSection()
+    metrics: MetricsSection = MetricsSection()
