@@ -1,0 +1,75 @@
+"""Build a G02/G03 circle in the G17 plane from the programmed words, with the ISG checks.
+
+Centre by I/J (relative to the start under G162, absolute under G161) or by radius R (G163:
+R > 0 shorter arc, R < 0 longer arc; a full circle with R is error 20034). The difference of
+start and end radius must not exceed P-CHAN-00171 (error 21758); an accepted difference is
+removed by moving the centre onto the perpendicular bisector (liftd's choice, documented in the
+README), so the arc is an exact circle through both points.
+"""
+
+from __future__ import annotations
+
+import math
+
+from liftd.cnc.nc.blocks import ErrorId, NcFault
+from liftd.cnc.path.geometry import arc_sweep, center_from_radius, corrected_center
+
+
+def build_arc(
+    start: tuple[float, ...],
+    end: tuple[float, ...],
+    ccw: bool,
+    i_j: tuple[float | None, float | None],
+    center_absolute: bool,
+    radius: float | None,
+    max_radius_diff: float,
+    column: int,
+) -> tuple[tuple[float, float], float]:
+    """Return (centre, signed sweep) or raise NcFault."""
+    if len(start) < 2:
+        raise NcFault(ErrorId.ARC_GEOMETRY, column, "circles need two axes in the G17 plane")
+    for k in range(2, len(start)):
+        if abs(end[k] - start[k]) > 0.0:
+            raise NcFault(
+                ErrorId.HELIX,
+                column,
+                "circle with motion outside the G17 plane (helix) is not emulated",
+            )
+    p0 = (start[0], start[1])
+    p1 = (end[0], end[1])
+    if i_j != (None, None):
+        i = i_j[0] or 0.0
+        j = i_j[1] or 0.0
+        center = (i, j) if center_absolute else (p0[0] + i, p0[1] + j)
+        r0 = math.hypot(p0[0] - center[0], p0[1] - center[1])
+        r1 = math.hypot(p1[0] - center[0], p1[1] - center[1])
+        if r0 <= 0.0:
+            raise NcFault(ErrorId.ARC_GEOMETRY, column, "circle centre equals the start point")
+        diff = abs(r0 - r1)
+        if diff > max_radius_diff:
+            raise NcFault(
+                ErrorId.RADIUS_DIFFERENCE,
+                column,
+                f"end point not on the circle: start radius {r0 * 1e3:.4f} mm, end radius "
+                f"{r1 * 1e3:.4f} mm, difference {diff * 1e3:.4f} mm > "
+                f"{max_radius_diff * 1e3:.4f} mm (P-CHAN-00171)",
+            )
+        center = corrected_center(p0, p1, center)
+    else:
+        if radius is None:
+            raise NcFault(ErrorId.ARC_GEOMETRY, column, "circle needs I/J or R")
+        if math.hypot(p1[0] - p0[0], p1[1] - p0[1]) == 0.0:
+            raise NcFault(
+                ErrorId.FULL_CIRCLE_RADIUS,
+                column,
+                "full circle cannot be programmed with R; use I/J",
+            )
+        found = center_from_radius(p0, p1, radius, ccw)
+        if found is None:
+            raise NcFault(
+                ErrorId.ARC_GEOMETRY,
+                column,
+                f"radius {abs(radius) * 1e3:.4f} mm is smaller than half the chord",
+            )
+        center = found
+    return center, arc_sweep(p0, p1, center, ccw)

@@ -1,0 +1,160 @@
+"""Decoded NC blocks and NC errors: what the decoder hands to path preparation.
+
+Positions are absolute, in m, one value per channel axis in channel order; feeds in m/s.
+The per-block records are NamedTuples: immutable and cheap to build (decoding 100 000 blocks
+must stay under 2 s on a 2-vCPU VM, where a frozen dataclass __init__ alone costs ~2 µs).
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass
+from typing import NamedTuple
+
+from liftd.cnc.params import SlopeType
+
+
+class ErrorId(enum.IntEnum):
+    """NC error ids: ISG ids where the vendor documents one, liftd's own (99xxxx) otherwise."""
+
+    # ISG ids (vendor text §2.1.1, §2.3; reference/isg-cnc.md §4.8; TF5200 diagnosis pages)
+    LIFT_ALREADY_ACTIVE = 21558  # LIFT already active, LIFT_END expected
+    LIFT_NOT_ACTIVE = 21559  # LIFT already deactivated, LIFT_START expected
+    LIFT_SECOND_START = 120604  # second lift start while a lift is active
+    LIFT_AXIS_MISMATCH = 120605  # LIFT_START and LIFT_END for different axes
+    LIFT_ROTATION_IN_RANGE = 120606  # #ROTATION / #TRAFO ON|OFF inside the lift range
+    LIFT_HSC_SLOPE = 120711  # HSC slope (type 3) with Advanced Lifting
+    FEED_ZERO = 20008  # motion block with feed 0 / no F programmed
+    DOUBLE_F = 20175  # more than one F word in a block
+    FULL_CIRCLE_RADIUS = 20034  # full circle programmed with R
+    DWELL_VALUE_AND_AXIS = 20013  # G04 with a direct value and an axis
+    DWELL_WITH_AXES = 20685  # warning: other axes programmed in the G04 block
+    RADIUS_DIFFERENCE = 21758  # radius difference start/end exceeds P-CHAN-00171
+    # Software-limit messages of path preparation (the ids MCV_SuppressSoftLimSw lists,
+    # https://infosys.beckhoff.com/content/1033/tccncmcplatform_fb/15306250379.html;
+    # which of the two is positive/negative is our assumption).
+    SW_LIMIT_POS = 50041
+    SW_LIMIT_NEG = 50042
+    # liftd's own ids
+    SYNTAX = 990001  # unknown character or word
+    NUMBER = 990002  # missing or malformed number
+    COMMENT_OPEN = 990003  # #COMMENT BEGIN without #COMMENT END
+    UNSUPPORTED = 990004  # valid ISG, not emulated by liftd
+    LIFT_AXIS_PROGRAMMED = 990005  # lift axis programmed inside a lift range
+    LIFT_DOWN_PATH_BASED = 990006  # DOWN with path-based Lifting (vendor §2.2)
+    LIFT_NO_METHOD = 990007  # lift command but no lift method enabled in the lists
+    LIFT_POS_LIMIT_MISSING = 990008  # POS_LIMIT is mandatory
+    LIFT_SYNTAX = 990009  # malformed lift command
+    ZERO_LENGTH = 990010  # warning: motion block without motion
+    HELIX = 990011  # circle with motion outside the plane
+    ARC_GEOMETRY = 990012  # circle cannot be constructed
+    AXIS_TWICE = 990013  # a word programmed twice in one block
+    M_NOT_CONFIGURED = 990014  # M function without m_synch entry
+    LIFT_DOWN_LIMIT_SIDE = 990015  # DOWN with POS_LIMIT above start and target
+    DWELL_MISSING = 990016  # G04 without a time
+    LIFT_WRONG_AXIS = 990017  # lift command on an axis that is not the configured lift axis
+    UNKNOWN_AXIS = 990018  # address letter that is not an axis of the channel
+
+
+class Severity(enum.Enum):
+    ERROR = "error"
+    WARNING = "warning"
+
+
+class NcFault(Exception):
+    """Raised inside the decoder for one block; becomes an NcError with the line."""
+
+    def __init__(self, error_id: ErrorId, column: int, message: str) -> None:
+        super().__init__(message)
+        self.error_id = error_id
+        self.column = column
+        self.message = message
+
+
+@dataclass(frozen=True, slots=True)
+class NcError:
+    id: int
+    line: int  # 1-based source line
+    column: int  # 1-based column of the offending word
+    message: str
+    severity: Severity = Severity.ERROR
+
+    def __str__(self) -> str:
+        return f"{self.line}:{self.column}: {self.severity.value} {self.id}: {self.message}"
+
+
+class MotionKind(enum.Enum):
+    RAPID = "G00"
+    LINEAR = "G01"
+    ARC_CW = "G02"
+    ARC_CCW = "G03"
+
+
+class Motion(NamedTuple):
+    kind: MotionKind
+    start: tuple[float, ...]  # m, every channel axis
+    end: tuple[float, ...]
+    feed: float  # m/s programmed (F); inf for G00 (axis limits only)
+    center: tuple[float, float] | None = None  # arcs: centre in the G17 plane (axes 0, 1), m
+    sweep: float = 0.0  # arcs: signed angle, rad (CCW positive); ±2π for a full circle
+
+
+class FlushKind(enum.Enum):
+    FLUSH = "#FLUSH"
+    WAIT = "#FLUSH WAIT"
+    CONTINUE = "#FLUSH CONTINUE"
+
+
+class LiftEndCause(enum.Enum):
+    PROGRAMMED = "LIFT_END"
+    SINGLE_BLOCK = "LIFT"
+    FLUSH = "#FLUSH"  # implicit LIFT_END + LIFT_START (vendor §2.4)
+    PROGRAM_END = "program end"  # implicit LIFT_END at the end (vendor §2.4)
+
+
+class LiftStart(NamedTuple):
+    """Start of a lift range; takes effect at the beginning of its block's motion."""
+
+    axis: str
+    z_start: float  # programmed lift-axis position at the start, m
+    target: float  # POS, absolute, m (default: the current command position)
+    pos_limit: float  # POS_LIMIT, absolute, m
+    down: bool
+    line: int  # line of the programmed LIFT_START / LIFT
+    single_block: bool = False
+    implicit: bool = False  # re-start inserted after #FLUSH
+
+
+class LiftEnd(NamedTuple):
+    """End of a lift range; takes effect at the end of its block's motion."""
+
+    axis: str
+    cause: LiftEndCause
+    start_line: int
+
+
+class Block(NamedTuple):
+    line: int  # 1-based source line
+    n: int | None = None
+    motion: Motion | None = None
+    dwell: float | None = None  # s (G04, #TIME)
+    m_functions: tuple[int, ...] = ()
+    flush: FlushKind | None = None
+    slope: SlopeType | None = None
+    lift_start: LiftStart | None = None
+    lift_end: LiftEnd | None = None
+    program_end: bool = False  # M02 / M30
+
+
+@dataclass(frozen=True, slots=True)
+class DecodeResult:
+    """Blocks decoded before the first error (the vendor's "last correctly decoded point"),
+    plus every error and warning found in the whole text."""
+
+    blocks: tuple[Block, ...]
+    errors: tuple[NcError, ...]
+    open_lift: LiftStart | None  # a lift range still open where execution stops
+
+    @property
+    def first_error(self) -> NcError | None:
+        return next((e for e in self.errors if e.severity is Severity.ERROR), None)

@@ -1,0 +1,70 @@
+"""`#` commands of the ISG dialect that liftd understands (isg-cnc.md §4.9, §5).
+
+#FLUSH, #FLUSH WAIT, #FLUSH CONTINUE; #SLOPE [TYPE=STEP|TRAPEZ|SIN2|HSC [NO_OPT=0|1]] and
+#SLOPE DEFAULT; #TIME <s>. #ROTATION, #TRAFO and #CS are recognised so that the lift-specific
+errors can be given; liftd does not emulate coordinate transformations.
+"""
+
+from __future__ import annotations
+
+import enum
+import re
+from dataclasses import dataclass
+
+from liftd.cnc.nc.blocks import ErrorId, FlushKind, NcFault
+from liftd.cnc.nc.lexer import NUMBER_RE, Token
+from liftd.cnc.params import SlopeType
+
+
+class CommandKind(enum.Enum):
+    FLUSH = "flush"
+    SLOPE = "slope"
+    SLOPE_DEFAULT = "slope default"
+    TIME = "time"
+    TRANSFORM = "transform"  # #ROTATION / #TRAFO: forbidden inside a lift range (120606)
+    CS = "cs"
+
+
+@dataclass(frozen=True, slots=True)
+class CommandResult:
+    kind: CommandKind
+    column: int
+    flush: FlushKind | None = None
+    slope: SlopeType | None = None
+    seconds: float | None = None
+    text: str = ""
+
+
+_SLOPE = re.compile(r"#SLOPE\s*\[\s*TYPE\s*=\s*([A-Z0-9]+)\s*(NO_OPT\s*=\s*[01]\s*)?\]\Z")
+
+
+def parse_command(token: Token) -> CommandResult:
+    """Parse one # command token; raises NcFault."""
+    text = " ".join(token.text.upper().split())
+    col = token.column
+    if text in ("#FLUSH", "#FLUSH WAIT", "#FLUSH CONTINUE"):
+        return CommandResult(CommandKind.FLUSH, col, flush=FlushKind(text))
+    if text.startswith("#SLOPE"):
+        if text == "#SLOPE DEFAULT":
+            return CommandResult(CommandKind.SLOPE_DEFAULT, col)
+        m = _SLOPE.match(text)
+        if m is None:
+            raise NcFault(ErrorId.SYNTAX, col, "#SLOPE needs [TYPE=STEP|TRAPEZ|SIN2|HSC]")
+        try:
+            slope = SlopeType[m.group(1)]
+        except KeyError:
+            raise NcFault(
+                ErrorId.SYNTAX, col, f"unknown slope type {m.group(1)} (STEP|TRAPEZ|SIN2|HSC)"
+            ) from None
+        return CommandResult(CommandKind.SLOPE, col, slope=slope)
+    if text.startswith("#TIME"):
+        value = text[len("#TIME") :].strip()
+        if NUMBER_RE.fullmatch(value) is None or float(value) < 0.0:
+            raise NcFault(ErrorId.DWELL_MISSING, col, "#TIME needs a time in seconds >= 0")
+        return CommandResult(CommandKind.TIME, col, seconds=float(value))
+    if text.startswith(("#ROTATION", "#TRAFO")):
+        return CommandResult(CommandKind.TRANSFORM, col, text=text)
+    if text.startswith("#CS"):
+        return CommandResult(CommandKind.CS, col, text=text)
+    name = text.split("[", 1)[0].split(" ", 1)[0]
+    raise NcFault(ErrorId.UNSUPPORTED, col, f"{name} is not emulated by liftd")
