@@ -1,0 +1,99 @@
+"""Command line (DESIGN.md §3.1). The only place that maps errors to exit codes:
+0 ok, 1 NC program error, 2 configuration error, 3 runtime failure."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+from liftd import __version__
+from liftd.cnc.nc import DecoderContext, Severity, decode
+from liftd.settings import ConfigError, Settings, load_settings
+
+EXIT_OK = 0
+EXIT_PROGRAM = 1
+EXIT_CONFIG = 2
+EXIT_RUNTIME = 3
+
+
+def _print_config_error(err: ConfigError) -> None:
+    for problem in err.problems:
+        print(problem, file=sys.stderr)
+
+
+def _load(args: argparse.Namespace, program: str | None = None) -> Settings:
+    settings = load_settings(args.config, program)
+    for warning in settings.warnings:
+        print(warning, file=sys.stderr)
+    return settings
+
+
+def check_program(settings: Settings, path: Path) -> int:
+    """Decode one program and print its problems; returns the number of errors."""
+    try:
+        text = path.read_text(encoding="utf-8", errors="replace")
+    except OSError as exc:
+        print(f"{path}: error: cannot read program: {exc.strerror or exc}", file=sys.stderr)
+        return 1
+    result = decode(text, DecoderContext.from_channel(settings.channel))
+    errors = 0
+    for problem in result.errors:
+        print(f"{path}:{problem}", file=sys.stderr)
+        errors += problem.severity is Severity.ERROR
+    if not errors:
+        lifts = sum(
+            1 for b in result.blocks if b.lift_start is not None and not b.lift_start.implicit
+        )
+        print(f"{path}: ok ({len(result.blocks)} blocks, {lifts} lift ranges)")
+    return errors
+
+
+def cmd_check(args: argparse.Namespace) -> int:
+    try:
+        settings = _load(args)
+    except ConfigError as err:
+        _print_config_error(err)
+        return EXIT_CONFIG
+    ch = settings.channel
+    axes = " ".join(ax.name for ax in ch.axes)
+    print(
+        f"{settings.path}: ok (channel {ch.channel_id}: axes {axes}, lift axis {ch.lift_axis}, "
+        f"method {ch.lift_method.value}, cycle {round(ch.cycle_time * 1e6)} µs, "
+        f"look-ahead {ch.look_ahead_blocks} blocks)"
+    )
+    programs = [Path(p) for p in args.programs] or (
+        [settings.program] if settings.program is not None else []
+    )
+    failed = sum(check_program(settings, path) > 0 for path in programs)
+    return EXIT_PROGRAM if failed else EXIT_OK
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="liftd",
+        description="Emulated TwinCAT 3 CNC GEO task: collision avoidance by lifting, over ADS.",
+    )
+    parser.add_argument("--version", action="version", version=f"liftd {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    check = sub.add_parser("check", help="validate the configuration and NC programs")
+    check.add_argument(
+        "-c",
+        "--config",
+        help="liftd.toml (default: $LIFTD_CONFIG, ./config/liftd.toml, the packaged default)",
+    )
+    check.add_argument("programs", nargs="*", help="NC programs (default: the configured one)")
+    check.set_defaults(func=cmd_check)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        code: int = args.func(args)
+    except KeyboardInterrupt:
+        return 130
+    return code

@@ -1,0 +1,3 @@
+; expect 21559 line 3
+N10 G01 X10 Y10 Z1 F6000
+N20 Z[LIFT_END]

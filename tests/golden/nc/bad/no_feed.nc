@@ -1,0 +1,2 @@
+; expect 20008 line 2
+N10 G01 X10 Y10

@@ -1,0 +1,90 @@
+"""`liftd check` as a user runs it: subprocess, exit codes, messages on stderr."""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import pytest
+
+from tests.conftest import GOLDEN, REPO
+
+pytestmark = pytest.mark.integration
+
+
+def liftd(*args: str, cwd: Path | None = None, env: dict[str, str] | None = None
+          ) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "liftd", *args], capture_output=True, text=True, timeout=60,
+        cwd=cwd, env=env,
+    )
+
+
+@pytest.mark.parametrize("config", ["config/liftd.toml", "config/liftd-lifting.toml"])
+def test_shipped_configs_and_demo_check_clean(config: str) -> None:
+    r = liftd("check", "-c", str(REPO / config))
+    assert r.returncode == 0, r.stderr
+    assert r.stderr == ""
+    assert "demo.nc: ok (" in r.stdout
+
+
+def test_configuration_error_exits_2_with_location(tmp_path: Path) -> None:
+    bad = tmp_path / "liftd.toml"
+    bad.write_text('[cnc]\nstartup_list = "x/hochlauf.lis"\ncycle_time_us = 99\n')
+    r = liftd("check", "-c", str(bad))
+    assert r.returncode == 2
+    assert f"{bad}:3: cnc.cycle_time_us = '99' error:" in r.stderr
+
+
+def test_list_error_exits_2_with_location(machine) -> None:  # type: ignore[no-untyped-def]
+    cfg = machine({"cnc/achsmds3.lis": {"getriebe[0].dynamik.tr_min": "fast"}})
+    r = liftd("check", "-c", str(cfg))
+    assert r.returncode == 2
+    assert re.search(r"achsmds3\.lis:\d+: getriebe\[0\]\.dynamik\.tr_min = 'fast' error: "
+                     r"expected an integer", r.stderr), r.stderr
+
+
+def program_cases() -> list[Path]:
+    return sorted((GOLDEN / "nc" / "bad").glob("*.nc"))
+
+
+@pytest.mark.parametrize("program", program_cases(), ids=lambda p: p.stem)
+def test_golden_bad_programs(program: Path) -> None:
+    m = re.match(r"; expect (\d+) line (\d+)", program.read_text().splitlines()[0])
+    assert m, "first line must be '; expect <id> line <n>'"
+    r = liftd("check", "-c", str(REPO / "config" / "liftd.toml"), str(program))
+    assert r.returncode == 1
+    first = r.stderr.splitlines()[0]
+    assert first.startswith(f"{program}:{m.group(2)}:")
+    assert f" error {m.group(1)}: " in first
+
+
+def test_unreadable_program_is_a_program_error(tmp_path: Path) -> None:
+    r = liftd("check", "-c", str(REPO / "config" / "liftd.toml"), str(tmp_path / "none.nc"))
+    assert r.returncode == 1 and "cannot read program" in r.stderr
+
+
+def test_wheel_ships_the_default_config_and_runs_from_anywhere(tmp_path: Path) -> None:
+    subprocess.run(
+        [sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q",
+         "-w", str(tmp_path / "dist"), str(REPO)], check=True, timeout=120,
+    )
+    (wheel,) = (tmp_path / "dist").glob("liftd-*.whl")
+    names = zipfile.ZipFile(wheel).namelist()
+    assert "liftd/_config/liftd.toml" in names
+    assert "liftd/_config/programs/demo.nc" in names
+    assert "liftd/_config/cnc/hochlauf.lis" in names
+    target = tmp_path / "site"
+    with zipfile.ZipFile(wheel) as zf:
+        zf.extractall(target)
+    env = {**os.environ, "PYTHONPATH": str(target)}
+    env.pop("LIFTD_CONFIG", None)
+    work = tmp_path / "elsewhere"
+    work.mkdir()
+    r = liftd("check", cwd=work, env=env)
+    assert r.returncode == 0, r.stderr
+    assert str(target / "liftd" / "_config" / "liftd.toml") in r.stdout
