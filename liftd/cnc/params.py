@@ -8,6 +8,11 @@ from __future__ import annotations
 import enum
 from dataclasses import dataclass, field
 
+# Every planner uses the axis limits scaled by (1 − PLANNING_MARGIN), so that the sampled
+# command positions stay strictly within the limits when differentiated by finite differences
+# despite floating-point rounding (seen: 20 ulp of position = 6e-9 of the jerk limit).
+PLANNING_MARGIN = 1e-6
+
 
 class LiftMethod(enum.Enum):
     """Resulting lift method of a channel (activation rules, DESIGN.md §3.4)."""

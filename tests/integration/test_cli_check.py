@@ -16,11 +16,17 @@ from tests.conftest import GOLDEN, REPO
 pytestmark = pytest.mark.integration
 
 
-def liftd(*args: str, cwd: Path | None = None, env: dict[str, str] | None = None
-          ) -> subprocess.CompletedProcess[str]:
+def liftd(
+    *args: str, cwd: Path | None = None, env: dict[str, str] | None = None
+) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
-        [sys.executable, "-m", "liftd", *args], capture_output=True, text=True, timeout=60,
-        cwd=cwd, env=env,
+        [sys.executable, "-m", "liftd", *args],
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        cwd=cwd,
+        env=env,
     )
 
 
@@ -44,8 +50,11 @@ def test_list_error_exits_2_with_location(machine) -> None:  # type: ignore[no-u
     cfg = machine({"cnc/achsmds3.lis": {"getriebe[0].dynamik.tr_min": "fast"}})
     r = liftd("check", "-c", str(cfg))
     assert r.returncode == 2
-    assert re.search(r"achsmds3\.lis:\d+: getriebe\[0\]\.dynamik\.tr_min = 'fast' error: "
-                     r"expected an integer", r.stderr), r.stderr
+    assert re.search(
+        r"achsmds3\.lis:\d+: getriebe\[0\]\.dynamik\.tr_min = 'fast' error: "
+        r"expected an integer",
+        r.stderr,
+    ), r.stderr
 
 
 def program_cases() -> list[Path]:
@@ -70,8 +79,20 @@ def test_unreadable_program_is_a_program_error(tmp_path: Path) -> None:
 
 def test_wheel_ships_the_default_config_and_runs_from_anywhere(tmp_path: Path) -> None:
     subprocess.run(
-        [sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q",
-         "-w", str(tmp_path / "dist"), str(REPO)], check=True, timeout=120,
+        [
+            sys.executable,
+            "-m",
+            "pip",
+            "wheel",
+            "--no-deps",
+            "--no-build-isolation",
+            "-q",
+            "-w",
+            str(tmp_path / "dist"),
+            str(REPO),
+        ],
+        check=True,
+        timeout=120,
     )
     (wheel,) = (tmp_path / "dist").glob("liftd-*.whl")
     names = zipfile.ZipFile(wheel).namelist()
