@@ -1,0 +1,381 @@
+"""GeoTask.step(inputs, t) -> GeoSnapshot: one GEO cycle of the emulated CNC channel.
+
+Pure and deterministic: time is passed in, nothing is read from a clock, nothing is logged; the
+same inputs give bit-identical snapshots. Order within a cycle:
+
+1. PLC inputs (command, M acknowledge, override, feed hold) take effect from the time of the
+   last state; Advanced Lifting may limit the override first;
+2. the path moves to t; the actions of every boundary it passes run at that boundary's exact
+   time; where the path rests, waiting actions (M acknowledge, dwell, M00, Z not yet at POS)
+   hold it, and it resumes at the exact time the wait ended;
+3. the lift axis moves to t against the absolute time the path reaches its horizon;
+4. the snapshot is published.
+"""
+
+from __future__ import annotations
+
+from liftd.cnc.geo_program import GeoProgram, load_program
+from liftd.cnc.lift.controller import LiftController
+from liftd.cnc.lift.ranges import LiftRange
+from liftd.cnc.params import ChannelParams, MSync
+from liftd.cnc.path.interpolator import Crossing, Interpolator
+from liftd.cnc.path.program import Action, ActionKind
+from liftd.cnc.snapshot import ChannelState, Command, Event, GeoInputs, GeoSnapshot, LiftPhase
+
+INF = float("inf")
+MAX_OVERRIDE = 2.0
+ACK_SYNCS = (MSync.MVS_SVS, MSync.MVS_SNS, MSync.MNS_SNS, MSync.MNE_SNS)
+
+
+class GeoTask:
+    """One CNC channel's GEO task running one NC program."""
+
+    def __init__(
+        self,
+        channel: ChannelParams,
+        program_text: str,
+        *,
+        autostart: bool = True,
+        start_position: tuple[float, ...] | None = None,
+    ) -> None:
+        self.ch = channel
+        self.text = program_text
+        self.autostart = autostart
+        self.z_index = channel.lift_axis_index
+        self.home = start_position or tuple(0.0 for _ in channel.axes)
+        self.state = ChannelState.READY
+        self.cycle = 0
+        self.t_cycle = 0.0
+        self.ov_eff = 1.0
+        self.ov_req = 1.0
+        self.ov_max = MAX_OVERRIDE
+        self.was_holding = False
+        self.stop_requested = False
+        self.reset_requested = False
+        self.m_pending = -1
+        self.m_acked: set[int] = set()
+        self.error_id = 0
+        self.error_line = 0
+        self.events: list[Event] = []
+        self.waiting: list[Action] = []  # actions left at the boundary where the path rests
+        self.wait_since = 0.0  # time from which the current wait counts
+        self.ack_time = 0.0
+        self.runs = 0
+        self.prog: GeoProgram
+        self.interp: Interpolator
+        self.lift: LiftController
+        self._load(self.home)
+
+    # -- program control ---------------------------------------------------------------------------
+    def _load(self, start: tuple[float, ...]) -> None:
+        self.prog = load_program(self.text, self.ch, start)
+        self.interp = Interpolator(self.prog.path, self.ch.look_ahead_blocks)
+        self.lift = LiftController(
+            self.ch.axis(self.ch.lift_axis), self.prog.ranges, self.ch.cycle_time
+        )
+        self.waiting = []
+        self.m_acked.clear()
+        self.m_pending = -1
+
+    def _start(self, t: float) -> None:
+        if self.state is ChannelState.READY:
+            if self.runs:
+                self._load(self._positions())  # a new run from where the last one ended
+            self.runs += 1
+            self.state = ChannelState.ACTIVE
+            self.interp.stopped_at = 0
+            self.interp.t_state = t
+            self.waiting = list(self.prog.path.boundaries[0].actions)
+            self.wait_since = t
+            self._emit("geo.program_start", t, self.prog.first_line)
+        elif self.state is ChannelState.HOLD:
+            if self.waiting and self.waiting[0].kind is ActionKind.M00:
+                self.waiting.pop(0)
+                self.wait_since = t
+            self.state = ChannelState.ACTIVE
+            self._emit("geo.resume", t, self.line)
+        self.stop_requested = False
+
+    def _command(self, cmd: Command, t: float) -> None:
+        if cmd is Command.START and self.state is not ChannelState.ERROR:
+            self._start(t)
+        elif cmd is Command.STOP and self.state is ChannelState.ACTIVE:
+            self.stop_requested = True
+        elif cmd is Command.RESET:
+            self.reset_requested = True
+            self.stop_requested = self.state is ChannelState.ACTIVE
+
+    def _settle(self, t: float) -> None:
+        """STOP and RESET complete once the path is at rest."""
+        at_rest = self.interp.v == 0.0 and self.interp.a == 0.0
+        if self.stop_requested and at_rest and self.state is ChannelState.ACTIVE:
+            self.stop_requested = False
+            self.state = ChannelState.HOLD
+            self._emit("geo.stopped", t, self.line)
+        if self.reset_requested and (at_rest or self.state is not ChannelState.ACTIVE):
+            self.reset_requested = self.stop_requested = False
+            self.state = ChannelState.READY
+            self.error_id = self.error_line = 0
+            self.m_pending = -1
+            self.waiting = []
+            # Z stays where it is (e.g. at POS_LIMIT after an error); the next START loads the
+            # program from the current positions.
+            self.lift.active = self.lift.suppressed = False
+            self._emit("geo.reset", t, self.line)
+
+    def _end_of_program(self, t: float, line: int) -> None:
+        err = self.prog.error
+        if err is not None:
+            if self.lift.current is not None:
+                self.lift.error_in_range(t)  # Z rises to POS_LIMIT and stays (vendor §2.4)
+            self.state = ChannelState.ERROR
+            self.error_id, self.error_line = err.id, err.line
+            self._emit("geo.error", t, err.line, float(err.id), err.message)
+        else:
+            self.state = ChannelState.READY
+            self._emit("geo.program_end", t, line)
+        self.waiting = []
+
+    # -- helpers ----------------------------------------------------------------------------------
+    def _emit(self, name: str, t: float, line: int, value: float = 0.0, text: str = "") -> None:
+        self.events.append(Event(name, t, line, value, text))
+
+    @property
+    def line(self) -> int:
+        if self.waiting:
+            return self.waiting[0].line
+        k = self.interp.stopped_at
+        if k is not None:
+            return self.prog.path.boundaries[k].line or self.prog.first_line
+        segs = self.prog.path.segments
+        return segs[min(self.interp.segment, len(segs) - 1)].line if segs else 0
+
+    def _positions(self) -> tuple[float, ...]:
+        pos = self.interp.position()
+        if self.lift.current is not None:
+            pos = (*pos[: self.z_index], self.lift.gen.z, *pos[self.z_index + 1 :])
+        return pos
+
+    # -- lift horizon and override --------------------------------------------------------------
+    def _horizon(self) -> int:
+        """Boundary the lift plans for: LIFT_END, or an earlier waiting point of the range."""
+        rng = self.lift.current
+        if rng is None or rng.k_end < 0:
+            return -1
+        ahead = self.interp.segment if self.interp.stopped_at is None else self.interp.stopped_at
+        for k in self.prog.stops_in(rng):
+            if k > ahead:
+                return k
+        return rng.k_end
+
+    def _arrival(self) -> float:
+        k = self._horizon()
+        return INF if k < 0 else self.interp.arrival(k)
+
+    def _limit_override(self, ov_req: float, holding: bool) -> float:
+        """Advanced Lifting's override rules (vendor §2.5, DESIGN.md §4): while Z descends the
+        override is clamped to its value at descent start; while Z rises (or goes straight to
+        POS) an increase, or a restart after feed hold, is accepted only as far as Z still lands
+        on time; a decrease is always accepted."""
+        lift = self.lift
+        phase = lift.phase
+        self.ov_max = MAX_OVERRIDE
+        if phase in (LiftPhase.NONE, LiftPhase.DONE, LiftPhase.HOLD_LIMIT) or holding:
+            return ov_req
+        if phase is LiftPhase.DOWN and lift.ov_at_descent is not None:
+            self.ov_max = lift.ov_at_descent
+            return min(ov_req, self.ov_max)
+        k = self._horizon()
+        need_abs = self.interp.t_state + lift.needed_time() + self.ch.cycle_time
+        arrival = self.interp.arrival(k) if k >= 0 else INF
+        if arrival != INF and lift.needed_time() > 0.0:
+            span = arrival - self.interp.t_state
+            self.ov_max = min(MAX_OVERRIDE, self.ov_eff * span / (need_abs - self.interp.t_state))
+        changing = ov_req > self.ov_eff or self.was_holding
+        if k < 0 or not changing or self.interp.stopped_at is not None:
+            return ov_req
+        if self.interp.trial_time(k, ov_req) >= need_abs:
+            return ov_req
+        lo, hi = 0.0, ov_req
+        for _ in range(12):
+            mid = 0.5 * (lo + hi)
+            if self.interp.trial_time(k, mid) >= need_abs:
+                lo = mid
+            else:
+                hi = mid
+        self.ov_max = lo
+        self._emit("lift.override_limited", self.interp.t_state, self.line, lo)
+        return lo
+
+    # -- cycle ------------------------------------------------------------------------------------
+    def step(self, inputs: GeoInputs, t: float) -> GeoSnapshot:
+        """Advance the channel to absolute time t (a multiple of the cycle time)."""
+        self.cycle += 1
+        t_in = self.t_cycle  # inputs take effect at the start of the cycle
+        self.t_cycle = t
+        self.events = []
+        if self.autostart and self.runs == 0:
+            self._start(t_in)
+        self._command(inputs.command, t_in)
+        if inputs.m_ack and self.m_pending >= 0:
+            self._acknowledge(self.m_pending, t_in)
+        self.ov_req = min(max(inputs.override, 0.0), MAX_OVERRIDE)
+        holding = inputs.feed_hold or self.stop_requested or self.state is not ChannelState.ACTIVE
+        self.ov_eff = self._limit_override(self.ov_req, holding)
+        self.was_holding = holding
+        self.interp.set_inputs(self.ov_eff, holding)
+        if self.state is ChannelState.ACTIVE:
+            self._run_path(t)
+        if self.lift.current is not None:
+            arrival = self._arrival()
+            self.lift.step(t, arrival - self.lift.gen.t, self.ov_eff)
+            if self.lift.ending and self.lift.z_done:
+                self._close_lift(t, self.line)
+        self._settle(t)
+        return self._snapshot(t, inputs)
+
+    def _acknowledge(self, number: int, t: float) -> None:
+        self.m_pending = -1
+        self.m_acked.add(number)
+        self.ack_time = t
+        self._emit("geo.m_ack", t, self.line, float(number))
+        for k in self.prog.conditional_for(number):
+            self.interp.acknowledge_conditional(k)
+
+    def _run_path(self, t: float) -> None:
+        for _ in range(100000):  # bounded: every pass ends a wait or passes a boundary
+            if self.interp.stopped_at is not None:
+                if not self._work_waiting(t):
+                    return
+                k = self.interp.stopped_at
+                self.interp.resume(self.wait_since)
+                rng = self.lift.current
+                if rng is not None and rng.k_start < k and (rng.k_end < 0 or k < rng.k_end):
+                    self.lift.resume_in_range(self.wait_since)
+            for crossing in self.interp.advance(t):
+                self._cross(crossing)
+            if self.interp.stopped_at is None or self.state is not ChannelState.ACTIVE:
+                return
+
+    def _cross(self, c: Crossing) -> None:
+        actions = self.prog.path.boundaries[c.boundary].actions
+        if c.at_rest:
+            self.waiting = list(actions)
+            self.wait_since = c.t
+            return
+        for action in actions:  # passing without a stop: nothing here waits
+            self._do(action, c.t, c)
+
+    def _work_waiting(self, now: float) -> bool:
+        """Run the actions where the path rests; True when it may go on."""
+        while self.waiting:
+            if not self._do(self.waiting[0], self.wait_since, None, now):
+                return False
+            self.waiting.pop(0)
+        k = self.interp.stopped_at
+        if k is not None and k >= len(self.prog.path.segments):
+            self._end_of_program(self.wait_since, self.prog.path.boundaries[k].line)
+            return False
+        return self.state is ChannelState.ACTIVE
+
+    def _do(self, action: Action, t_at: float, crossing: Crossing | None, now: float = 0.0) -> bool:
+        """Execute one action at time t_at; False while it still waits (only where the path
+        rests, `now` being the cycle time)."""
+        kind = action.kind
+        if kind is ActionKind.LIFT_START:
+            self._lift_start(self.prog.range_at(action), t_at, crossing)
+        elif kind is ActionKind.LIFT_END:
+            return self._lift_end(action, t_at, crossing, now)
+        elif kind is ActionKind.M_OUTPUT:
+            self._emit("geo.m_output", t_at, action.line, float(action.m_number))
+            if action.sync in ACK_SYNCS:
+                self.m_pending = action.m_number
+                self.m_acked.discard(action.m_number)
+        elif kind is ActionKind.M_WAIT:
+            if action.m_number not in self.m_acked:
+                return False
+            self.m_acked.discard(action.m_number)
+            if crossing is None:
+                self.wait_since = max(self.wait_since, self.ack_time)
+        elif kind is ActionKind.M00:
+            self._emit("geo.m00", t_at, action.line)
+            self.state = ChannelState.HOLD
+            return False
+        elif kind is ActionKind.DWELL:
+            if now < t_at + action.seconds:
+                return False
+            self.wait_since = t_at + action.seconds
+        elif kind is ActionKind.PROGRAM_END:
+            self._end_of_program(t_at, action.line)
+            return False
+        return True
+
+    def _lift_start(self, rng: LiftRange, t_at: float, crossing: Crossing | None) -> None:
+        pos = self.prog.boundary_position(rng.k_start)
+        vz = crossing.v * self.prog.z_direction_into(rng.k_start) if crossing else 0.0
+        self.lift.start(rng, t_at, pos[self.z_index], vz, 0.0)
+        rec = self.lift.record
+        if rec is not None and rng.k_end >= 0:
+            rec.nominal_time = self.interp.trial_time(rng.k_end, self.ov_eff, nominal=True) - t_at
+        self._emit(
+            "lift.start",
+            t_at,
+            rng.start.line,
+            rng.start.target,
+            "suppressed" if rng.suppressed else "",
+        )
+
+    def _lift_end(self, action: Action, t_at: float, crossing: Crossing | None, now: float) -> bool:
+        lift = self.lift
+        if lift.current is None:
+            return True
+        if lift.gen.t < t_at:
+            lift.step(t_at, t_at - lift.gen.t, self.ov_eff)  # Z to the time the path got here
+        if crossing is None and not lift.z_done:
+            lift.step(now, 0.0, self.ov_eff)  # the path waits here for Z
+            if not self._z_landed():
+                return False
+            t_at = self.wait_since = max(t_at, lift.gen.landed)
+        if not lift.z_done:
+            # Should not happen (the path is limited so Z makes it); Z finishes its move while
+            # the path goes on, and the event says by how much it was late.
+            self._emit("lift.late", t_at, action.line, lift.needed_time())
+            lift.ending = True
+            return True
+        self._close_lift(t_at, action.line)
+        return True
+
+    def _z_landed(self) -> bool:
+        return self.lift.z_done
+
+    def _close_lift(self, t: float, line: int) -> None:
+        rec = self.lift.finish(t)
+        if rec is not None:
+            rec.path_delay = max(0.0, rec.t_end - rec.t_start - rec.nominal_time)
+            self._emit("lift.end", rec.t_end, line, rec.peak)
+
+    def _snapshot(self, t: float, inputs: GeoInputs) -> GeoSnapshot:
+        lift = self.lift
+        lifting = lift.current is not None
+        return GeoSnapshot(
+            cycle=self.cycle,
+            t=t,
+            state=self.state,
+            line=self.line,
+            segment=self.interp.segment,
+            positions=self._positions(),
+            v_path=self.interp.v,
+            override=self.ov_eff,
+            override_requested=self.ov_req,
+            override_max=self.ov_max,
+            feed_hold=inputs.feed_hold,
+            lift_active=lift.active,
+            lift_suppressed=lift.suppressed,
+            lift_phase=lift.phase,
+            lift_vz=lift.gen.vz if lifting else 0.0,
+            lift_az=lift.gen.az if lifting else 0.0,
+            m_pending=self.m_pending,
+            error_id=self.error_id,
+            error_line=self.error_line,
+            events=tuple(self.events),
+        )

@@ -1,0 +1,228 @@
+"""Advanced Lifting (time-based, in the GEO cycle): the highest lift that still lands on time.
+
+Design and measurements: reference/lift-algorithm.md §3. Each cycle, with the remaining path
+time T_rem until LIFT_END:
+
+* UP: rise time-optimally toward POS_LIMIT as long as the time-optimal descent from the *next*
+  state still fits into T_rem − dt. When it no longer fits, the switch time τ ∈ [0, dt) is found
+  inside the cycle (bisection on τ + t_min(state(τ) → POS) = T_rem): deciding only at cycle
+  boundaries loses up to 12 % of the height on short lifts.
+* DOWN: follow the descent plan; re-plan only when T_rem no longer matches the plan (re-planning
+  a stretched profile every cycle is not time-consistent); go back to UP when T_rem grew by more
+  than two cycles (override lowered).
+* T_rem = inf (feed hold): UP never switches, so Z rises toward POS_LIMIT and holds there.
+
+Coordinates are mirrored for DOWN (the lift goes toward the negative software limit): inside
+this class q = sign·z, so "up" is always +q. POS_LIMIT is enforced by construction (targets are
+never above it) and checked on every descent plan (community ruckig ignores position limits).
+"""
+
+from __future__ import annotations
+
+import enum
+
+from ruckig import Trajectory
+
+from liftd.cnc.lift.profile import LiftProfileError, LiftProfiles, position_range, state_at
+
+INF = float("inf")
+POS_TOL = 1e-7  # 0.1 µm: tolerance of the position checks
+TIME_TOL = 1e-9  # s
+
+
+class Phase(enum.IntEnum):
+    IDLE = 0
+    UP = 1
+    DOWN = 2
+    DONE = 3  # at the target, at rest
+    DIRECT = 4  # time-optimal straight to the target (suppressed, or POS beyond POS_LIMIT)
+    HOLD_LIMIT = 5  # program error inside the range: rise to POS_LIMIT and stay
+
+
+class AdvancedLift:
+    """The set-point generator of one lift range. Pure; times are absolute seconds."""
+
+    def __init__(self, profiles: LiftProfiles, cycle: float) -> None:
+        self.prof = profiles
+        self.cycle = cycle
+        self.phase = Phase.IDLE
+        self.sign = 1.0
+        self.t = 0.0
+        self.q = self.v = self.a = 0.0
+        self.target = 0.0  # POS in q coordinates
+        self.limit = 0.0  # POS_LIMIT in q coordinates
+        self.plan: Trajectory | None = None
+        self.plan_t0 = 0.0
+        self.t_need = 0.0  # time-optimal descent time from the last output state
+        self.late = 0.0  # > 0: Z needs this much longer than the path gives it
+        self.fallbacks = 0  # ruckig failures answered with the safe move
+        self.peak = -INF  # highest q reached (for the summary)
+        self.landed = 0.0  # exact time Z reached the target
+
+    # -- lifecycle -------------------------------------------------------------------------------
+    def start(
+        self,
+        t: float,
+        z: float,
+        vz: float,
+        az: float,
+        target: float,
+        limit: float,
+        down: bool,
+        direct: bool,
+    ) -> None:
+        self.sign = -1.0 if down else 1.0
+        s = self.sign
+        self.t = t
+        self.q, self.v, self.a = s * z, s * vz, s * az
+        self.target = s * target
+        self.limit = s * limit
+        self.late = 0.0
+        self.peak = self.q
+        self.plan = None
+        if direct:
+            self._plan_direct(t)
+            self.phase = Phase.DIRECT
+        else:
+            self.phase = Phase.UP
+
+    def rise_and_hold(self, t: float) -> None:
+        """Program error inside the range: go to POS_LIMIT and stay (vendor §2.1.3 case 2)."""
+        self.target = max(self.limit, self.q) if self.limit >= self.target else self.limit
+        self._plan_direct(t)
+        self.phase = Phase.HOLD_LIMIT
+
+    @property
+    def z(self) -> float:
+        return self.sign * self.q
+
+    @property
+    def vz(self) -> float:
+        return self.sign * self.v
+
+    @property
+    def az(self) -> float:
+        return self.sign * self.a
+
+    @property
+    def done(self) -> bool:
+        return self.phase is Phase.DONE or (
+            self.phase in (Phase.DIRECT, Phase.HOLD_LIMIT) and self.plan is None
+        )
+
+    # -- cycle ------------------------------------------------------------------------------------
+    def step(self, t_new: float, t_rem: float) -> None:
+        """Advance from the last output time to t_new; t_rem is the remaining path time until
+        LIFT_END measured at the last output time."""
+        dt = t_new - self.t
+        if dt <= 0.0:
+            return
+        try:
+            if self.phase is Phase.UP:
+                self._up(dt, t_rem)
+            elif self.phase is Phase.DOWN:
+                self._down(dt, t_rem)
+            elif self.phase in (Phase.DIRECT, Phase.HOLD_LIMIT):
+                self._follow(t_new)
+            elif self.phase is Phase.DONE and t_rem > 2.0 * self.cycle:
+                self.phase = Phase.UP  # the path got slower after Z landed: rise again
+                self._up(dt, t_rem)
+        except LiftProfileError:
+            # Guarded fallback: stop rising, go time-optimally to the target (the guard counts it).
+            self.fallbacks += 1
+            self._plan_direct(self.t)
+            self.phase = Phase.DIRECT
+            self._follow(t_new)
+        self.t = t_new
+        self.peak = max(self.peak, self.q)
+
+    def _set(self, state: tuple[float, float, float]) -> None:
+        self.q, self.v, self.a = state
+
+    def _plan_direct(self, t: float) -> None:
+        if abs(self.q - self.target) <= 1e-12 and abs(self.v) < 1e-12 and abs(self.a) < 1e-12:
+            self.q, self.v, self.a = self.target, 0.0, 0.0
+            self.plan = None
+            self.landed = t
+            return
+        self.plan = self.prof.to_rest(self.q, self.v, self.a, self.target)
+        self.plan_t0 = t
+        self.t_need = self.plan.duration
+
+    def _follow(self, t_new: float) -> None:
+        if self.plan is None:
+            return
+        local = t_new - self.plan_t0
+        if local >= self.plan.duration:
+            self.q, self.v, self.a = self.target, 0.0, 0.0  # snap (ruckig #160 regime)
+            self.landed = self.plan_t0 + self.plan.duration
+            self.plan = None
+            if self.phase is Phase.DOWN:
+                self.phase = Phase.DONE
+            return
+        self._set(state_at(self.plan, local))
+
+    def _descent_fits(self, traj: Trajectory, start_q: float) -> bool:
+        lo, hi = position_range(traj)
+        return hi <= self.limit + POS_TOL and lo >= min(start_q, self.target) - POS_TOL
+
+    def _up(self, dt: float, t_rem: float) -> None:
+        up = self.prof.to_rest(self.q, self.v, self.a, max(self.limit, self.target))
+        nxt = state_at(up, dt)
+        if t_rem == INF:
+            self._set(nxt)
+            self.t_need = 0.0
+            return
+        desc = self.prof.to_rest(nxt[0], nxt[1], nxt[2], self.target)
+        self.t_need = desc.duration
+        if desc.duration <= t_rem - dt + TIME_TOL and self._descent_fits(desc, nxt[0]):
+            self._set(nxt)
+            return
+        # The switch lies in this cycle (or is overdue): find τ ∈ [0, dt).
+        now = self.prof.to_rest(self.q, self.v, self.a, self.target)
+        if now.duration >= t_rem - TIME_TOL:
+            tau, plan = 0.0, now  # overdue: descend time-optimally now
+        else:
+            lo, hi = 0.0, dt
+            plan = now
+            for _ in range(30):
+                mid = 0.5 * (lo + hi)
+                s = state_at(up, mid)
+                trial = self.prof.to_rest(s[0], s[1], s[2], self.target)
+                if mid + trial.duration <= t_rem and self._descent_fits(trial, s[0]):
+                    lo, plan = mid, trial
+                else:
+                    hi = mid
+            tau = lo
+        self.plan = plan
+        self.plan_t0 = self.t + tau
+        self.late = max(0.0, tau + plan.duration - t_rem)
+        self.phase = Phase.DOWN
+        self._follow(self.t + dt)
+
+    def _down(self, dt: float, t_rem: float) -> None:
+        assert self.plan is not None
+        remaining = self.plan_t0 + self.plan.duration - self.t
+        if t_rem == INF or t_rem > remaining + 2.0 * self.cycle:
+            self.phase = Phase.UP  # more time than planned: use it to rise again
+            self.plan = None
+            self._up(dt, t_rem)
+            return
+        if abs(t_rem - remaining) > TIME_TOL:
+            self._replan_down(t_rem)
+        self._follow(self.t + dt)
+
+    def _replan_down(self, t_rem: float) -> None:
+        """T_rem changed while descending: stretch the descent to T_rem if that stays within
+        [target, POS_LIMIT], else time-optimal (then `late` says how long the path must wait)."""
+        best = self.prof.to_rest(self.q, self.v, self.a, self.target)
+        self.late = max(0.0, best.duration - t_rem)
+        if best.duration < t_rem - TIME_TOL:
+            try:
+                stretched = self.prof.to_rest(self.q, self.v, self.a, self.target, t_rem)
+                if stretched.duration <= t_rem + TIME_TOL and self._descent_fits(stretched, self.q):
+                    best = stretched
+            except LiftProfileError:
+                pass
+        self.plan = best
+        self.plan_t0 = self.t

@@ -1,0 +1,150 @@
+"""Runs the lift ranges of a program in the GEO cycle: starts and ends lifts, the status flags
+`lift_active` / `lift_suppressed`, waiting conditions inside a range, and the override limits
+of Advanced Lifting. Path-based Lifting plugs in through the same interface.
+
+Rules (vendor text §2.1, §2.5, §2.6; DESIGN.md §4), with liftd's choices where it is silent:
+
+* lift_active is TRUE from the LIFT_START point until Z is at POS at LIFT_END; a suppressed lift
+  (path shorter than lift_min_dist) sets lift_suppressed, and also lift_active when POS differs
+  from the start (both TRUE, vendor §2.6).
+* A waiting condition inside a range (G04, M function with synchronisation, M00, #FLUSH) is a
+  stop of the path; Z plans to be at POS when the path stops there ("the lift axis moves on to
+  target height", vendor §2.1.1) and lifts again for the rest of the range after the wait.
+* Feed hold: T_rem is infinite, so Z keeps rising toward POS_LIMIT and holds; when the path
+  resumes the override is limited so that Z still lands on time.
+* Program error inside the range: Z rises to POS_LIMIT and stays (vendor §2.1.3 case 2, §2.4).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from liftd.cnc.lift.advanced import AdvancedLift, Phase
+from liftd.cnc.lift.profile import LiftProfileError, LiftProfiles
+from liftd.cnc.lift.ranges import LiftRange
+from liftd.cnc.params import AxisParams
+from liftd.cnc.snapshot import LiftPhase
+
+INF = float("inf")
+
+
+@dataclass(slots=True)
+class LiftRecord:
+    """What the summary reports per lift (filled while the lift runs)."""
+
+    range: LiftRange
+    t_start: float
+    z_start: float
+    t_end: float = -1.0
+    peak: float = 0.0
+    area: float = 0.0  # ∫ (q − q_base) dt over the lift, for the mean clearance
+    arrival_error: float = 0.0
+    path_delay: float = 0.0
+    nominal_time: float = 0.0  # path time without the lift's limits (for path_delay_s)
+
+
+class LiftController:
+    def __init__(self, axis: AxisParams, ranges: tuple[LiftRange, ...], cycle: float) -> None:
+        self.axis = axis
+        self.ranges = ranges
+        self.by_start = {r.k_start: r for r in ranges}
+        self.cycle = cycle
+        self.gen = AdvancedLift(LiftProfiles(axis.v_max, axis.a_max, axis.j_max), cycle)
+        self.current: LiftRange | None = None
+        self.record: LiftRecord | None = None
+        self.records: list[LiftRecord] = []
+        self.active = False
+        self.suppressed = False
+        self.ov_at_descent: float | None = None
+        self.ending = False  # LIFT_END passed while Z still moved: close when Z is there
+
+    # -- path-side limits -------------------------------------------------------------------------
+    def z_time(self, z0: float, target: float) -> float:
+        """Time-optimal rest-to-rest Z move: the least path time a lift range may take."""
+        if abs(target - z0) <= 1e-12:
+            return 0.0
+        try:
+            return float(self.gen.prof.to_rest(z0, 0.0, 0.0, target).duration)
+        except LiftProfileError:
+            return INF
+
+    # -- events -----------------------------------------------------------------------------------
+    def start(self, rng: LiftRange, t: float, z: float, vz: float, az: float) -> None:
+        spec = rng.start
+        beyond = rng.beyond_limit or ((z < spec.pos_limit) if spec.down else (z > spec.pos_limit))
+        self.gen.start(
+            t, z, vz, az, spec.target, spec.pos_limit, spec.down, rng.suppressed or beyond
+        )
+        self.current = rng
+        self.suppressed = rng.suppressed
+        self.active = not rng.suppressed or rng.moves_z or abs(z - spec.target) > 1e-12
+        self.ov_at_descent = None
+        self.record = LiftRecord(rng, t, z)
+        self.record.peak = z
+
+    def resume_in_range(self, t: float) -> None:
+        """The path leaves a waiting point inside the range: lift again for the rest of it."""
+        if self.current is None or self.current.direct:
+            return
+        spec = self.current.start
+        self.gen.start(
+            t, self.gen.z, self.gen.vz, self.gen.az, spec.target, spec.pos_limit, spec.down, False
+        )
+
+    def error_in_range(self, t: float) -> None:
+        if self.current is not None:
+            self.gen.rise_and_hold(t)
+
+    def finish(self, t: float) -> LiftRecord | None:
+        """LIFT_END reached with Z at POS: close the range and the record."""
+        rec = self.record
+        if rec is not None:
+            rec.t_end = t
+            rec.arrival_error = abs(self.gen.z - rec.range.start.target)
+            self.records.append(rec)
+        self.current = None
+        self.record = None
+        self.active = False
+        self.suppressed = False
+        self.ov_at_descent = None
+        self.ending = False
+        return rec
+
+    # -- cycle ------------------------------------------------------------------------------------
+    def step(self, t_new: float, t_rem: float, override: float) -> None:
+        if self.current is None:
+            return
+        was_down = self.gen.phase is Phase.DOWN
+        t_old = self.gen.t
+        z_old = self.gen.z
+        self.gen.step(t_new, t_rem)
+        if self.gen.phase is Phase.DOWN and not was_down:
+            self.ov_at_descent = override
+        elif self.gen.phase is Phase.UP:
+            self.ov_at_descent = None
+        rec = self.record
+        if rec is not None:
+            spec = rec.range.start
+            base = min(rec.z_start, spec.target) if not spec.down else max(rec.z_start, spec.target)
+            sign = -1.0 if spec.down else 1.0
+            rec.area += 0.5 * sign * ((z_old - base) + (self.gen.z - base)) * (t_new - t_old)
+            rec.peak = max(rec.peak, self.gen.z) if not spec.down else min(rec.peak, self.gen.z)
+
+    @property
+    def z_done(self) -> bool:
+        return self.current is None or self.gen.done
+
+    @property
+    def phase(self) -> LiftPhase:
+        if self.current is None:
+            return LiftPhase.NONE
+        return LiftPhase(int(self.gen.phase))
+
+    def needed_time(self) -> float:
+        """Time Z still needs to reach POS from its current state (time-optimal)."""
+        if self.current is None or self.gen.done:
+            return 0.0
+        if self.gen.phase is Phase.UP:
+            return self.gen.t_need
+        plan = self.gen.plan
+        return 0.0 if plan is None else max(0.0, self.gen.plan_t0 + plan.duration - self.gen.t)

@@ -1,0 +1,78 @@
+"""What goes into and comes out of one GEO cycle: inputs from the PLC side, the snapshot."""
+
+from __future__ import annotations
+
+import enum
+from typing import NamedTuple
+
+
+class ChannelState(enum.IntEnum):
+    """Channel state, numbered as the KERNELV API enumerates it (isg-cnc.md §2.2)."""
+
+    READY = 3  # no program running
+    ACTIVE = 4  # program running
+    HOLD = 5  # started, then stopped
+    ERROR = 6
+
+
+class Command(enum.IntEnum):
+    """One-shot channel command from the PLC (edge, not level)."""
+
+    NONE = 0
+    START = 1  # start the program, continue after STOP or M00
+    STOP = 2  # stop at a standstill (HOLD), keep the program
+    RESET = 3  # abort the program (at standstill), clear errors
+
+
+class LiftPhase(enum.IntEnum):
+    NONE = 0
+    UP = 1
+    DOWN = 2
+    DONE = 3
+    DIRECT = 4
+    HOLD_LIMIT = 5
+    COUPLED = 6  # path-based Lifting: z = f(s)
+
+
+class GeoInputs(NamedTuple):
+    """PLC-side signals read at the start of a cycle."""
+
+    override: float = 1.0  # requested path override, fraction (0 … 2)
+    feed_hold: bool = False
+    command: Command = Command.NONE
+    m_ack: bool = False  # acknowledges the M function the channel waits for
+
+
+class Event(NamedTuple):
+    """Something that happened in a cycle; becomes a log line / trace note in the drivers."""
+
+    name: str  # stable name, e.g. "geo.m_output", "lift.start", "geo.error"
+    t: float  # exact time (s), may lie inside the cycle
+    line: int
+    value: float = 0.0
+    text: str = ""
+
+
+class GeoSnapshot(NamedTuple):
+    """Everything the GEO task publishes after one cycle. Positions in m, velocity in m/s."""
+
+    cycle: int
+    t: float
+    state: ChannelState
+    line: int  # NC source line of the block being executed
+    segment: int  # motion segment index (0-based), = active block
+    positions: tuple[float, ...]  # command positions of all channel axes
+    v_path: float
+    override: float  # in effect (fraction)
+    override_requested: float
+    override_max: float  # highest override the lift currently accepts
+    feed_hold: bool
+    lift_active: bool
+    lift_suppressed: bool
+    lift_phase: LiftPhase
+    lift_vz: float  # lift axis command velocity (m/s)
+    lift_az: float  # lift axis command acceleration (m/s²)
+    m_pending: int  # M function waiting for its acknowledge, -1 for none
+    error_id: int
+    error_line: int
+    events: tuple[Event, ...]
