@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -70,6 +71,80 @@ def cmd_check(args: argparse.Namespace) -> int:
     return EXIT_PROGRAM if failed else EXIT_OK
 
 
+def cmd_simulate(args: argparse.Namespace) -> int:
+    from liftd import plot  # noqa: PLC0415
+    from liftd.simulate import (  # noqa: PLC0415
+        Schedule,
+        SpecError,
+        channel_for,
+        parse_feedhold_spec,
+        parse_override_spec,
+        simulate,
+    )
+
+    try:
+        schedule = Schedule(
+            tuple(parse_override_spec(args.override or "")),
+            tuple(parse_feedhold_spec(args.feedhold or "")),
+        )
+    except SpecError as exc:
+        print(f"liftd simulate: {exc}", file=sys.stderr)
+        return EXIT_CONFIG
+    if args.plot and not plot.available():
+        print(f"liftd simulate: --plot: {plot.HINT}", file=sys.stderr)
+        return EXIT_RUNTIME
+    try:
+        settings = _load(args)
+    except ConfigError as err:
+        _print_config_error(err)
+        return EXIT_CONFIG
+    program = Path(args.program)
+    try:
+        text = program.read_text(encoding="utf-8", errors="replace")
+    except OSError as exc:
+        print(f"{program}: error: cannot read program: {exc.strerror or exc}", file=sys.stderr)
+        return EXIT_PROGRAM
+    ch = channel_for(settings.channel, args.method)
+    delay = settings.config.plc.m_ack_delay_ms * 1e-3
+    try:
+        trace = open(args.trace, "w", encoding="utf-8", newline="") if args.trace else None  # noqa: SIM115
+    except OSError as exc:
+        print(
+            f"{args.trace}: error: cannot write the trace: {exc.strerror or exc}", file=sys.stderr
+        )
+        return EXIT_RUNTIME
+    try:
+        result = simulate(ch, text, schedule, delay, trace, args.max_time)
+    finally:
+        if trace is not None:
+            trace.close()
+    if not result.finished:
+        print(
+            f"liftd simulate: the program did not end within {args.max_time} s simulated "
+            "(--max-time)",
+            file=sys.stderr,
+        )
+    for item in result.summary["errors"]:
+        print(f"{program}:{item['line']}: error {item['id']}: {item['message']}", file=sys.stderr)
+    if args.plot:
+        title = f"{program.name}: {plot.describe(result.summary)}"
+        plot.plot_run(
+            Path(args.plot),
+            result.series.rows,
+            ch.axis_names,
+            ch.lift_axis_index,
+            result.records,
+            title,
+        )
+    if args.json:
+        print(json.dumps(result.summary, indent=None))
+    else:
+        print(plot.describe(result.summary))
+    if result.program_error:
+        return EXIT_PROGRAM
+    return EXIT_OK if result.finished else EXIT_RUNTIME
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="liftd",
@@ -86,6 +161,31 @@ def build_parser() -> argparse.ArgumentParser:
     )
     check.add_argument("programs", nargs="*", help="NC programs (default: the configured one)")
     check.set_defaults(func=cmd_check)
+
+    sim = sub.add_parser("simulate", help="run a program on a virtual clock, as fast as possible")
+    sim.add_argument("program", help="NC program")
+    sim.add_argument("-c", "--config", help="liftd.toml")
+    sim.add_argument(
+        "--method",
+        choices=["advanced", "lifting", "config"],
+        default="config",
+        help="lift method: as the lists enable it (config) or forced",
+    )
+    sim.add_argument(
+        "--override", metavar="SPEC", help='override steps "T:PERCENT,…", e.g. "0:100,0.4:150"'
+    )
+    sim.add_argument("--feedhold", metavar="SPEC", help='feed hold "T:DURATION,…"')
+    sim.add_argument("--trace", metavar="OUT.csv", help="write one CSV row per GEO cycle")
+    sim.add_argument("--plot", metavar="OUT.png", help="write a figure of the run")
+    sim.add_argument("--json", action="store_true", help="print the JSON summary on stdout")
+    sim.add_argument(
+        "--max-time",
+        type=float,
+        default=3600.0,
+        metavar="S",
+        help="stop after S simulated seconds (default 3600)",
+    )
+    sim.set_defaults(func=cmd_simulate)
     return parser
 
 

@@ -1,0 +1,257 @@
+"""`liftd simulate`: the GEO core on a virtual clock, as fast as possible.
+
+Drives GeoTask.step with t = k × cycle time, applies the override / feed-hold schedules, plays a
+simple PLC that acknowledges M functions (and continues after M00) after `plc.m_ack_delay_ms`,
+streams the trace CSV, keeps a decimated copy for the plot, and builds the JSON summary of
+DESIGN.md §3.3.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from typing import Any, TextIO
+
+import numpy as np
+
+from liftd.cnc.geo_task import GeoTask
+from liftd.cnc.lift.controller import LiftRecord
+from liftd.cnc.params import ChannelParams, LiftMethod
+from liftd.cnc.snapshot import ChannelState, Command, GeoInputs, GeoSnapshot
+from liftd.trace import LimitMonitor, TraceWriter
+
+MM = 1e3
+
+
+class SpecError(ValueError):
+    """A schedule on the command line cannot be read."""
+
+
+def parse_override_spec(spec: str) -> list[tuple[float, float]]:
+    """ "T:PERCENT,T:PERCENT" → [(t_s, fraction)], steps in time order (DESIGN.md §3.1)."""
+    steps = []
+    for item in filter(None, (p.strip() for p in spec.split(","))):
+        try:
+            t_text, pct_text = item.split(":")
+            t, pct = float(t_text), float(pct_text)
+        except ValueError:
+            raise SpecError(f"override step {item!r}: expected T:PERCENT, e.g. 0.4:150") from None
+        if not (math.isfinite(t) and t >= 0.0 and math.isfinite(pct) and 0.0 <= pct <= 200.0):
+            raise SpecError(f"override step {item!r}: T >= 0 s and 0 <= PERCENT <= 200")
+        steps.append((t, pct / 100.0))
+    return sorted(steps)
+
+
+def parse_feedhold_spec(spec: str) -> list[tuple[float, float]]:
+    """ "T:DURATION,..." → [(t_from, t_to)]."""
+    windows = []
+    for item in filter(None, (p.strip() for p in spec.split(","))):
+        try:
+            t_text, d_text = item.split(":")
+            t, d = float(t_text), float(d_text)
+        except ValueError:
+            raise SpecError(f"feed hold {item!r}: expected T:DURATION, e.g. 0.3:0.2") from None
+        if not (math.isfinite(t) and t >= 0.0 and math.isfinite(d) and d > 0.0):
+            raise SpecError(f"feed hold {item!r}: T >= 0 s and DURATION > 0 s")
+        windows.append((t, t + d))
+    return sorted(windows)
+
+
+@dataclass(frozen=True, slots=True)
+class Schedule:
+    override: tuple[tuple[float, float], ...] = ()
+    feed_hold: tuple[tuple[float, float], ...] = ()
+
+    def override_at(self, t: float) -> float:
+        value = 1.0
+        for t_step, fraction in self.override:
+            if t >= t_step - 1e-12:
+                value = fraction
+        return value
+
+    def hold_at(self, t: float) -> bool:
+        return any(t0 - 1e-12 <= t < t1 - 1e-12 for t0, t1 in self.feed_hold)
+
+
+class SimPlc:
+    """A PLC that acknowledges every M function and continues after M00 after a delay."""
+
+    def __init__(self, delay: float) -> None:
+        self.delay = delay
+        self.since: float | None = None
+
+    def inputs(self, last: GeoSnapshot | None, t: float, schedule: Schedule) -> GeoInputs:
+        ack = False
+        command = Command.NONE
+        waiting = last is not None and (
+            last.m_pending >= 0 or (last.state is ChannelState.HOLD and not last.feed_hold)
+        )
+        if waiting:
+            assert last is not None
+            if self.since is None:
+                self.since = t
+            if t - self.since >= self.delay - 1e-12:
+                self.since = None
+                if last.m_pending >= 0:
+                    ack = True
+                else:
+                    command = Command.START
+        else:
+            self.since = None
+        return GeoInputs(schedule.override_at(t), schedule.hold_at(t), command, ack)
+
+
+class SeriesBuffer:
+    """Decimated copy of the run for plotting, constant memory: when full, every other sample
+    is dropped and the stride doubles."""
+
+    def __init__(self, columns: int, capacity: int = 20000) -> None:
+        self.data = np.zeros((capacity, columns))
+        self.n = 0
+        self.stride = 1
+        self.count = 0
+
+    def add(self, row: tuple[float, ...]) -> None:
+        self.count += 1
+        if (self.count - 1) % self.stride:
+            return
+        if self.n == self.data.shape[0]:
+            self.data[: self.n // 2] = self.data[: self.n : 2]
+            self.n //= 2
+            self.stride *= 2
+            if (self.count - 1) % self.stride:
+                return
+        self.data[self.n] = row
+        self.n += 1
+
+    @property
+    def rows(self) -> np.ndarray:
+        return self.data[: self.n]
+
+
+@dataclass
+class SimResult:
+    summary: dict[str, Any]
+    series: SeriesBuffer
+    records: list[LiftRecord] = field(default_factory=list)
+    program_error: bool = False
+    finished: bool = True
+
+
+def channel_for(ch: ChannelParams, method: str) -> ChannelParams:
+    """--method: 'config' keeps what the lists enable; 'advanced'/'lifting' force one."""
+    if method == "config":
+        return ch
+    return dataclasses.replace(ch, lift_method=LiftMethod(method))
+
+
+def run_cycles(
+    task: GeoTask, plc: SimPlc, schedule: Schedule, dt: float, max_time: float
+) -> Iterator[GeoSnapshot]:
+    last: GeoSnapshot | None = None
+    k = 0
+    limit = round(max_time / dt)
+    while k < limit:
+        k += 1
+        t = k * dt
+        snap = task.step(plc.inputs(last, t, schedule), t)
+        yield snap
+        last = snap
+        if snap.state in (ChannelState.READY, ChannelState.ERROR) and task.runs:
+            return
+
+
+def simulate(
+    ch: ChannelParams,
+    text: str,
+    schedule: Schedule,
+    m_ack_delay: float,
+    trace: TextIO | None = None,
+    max_time: float = 3600.0,
+) -> SimResult:
+    dt = ch.cycle_time
+    task = GeoTask(ch, text)
+    plc = SimPlc(m_ack_delay)
+    writer = TraceWriter(trace, ch.axis_names) if trace is not None else None
+    monitor = LimitMonitor(len(ch.axes), dt)
+    series = SeriesBuffer(len(ch.axes) + 6)
+    errors: list[dict[str, Any]] = []
+    snap: GeoSnapshot | None = None
+    cycles = 0
+    for snap in run_cycles(task, plc, schedule, dt, max_time):
+        cycles += 1
+        if writer is not None:
+            writer.write(snap)
+        monitor.add(snap.positions)
+        series.add(
+            (
+                snap.t,
+                *snap.positions,
+                snap.v_path,
+                snap.override,
+                float(snap.lift_active),
+                float(snap.lift_suppressed),
+                float(snap.line),
+            )
+        )
+        for ev in snap.events:
+            if ev.name == "geo.error":
+                errors.append({"id": int(ev.value), "line": ev.line, "message": ev.text})
+    if writer is not None:
+        writer.flush()
+    finished = snap is not None and snap.state in (ChannelState.READY, ChannelState.ERROR)
+    summary = build_summary(ch, task, monitor, cycles, snap.t if snap else 0.0, errors)
+    return SimResult(summary, series, list(task.lift.records), bool(errors), finished)
+
+
+def lift_summary(rec: LiftRecord, method: LiftMethod) -> dict[str, Any]:
+    spec = rec.range.start
+    duration = rec.t_end - rec.t_start
+    return {
+        "start_line": spec.line,
+        "end_line": rec.range.end_line,
+        "method": method.value,
+        "suppressed": rec.range.suppressed,
+        "z_start": round(rec.z_start * MM, 6),
+        "z_target": round(spec.target * MM, 6),
+        "pos_limit": round(spec.pos_limit * MM, 6),
+        "peak": round(rec.peak * MM, 6),
+        "mean_clearance": round(rec.area / duration * MM, 6) if duration > 0 else 0.0,
+        "t_start": round(rec.t_start, 6),
+        "t_end": round(rec.t_end, 6),
+        "arrival_error": round(rec.arrival_error * MM, 6),
+        "path_delay_s": round(rec.path_delay, 6),
+    }
+
+
+def build_summary(
+    ch: ChannelParams,
+    task: GeoTask,
+    monitor: LimitMonitor,
+    cycles: int,
+    duration: float,
+    errors: list[dict[str, Any]],
+) -> dict[str, Any]:
+    max_v, max_a, max_j = monitor.result()
+    limits: dict[str, float] = {}
+    z = ch.lift_axis_index
+    order = [z] + [i for i in range(len(ch.axes)) if i != z]
+    for i in order:
+        ax = ch.axes[i]
+        prefix = "z" if i == z else ax.name.lower()
+        limits[f"{prefix}_v_max_ratio"] = float(max_v[i] / ax.v_max)
+        limits[f"{prefix}_a_max_ratio"] = float(max_a[i] / ax.a_max)
+        limits[f"{prefix}_j_max_ratio"] = (
+            float(max_j[i] / ax.j_max) if ax.j_max != math.inf else 0.0
+        )
+    return {
+        "cycle_time_s": ch.cycle_time,
+        "duration_s": round(duration, 6),
+        "cycles": cycles,
+        "method": ch.lift_method.value,
+        "lifts": [lift_summary(r, ch.lift_method) for r in task.lift.records],
+        "limits": limits,
+        "errors": errors,
+    }
