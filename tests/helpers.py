@@ -23,6 +23,17 @@ def run(
     inputs: InputFn | None = None,
 ) -> list[GeoSnapshot]:
     """Run a program to its end; the simulated PLC acknowledges M functions after ack_delay."""
+    return run_task(ch, text, schedule, ack_delay, max_time, inputs)[1]
+
+
+def run_task(
+    ch: ChannelParams,
+    text: str,
+    schedule: Schedule | None = None,
+    ack_delay: float = 0.02,
+    max_time: float = 120.0,
+    inputs: InputFn | None = None,
+) -> tuple[GeoTask, list[GeoSnapshot]]:
     task = GeoTask(ch, text)
     plc = SimPlc(ack_delay)
     sched = schedule or Schedule()
@@ -36,7 +47,7 @@ def run(
         out.append(last)
         if last.state in (ChannelState.READY, ChannelState.ERROR) and task.runs:
             break
-    return out
+    return task, out
 
 
 def positions(snaps: list[GeoSnapshot]) -> np.ndarray:

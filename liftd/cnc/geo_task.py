@@ -162,8 +162,12 @@ class GeoTask:
         rng = self.lift.current
         if rng is None or rng.k_end < 0:
             return -1
-        ahead = self.interp.segment if self.interp.stopped_at is None else self.interp.stopped_at
-        for k in self.prog.stops_in(rng):
+        stopped = self.interp.stopped_at
+        stops = self.prog.stops_in(rng)
+        if stopped is not None and stopped in stops:
+            return stopped  # waiting inside the range: Z goes to (and stays at) POS here
+        ahead = self.interp.segment if stopped is None else stopped
+        for k in stops:
             if k > ahead:
                 return k
         return rng.k_end
@@ -311,9 +315,9 @@ class GeoTask:
         return True
 
     def _lift_start(self, rng: LiftRange, t_at: float, crossing: Crossing | None) -> None:
-        pos = self.prog.boundary_position(rng.k_start)
+        # the programmed Z at the start (the decoder tracked every earlier lift's POS)
         vz = crossing.v * self.prog.z_direction_into(rng.k_start) if crossing else 0.0
-        self.lift.start(rng, t_at, pos[self.z_index], vz, 0.0)
+        self.lift.start(rng, t_at, rng.start.z_start, vz, 0.0)
         rec = self.lift.record
         if rec is not None and rng.k_end >= 0:
             rec.nominal_time = self.interp.trial_time(rng.k_end, self.ov_eff, nominal=True) - t_at

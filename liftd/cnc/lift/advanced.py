@@ -58,6 +58,8 @@ class AdvancedLift:
         self.fallbacks = 0  # ruckig failures answered with the safe move
         self.peak = -INF  # highest q reached (for the summary)
         self.landed = 0.0  # exact time Z reached the target
+        self.rise: Trajectory | None = None  # last rise profile (fallback)
+        self.rise_t0 = 0.0
 
     # -- lifecycle -------------------------------------------------------------------------------
     def start(
@@ -104,10 +106,15 @@ class AdvancedLift:
     def az(self) -> float:
         return self.sign * self.a
 
+    def _at_target(self) -> bool:
+        return self.q == self.target and self.v == 0.0 and self.a == 0.0
+
     @property
     def done(self) -> bool:
         return self.phase is Phase.DONE or (
-            self.phase in (Phase.DIRECT, Phase.HOLD_LIMIT) and self.plan is None
+            self.phase in (Phase.DIRECT, Phase.HOLD_LIMIT)
+            and self.plan is None
+            and self._at_target()
         )
 
     # -- cycle ------------------------------------------------------------------------------------
@@ -123,18 +130,34 @@ class AdvancedLift:
             elif self.phase is Phase.DOWN:
                 self._down(dt, t_rem)
             elif self.phase in (Phase.DIRECT, Phase.HOLD_LIMIT):
+                if self.plan is None and not self._at_target():
+                    self._plan_direct(self.t)  # retry after a refused profile
                 self._follow(t_new)
             elif self.phase is Phase.DONE and t_rem > 2.0 * self.cycle:
                 self.phase = Phase.UP  # the path got slower after Z landed: rise again
                 self._up(dt, t_rem)
         except LiftProfileError:
-            # Guarded fallback: stop rising, go time-optimally to the target (the guard counts it).
-            self.fallbacks += 1
+            self._fallback(t_new)
+        self.t = t_new
+        self.peak = max(self.peak, self.q)
+
+    def _fallback(self, t_new: float) -> None:
+        """Ruckig refused a profile: go time-optimally to the target; if even that is refused,
+        keep following the last valid plan (a descent, or the rise toward POS_LIMIT, both within
+        all limits) and try again next cycle. Counted in `fallbacks` (the guard reports it)."""
+        self.fallbacks += 1
+        try:
             self._plan_direct(self.t)
             self.phase = Phase.DIRECT
             self._follow(t_new)
-        self.t = t_new
-        self.peak = max(self.peak, self.q)
+            return
+        except LiftProfileError:
+            pass
+        if self.plan is not None:
+            self._follow(t_new)
+        elif self.rise is not None:
+            self._set(state_at(self.rise, t_new - self.rise_t0))
+        self.phase = Phase.DIRECT if self.plan is None else self.phase
 
     def _set(self, state: tuple[float, float, float]) -> None:
         self.q, self.v, self.a = state
@@ -168,6 +191,7 @@ class AdvancedLift:
 
     def _up(self, dt: float, t_rem: float) -> None:
         up = self.prof.to_rest(self.q, self.v, self.a, max(self.limit, self.target))
+        self.rise, self.rise_t0 = up, self.t
         nxt = state_at(up, dt)
         if t_rem == INF:
             self._set(nxt)
