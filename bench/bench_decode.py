@@ -14,9 +14,9 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from bench.gen import count_blocks, nesting_program  # noqa: E402
-from liftd.cnc.nc import DecoderContext, decode  # noqa: E402
-from liftd.settings import load_settings  # noqa: E402
+from bench.gen import count_blocks, nesting_program
+from liftd.cnc.nc import DecoderContext, decode
+from liftd.settings import load_settings
 
 
 def main() -> None:

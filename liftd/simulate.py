@@ -81,8 +81,16 @@ class SimPlc:
     def __init__(self, delay: float) -> None:
         self.delay = delay
         self.since: float | None = None
+        self._idle = GeoInputs()
 
     def inputs(self, last: GeoSnapshot | None, t: float, schedule: Schedule) -> GeoInputs:
+        if (
+            not schedule.override
+            and not schedule.feed_hold
+            and self.since is None
+            and (last is None or (last.m_pending < 0 and last.state is not ChannelState.HOLD))
+        ):
+            return self._idle  # nothing to say: the common case, no allocation
         ack = False
         command = Command.NONE
         waiting = last is not None and (
@@ -113,10 +121,13 @@ class SeriesBuffer:
         self.stride = 1
         self.count = 0
 
-    def add(self, row: tuple[float, ...]) -> None:
+    def wants(self) -> bool:
+        """Count a sample; True if it is kept (build the row only then)."""
         self.count += 1
-        if (self.count - 1) % self.stride:
-            return
+        return not (self.count - 1) % self.stride
+
+    def add(self, row: tuple[float, ...]) -> None:
+        """Store a sample that `wants()` accepted."""
         if self.n == self.data.shape[0]:
             self.data[: self.n // 2] = self.data[: self.n : 2]
             self.n //= 2
@@ -185,17 +196,18 @@ def simulate(
         if writer is not None:
             writer.write(snap)
         monitor.add(snap.positions)
-        series.add(
-            (
-                snap.t,
-                *snap.positions,
-                snap.v_path,
-                snap.override,
-                float(snap.lift_active),
-                float(snap.lift_suppressed),
-                float(snap.line),
+        if series.wants():
+            series.add(
+                (
+                    snap.t,
+                    *snap.positions,
+                    snap.v_path,
+                    snap.override,
+                    float(snap.lift_active),
+                    float(snap.lift_suppressed),
+                    float(snap.line),
+                )
             )
-        )
         for ev in snap.events:
             if ev.name == "geo.error":
                 errors.append({"id": int(ev.value), "line": ev.line, "message": ev.text})

@@ -66,7 +66,7 @@ class TraceWriter:
             % (
                 s.t,
                 s.line,
-                *(x * MM for x in p),
+                *[x * MM for x in p],
                 s.v_path * MM,
                 s.override,
                 s.lift_active,

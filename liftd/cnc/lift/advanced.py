@@ -176,7 +176,7 @@ class AdvancedLift:
         if self.plan is None:
             return
         local = t_new - self.plan_t0
-        if local >= self.plan.duration:
+        if local >= self.plan.duration - TIME_TOL:  # within 1 ns of the end: rounding of t
             self.q, self.v, self.a = self.target, 0.0, 0.0  # snap (ruckig #160 regime)
             self.landed = self.plan_t0 + self.plan.duration
             self.plan = None
@@ -193,12 +193,11 @@ class AdvancedLift:
         up = self.prof.to_rest(self.q, self.v, self.a, max(self.limit, self.target))
         self.rise, self.rise_t0 = up, self.t
         nxt = state_at(up, dt)
+        desc = self.prof.to_rest(nxt[0], nxt[1], nxt[2], self.target)
+        self.t_need = desc.duration  # also while holding: the restart is limited by it
         if t_rem == INF:
             self._set(nxt)
-            self.t_need = 0.0
             return
-        desc = self.prof.to_rest(nxt[0], nxt[1], nxt[2], self.target)
-        self.t_need = desc.duration
         if desc.duration <= t_rem - dt + TIME_TOL and self._descent_fits(desc, nxt[0]):
             self._set(nxt)
             return

@@ -87,6 +87,7 @@ class LiftController:
         if self.current is None or self.current.direct:
             return
         spec = self.current.start
+        t = self.gen.t  # the state (z, vz, az) belongs to this time; never rewind it
         self.gen.start(
             t, self.gen.z, self.gen.vz, self.gen.az, spec.target, spec.pos_limit, spec.down, False
         )

@@ -29,7 +29,7 @@ class LineSeg:
         return LineSeg(start, end, length, unit)
 
     def position(self, s: float) -> Vec:
-        return tuple(p + u * s for p, u in zip(self.start, self.unit, strict=True))
+        return tuple([p + u * s for p, u in zip(self.start, self.unit, strict=True)])
 
     def tangent(self, s: float) -> Vec:
         return self.unit

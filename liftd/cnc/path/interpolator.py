@@ -22,6 +22,7 @@ class Crossing:
     t: float  # absolute time the path reaches it
     at_rest: bool  # the path stops there (end of the plan)
     v: float  # path velocity there (m/s)
+    a: float = 0.0  # path acceleration there (m/s²); zero at the end of a zone profile
 
 
 class Interpolator:
@@ -43,6 +44,7 @@ class Interpolator:
         self.window_end = 0  # boundary index of the plan's end
         self.piece = 0
         self.acked_conditional: set[int] = set()  # MVS_SNS boundaries acknowledged in time
+        self.lift_stops: set[int] = set()  # boundaries where the path waits for Z
         self.plan_errors = 0
         self.last_plan_error = ""
         self.stopped_at: int | None = 0  # boundary where the path rests (waits), if any
@@ -51,7 +53,22 @@ class Interpolator:
     # -- planning --------------------------------------------------------------------------------
     def _is_stop(self, k: int) -> bool:
         b = self.program.boundaries[k]
-        return b.stop or (b.conditional_stop and k not in self.acked_conditional)
+        return (
+            b.stop
+            or k in self.lift_stops
+            or (b.conditional_stop and k not in self.acked_conditional)
+        )
+
+    def add_lift_stop(self, k: int) -> None:
+        """The path must wait at boundary k for the lift axis (Z cannot make it in time)."""
+        if k in self.lift_stops:
+            return
+        self.lift_stops.add(k)
+        if self.stopped_at is None:
+            self.replan(self.t_state)
+
+    def drop_lift_stop(self, k: int) -> None:
+        self.lift_stops.discard(k)
 
     def _window(self, override: float, nominal: bool = False) -> tuple[list[Zone], int]:
         segs = self.program.segments
@@ -72,15 +89,23 @@ class Interpolator:
         """New plan from the current state, which is taken to hold at absolute time t."""
         zones, end = self._window(self.override)
         hold = self.hold or self.override <= 0.0
+        witness = self._witness()
         try:
-            self.plan = Plan(self.calc, t, self.s, self.v, self.a, zones, hold=hold)
+            self.plan = Plan(self.calc, t, self.s, self.v, self.a, zones, hold, witness)
         except PlanError as exc:
             self.plan_errors += 1
             self.last_plan_error = str(exc)
-            self.plan = Plan(self.calc, t, self.s, self.v, self.a, zones, hold=True)
+            self.plan = Plan(self.calc, t, self.s, self.v, self.a, zones, True, witness)
         self.window_start = self.segment
-        self.window_end = end if not hold else self.segment
+        self.window_end = end
         self.piece = 0
+
+    def _witness(self) -> float | None:
+        """End velocity of the zone profile being followed (see Plan.witness)."""
+        old = self.plan
+        if old is None:
+            return None
+        return old.velocity_at_end_of(self.segment + 1 - self.window_start, self.piece)
 
     def set_inputs(self, override: float, hold: bool) -> None:
         """Apply override (fraction) and feed hold from the time of the current state on;
@@ -100,10 +125,17 @@ class Interpolator:
         zones, end = self._window(override, nominal)
         try:
             plan = Plan(
-                self.calc, self.t_state, self.s, self.v, self.a, zones, hold=override <= 0.0
+                self.calc,
+                self.t_state,
+                self.s,
+                self.v,
+                self.a,
+                zones,
+                override <= 0.0,
+                self._witness(),
             )
         except PlanError:
-            return INF
+            return -INF  # cannot tell: callers must treat it as "not enough time"
         rel = min(k, end) - self.segment
         return plan.boundary_time(rel) if rel > 0 else self.t_state
 
@@ -132,19 +164,25 @@ class Interpolator:
         while True:
             s, v, a, piece = plan.sample(t)
             while self.piece < piece:
-                t_end, rel = plan.piece_end(self.piece)
+                t_end, rel, v_end = plan.piece_end(self.piece)
                 self.piece += 1
                 if rel < 0:
                     continue
                 k = self.window_start + rel
                 rest = k >= self.window_end and self._is_stop(k)
-                crossings.append(Crossing(k, t_end, rest, 0.0 if rest else plan.b[rel]))
+                crossings.append(Crossing(k, t_end, rest, 0.0 if rest else v_end))
                 self.segment = min(k, len(self.program.segments) - 1) if not rest else k
                 if rest:
                     self.s, self.v, self.a = self.program.boundaries[k].s, 0.0, 0.0
                     self.stopped_at = k
                     self.t_state = t_end
                     return crossings
+            arrived = self._catch_up(plan, piece, s, t, crossings)
+            if arrived is not None:  # arrived at a stop while braking
+                k = arrived
+                self.s, self.v, self.a = self.program.boundaries[k].s, 0.0, 0.0
+                self.t_state = crossings[-1].t
+                return crossings
             self.s, self.v, self.a = s, v, a
             self.t_state = t
             if plan.stalled and v == 0.0 and a == 0.0 and retries < 3:
@@ -161,6 +199,34 @@ class Interpolator:
                 assert plan is not None
                 continue
             return crossings
+
+    def _catch_up(
+        self, plan: Plan, piece: int, s: float, t: float, out: list[Crossing]
+    ) -> int | None:
+        """Report boundaries passed inside a piece that is not a zone profile (a brake for feed
+        hold or override 0, or the stop after a refused profile), with their exact times."""
+        if plan.is_zone_piece(piece):
+            return None  # zone profiles report their end boundary themselves (exact time)
+        bounds = self.program.boundaries
+        last = len(self.program.segments)
+        while self.segment < last and s >= bounds[self.segment + 1].s - EPS_S:
+            k = self.segment + 1
+            t_k, v_k, a_k = plan.passage(piece, bounds[k].s, t)
+            if self._is_stop(k):
+                # A brake ends exactly on a stop (the plan was stopping there anyway): arrive.
+                # It never passes one; if it ever does, that is counted as a plan error.
+                if abs(v_k) > 1e-9:
+                    self.plan_errors += 1
+                    self.last_plan_error = f"passed the stop at boundary {k} while braking"
+                out.append(Crossing(k, t_k, True, 0.0))
+                self.segment = k
+                self.stopped_at = k
+                return k
+            out.append(Crossing(k, t_k, False, v_k, a_k))
+            self.segment = k if k < last else last - 1
+            if k == last:
+                break
+        return None
 
     def _needs_extension(self) -> bool:
         """Re-plan when half the window is behind us and its end is not a real stop, so the
@@ -180,7 +246,7 @@ class Interpolator:
         The state time if the path is there already; inf while holding or waiting before k."""
         if self.stopped_at is not None:
             return self.t_state if self.stopped_at == k else INF
-        if self.plan is None or self.hold:
+        if self.plan is None:
             return INF
         rel = min(k, self.window_end) - self.window_start
         if rel <= 0:

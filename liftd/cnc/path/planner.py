@@ -14,15 +14,17 @@ zones it may cross.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 from ruckig import ControlInterface, InputParameter, Ruckig, RuckigError, Trajectory
 
-from liftd.cnc.path.velocity import lowest_reachable, reach_velocity
+from liftd.cnc.path.velocity import change_distance, lowest_reachable, reach_velocity
 
 INF = float("inf")
 MARGIN = 1e-9  # relative distance margin so ruckig never sees a boundary-infeasible target
+FEASIBILITY_TOL = 1e-6  # relative: closed-form distances equal up to rounding are feasible
 
 
 class PlanError(Exception):
@@ -107,6 +109,7 @@ class Piece:
     traj: Trajectory | None  # None: standing still at s_end
     s_end: float
     boundary: int  # window-relative boundary reached at the end, -1 for none
+    v_end: float = 0.0  # path velocity at the end
 
 
 class Plan:
@@ -121,6 +124,7 @@ class Plan:
         a0: float,
         zones: Sequence[Zone],
         hold: bool = False,
+        witness: float | None = None,
     ) -> None:
         self.calc = calc
         self.t0 = t0
@@ -133,6 +137,9 @@ class Plan:
         self._state = (t0, s0, v0, a0)
         self.b: list[float] = []
         self._first: Trajectory | None = None
+        # velocity the previous plan had at the end of the first zone (with zero acceleration):
+        # always reachable from the current state, so the fallback when a new cap is not
+        self.witness = witness
         if hold or not self.zones:
             self._hold(t0, s0, v0, a0)
             self.b = []
@@ -141,17 +148,38 @@ class Plan:
 
     # -- planning ------------------------------------------------------------------------------
     def _hold(self, t0: float, s0: float, v0: float, a0: float) -> None:
-        if abs(v0) < 1e-12 and abs(a0) < 1e-12:
-            self.pieces.append(Piece(t0, INF, None, s0, -1))
-            return
-        a_max = min((z.a_max for z in self.zones), default=INF)
-        j_max = min((z.j_max for z in self.zones), default=INF)
-        if a_max == INF:
-            a_max = max(abs(a0), 1.0)
-        traj = self.calc.brake(s0, v0, a0, a_max, j_max)
-        p_end = traj.at_time(traj.duration)[0][0]
-        self.pieces.append(Piece(t0, traj.duration, traj, p_end, -1))
-        self.pieces.append(Piece(t0 + traj.duration, INF, None, p_end, -1))
+        """Stop as soon as the path allows: brake inside the zone if the stop fits there;
+        otherwise reach the zone end at the lowest velocity the zone's limits permit (which
+        never exceeds its transition cap, the previous plan being a witness) with zero path
+        acceleration, as every transition needs, and go on zone by zone."""
+        t, s, v, a = t0, s0, v0, a0
+        for k, z in enumerate(self.zones):
+            if abs(v) < 1e-12 and abs(a) < 1e-12:
+                break
+            brake = self.calc.brake(s, v, a, z.a_max, z.j_max)
+            s_stop = brake.at_time(brake.duration)[0][0]
+            if s_stop <= z.s1 + 1e-12:
+                self.pieces.append(Piece(t, brake.duration, brake, s_stop, -1))
+                t, s, v, a = t + brake.duration, s_stop, 0.0, 0.0
+                break
+            if k == 0:
+                self.zones = [dataclasses.replace(z, v_cap=0.0) for z in self.zones]
+                try:
+                    low = self._first_target(s, v, a, 0.0)
+                except PlanError:
+                    self.failures += 1  # last resort: a plain brake (counted, never expected)
+                    self.pieces.append(Piece(t, brake.duration, brake, s_stop, -1))
+                    t, s = t + brake.duration, s_stop
+                    break
+                assert self._first is not None
+                traj = self._first
+            else:
+                length = (z.s1 - z.s0) * (1.0 - MARGIN)
+                low = max(lowest_reachable(v, length, z.a_max, z.j_max), 1e-9)
+                traj = self.calc.position(s, v, 0.0, z.s1, low, low, z.a_max, z.j_max)
+            self.pieces.append(Piece(t, traj.duration, traj, z.s1, k + 1, low))
+            t, s, v, a = t + traj.duration, z.s1, low, 0.0
+        self.pieces.append(Piece(t, INF, None, s, -1))
 
     def _passes(self, s0: float, v0: float, a0: float) -> None:
         zones = self.zones
@@ -168,19 +196,21 @@ class Plan:
             z = zones[i]
             length = (z.s1 - z.s0) * (1.0 - MARGIN)
             b[i + 1] = min(b[i + 1], reach_velocity(b[i], length, z.a_max, z.j_max))
-            low = lowest_reachable(b[i], length, z.a_max, z.j_max)
-            if b[i + 1] < low:
-                b[i + 1] = low
+            if b[i + 1] < b[i] and change_distance(b[i], b[i + 1], z.a_max, z.j_max) > length * (
+                1.0 + FEASIBILITY_TOL
+            ):  # only after an earlier relaxation: b[i] is above what the backward pass allowed
+                b[i + 1] = lowest_reachable(b[i], length, z.a_max, z.j_max)
                 self.relaxed = True
         b[0] = v0
         self.b = b
 
-    def _feasible(self, s0: float, v0: float, a0: float, target: float) -> Trajectory | None:
+    def _feasible(
+        self, s0: float, v0: float, a0: float, target: float, cap: float | None = None
+    ) -> Trajectory | None:
         z = self.zones[0]
+        v_max = max(z.v_cap if cap is None else cap, target)
         try:
-            return self.calc.position(
-                s0, v0, a0, z.s1, target, max(z.v_cap, target), z.a_max, z.j_max
-            )
+            return self.calc.position(s0, v0, a0, z.s1, target, v_max, z.a_max, z.j_max)
         except PlanError:
             return None
 
@@ -191,6 +221,12 @@ class Plan:
         if traj is not None:
             self._first = traj
             return wanted
+        if self.witness is not None:  # feasible under the previous plan's cap (≥ v0)
+            traj = self._feasible(s0, v0, a0, self.witness, max(self.zones[0].v_cap, v0))
+            if traj is not None:
+                self._first = traj
+                self.relaxed = self.relaxed or self.witness > wanted
+                return self.witness
         z = self.zones[0]
         brake = self.calc.brake(s0, v0, a0, z.a_max, z.j_max)
         s_brake = brake.at_time(brake.duration)[0][0]
@@ -245,7 +281,7 @@ class Plan:
                 self.zones = self.zones[:k]
                 self.stalled = True
                 continue
-            self.pieces.append(Piece(t_start, traj.duration, traj, z.s1, k + 1))
+            self.pieces.append(Piece(t_start, traj.duration, traj, z.s1, k + 1, self.b[k + 1]))
         return self.pieces[i]
 
     def _zone_profile(self, k: int) -> Trajectory | None:
@@ -259,8 +295,10 @@ class Plan:
             if target < 0.0:
                 continue
             try:
+                # max(…, b0): a zone entered above its soft cap (after a relaxation) slows down
+                # within the zone as the passes planned, without a separate brake pre-phase
                 traj = self.calc.position(
-                    z.s0, b0, 0.0, z.s1, target, max(z.v_cap, target), z.a_max, z.j_max
+                    z.s0, b0, 0.0, z.s1, target, max(z.v_cap, target, b0), z.a_max, z.j_max
                 )
             except PlanError:
                 continue
@@ -272,7 +310,10 @@ class Plan:
     def boundary_time(self, index: int) -> float:
         """Absolute time at which the path reaches window boundary `index` (1 = end of the
         first zone). Builds the pieces up to it."""
-        if not self.b:
+        if not self.b:  # hold plan: only boundaries the brake still passes are reached
+            for piece in self.pieces:
+                if piece.boundary == index:
+                    return piece.t0 + piece.duration
             return INF
         piece = self._piece(index - 1)
         return piece.t0 + piece.duration
@@ -297,7 +338,28 @@ class Plan:
         p, v, a = piece.traj.at_time(t - piece.t0)
         return p[0], v[0], a[0], i
 
-    def piece_end(self, i: int) -> tuple[float, int]:
-        """(absolute end time, boundary reached) of piece i."""
+    def velocity_at_end_of(self, boundary: int, piece: int) -> float | None:
+        """If piece `piece` (the one being followed) is the zone profile ending at window
+        boundary `boundary`, its end velocity (with zero acceleration there), else None."""
+        if piece < len(self.pieces) and self.pieces[piece].boundary == boundary:
+            return self.pieces[piece].v_end
+        return None
+
+    def is_zone_piece(self, i: int) -> bool:
+        return self._piece(i).boundary >= 0
+
+    def passage(self, i: int, s: float, t_default: float) -> tuple[float, float, float]:
+        """(absolute time, velocity, acceleration) when piece i first reaches position s."""
         piece = self._piece(i)
-        return piece.t0 + piece.duration, piece.boundary
+        if piece.traj is None:
+            return t_default, 0.0, 0.0
+        local = piece.traj.get_first_time_at_position(0, s)
+        if local is None:
+            return t_default, 0.0, 0.0
+        _, v, a = piece.traj.at_time(local)
+        return piece.t0 + local, v[0], a[0]
+
+    def piece_end(self, i: int) -> tuple[float, int, float]:
+        """(absolute end time, boundary reached, velocity there) of piece i."""
+        piece = self._piece(i)
+        return piece.t0 + piece.duration, piece.boundary, piece.v_end

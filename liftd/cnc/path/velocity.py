@@ -67,8 +67,10 @@ def reach_velocity(v_end: float, length: float, a_max: float, j_max: float) -> f
 
 
 def lowest_reachable(v_start: float, length: float, a_max: float, j_max: float) -> float:
-    """Smallest velocity reachable from v_start (zero acceleration) within `length`."""
-    if change_distance(v_start, 0.0, a_max, j_max) <= length:
+    """Smallest velocity reachable from v_start (zero acceleration) within `length`. Stopping
+    counts as reachable when it needs at most length·(1 + 1e-6) (rounding of the closed forms);
+    near 0 the distance is not monotonic in the end velocity, so 0 is tested first."""
+    if change_distance(v_start, 0.0, a_max, j_max) <= length * (1.0 + 1e-6):
         return 0.0
     lo, hi = 0.0, v_start  # change_distance(v_start, hi) = 0 ≤ length
     for _ in range(60):

@@ -1,0 +1,61 @@
+"""≥ 1000 seeded random closed-loop Advanced-Lifting runs (issue 4, safety figure).
+
+Each run: random Z dynamics, cycle time, program (1–3 lift ranges, DOWN, waits), override steps
+and feed holds. Checks: |v|, |a|, |j| of every axis ≤ limit (+1e-9 relative, finite
+differences), no excursion beyond POS_LIMIT or the software limits (+0.1 µm), arrival error
+≤ 1 µm, never late (no lift.late). Prints one JSON line with the counts and the first failures.
+
+Run: .venv/bin/python bench/bench_lift_safety.py [RUNS]
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from bench.stress_cases import describe, scenario, violations
+from tests.helpers import run_task
+
+
+def main() -> None:
+    runs = int(sys.argv[1]) if len(sys.argv) > 1 else 1000
+    first = int(sys.argv[2]) if len(sys.argv) > 2 else 0
+    failures: list[dict[str, object]] = []
+    cycles = lifts = 0
+    t0 = time.perf_counter()
+    for seed in range(first, first + runs):
+        sc = scenario(seed)
+        try:
+            task, snaps = run_task(sc.channel, sc.text, sc.schedule, max_time=120)
+        except Exception as exc:  # a crash is a failure to report, not the end of the bench
+            bad = [f"exception {type(exc).__name__}: {exc}"]
+        else:
+            cycles += len(snaps)
+            lifts += len(task.lift.records)
+            bad = violations(sc, snaps, task.lift.records)
+        if bad:
+            failures.append({"seed": seed, "problems": bad})
+            if len(failures) <= 3:
+                print(describe(sc), bad, file=sys.stderr)
+    print(
+        json.dumps(
+            {
+                "bench": "lift_safety",
+                "runs": runs,
+                "first_seed": first,
+                "cycles": cycles,
+                "lifts": lifts,
+                "failed_runs": len(failures),
+                "first_failures": failures[:5],
+                "seconds": round(time.perf_counter() - t0, 1),
+            }
+        )
+    )
+
+
+if __name__ == "__main__":
+    main()

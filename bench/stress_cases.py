@@ -1,0 +1,138 @@
+"""Seeded random lift scenarios and their checks (used by bench/bench_lift_safety.py and, with
+fewer seeds, by the test suite)."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import random
+from dataclasses import dataclass
+
+import numpy as np
+
+from liftd.cnc.params import AxisParams, ChannelParams, LiftMethod, MSync, SlopeType
+from liftd.simulate import Schedule
+
+POS_TOL = 1e-7  # 0.1 µm
+
+
+@dataclass
+class Scenario:
+    seed: int
+    channel: ChannelParams
+    text: str
+    schedule: Schedule
+
+
+def scenario(seed: int, method: LiftMethod = LiftMethod.ADVANCED) -> Scenario:
+    rng = random.Random(seed)
+    zv, za = rng.uniform(0.3, 1.5), rng.uniform(3.0, 20.0)
+    zj = rng.uniform(100.0, 2000.0)
+    z_neg, z_pos = -0.05, 0.2
+    ch = ChannelParams(
+        channel_id=1,
+        axes=(
+            AxisParams("X", 1, 1.5, 10.0, 500.0, -0.001, 3.01),
+            AxisParams("Y", 2, 1.5, 8.0, 400.0, -0.001, 1.51),
+            AxisParams("Z", 3, zv, za, zj, z_neg, z_pos),
+        ),
+        lift_axis="Z",
+        lift_method=method,
+        cycle_time=rng.choice([1e-3, 1e-3, 1e-3, 5e-4, 2e-3]),
+        lift_min_dist=rng.choice([0.0, 0.0, 0.003]),
+        slope=SlopeType.TRAPEZ,
+        m_synch=((4, MSync.MVS_SVS), (5, MSync.MOS)),
+    )
+    z = rng.uniform(0.0, 0.03)
+    x, y = 10.0, 10.0
+    lines = [f"G01 X{x} Y{y} Z{z * 1e3:.3f} F6000"]
+    for _ in range(rng.randint(1, 3)):
+        down = method is LiftMethod.ADVANCED and rng.random() < 0.2
+        pos = min(max(z + rng.uniform(-0.02, 0.03), 0.0), 0.12)
+        if down:
+            limit = min(z, pos) - rng.uniform(0.0, 0.04)
+            limit = max(limit, z_neg + 0.001)
+        else:
+            limit = min(max(z, pos) + rng.uniform(-0.005, 0.09), z_pos - 0.001)
+        word = "LIFT_START DOWN" if down else "LIFT_START"
+        lines.append(f"Z[{word} POS={pos * 1e3:.3f} POS_LIMIT={limit * 1e3:.3f}]")
+        for _ in range(rng.randint(1, 5)):
+            x = min(x + rng.choice([0.5, 2.0, 20.0, 80.0, 250.0]) * rng.random(), 2900.0)
+            y = min(max(y + rng.uniform(-40.0, 40.0), 1.0), 1400.0)
+            lines.append(f"G01 X{x:.3f} Y{y:.3f} F{rng.choice([3000, 12000, 24000, 60000])}")
+            if rng.random() < 0.1:
+                lines.append(f"G04 {rng.uniform(0.01, 0.2):.3f}")
+        lines.append("Z[LIFT_END]")
+        z = pos
+        x = min(x + 5.0, 2900.0)
+        lines.append(f"G01 X{x:.3f} F6000")
+    lines.append("M30")
+    steps = tuple(
+        sorted((rng.uniform(0.1, 2.0), rng.uniform(0.3, 2.0)) for _ in range(rng.randint(0, 3)))
+    )
+    holds = tuple(
+        sorted(
+            (t, t + rng.uniform(0.02, 0.3))
+            for t in (rng.uniform(0.1, 2.0) for _ in range(rng.randint(0, 2)))
+        )
+    )
+    return Scenario(seed, ch, "\n".join(lines) + "\n", Schedule(steps, holds))
+
+
+def violations(sc: Scenario, snaps: list, records: list) -> list[str]:  # type: ignore[type-arg]
+    """Every broken promise of a run, as text (empty: all good)."""
+    ch = sc.channel
+    out: list[str] = []
+    if snaps[-1].state.name != "READY":
+        out.append(f"ended in {snaps[-1].state.name} at t={snaps[-1].t}")
+    p = np.array([s.positions for s in snaps])
+    dt = ch.cycle_time
+    v = np.diff(p, axis=0) / dt
+    a = np.diff(v, axis=0) / dt
+    j = np.diff(a, axis=0) / dt
+    for i, ax in enumerate(ch.axes):
+        for name, arr, lim in (("v", v, ax.v_max), ("a", a, ax.a_max), ("j", j, ax.j_max)):
+            got = float(np.abs(arr[:, i]).max()) / lim
+            if got > 1 + 1e-9:
+                out.append(f"{ax.name} |{name}| ratio {got:.9f}")
+    z = p[:, 2]
+    zax = ch.axes[2]
+    if z.max() > zax.sw_limit_pos + POS_TOL or z.min() < zax.sw_limit_neg - POS_TOL:
+        out.append("software limit")
+    for rec in records:
+        spec = rec.range.start
+        mask = np.array([rec.t_start <= s.t <= rec.t_end for s in snaps])
+        if not mask.any():
+            continue
+        seg = z[mask]
+        top = max(spec.pos_limit, spec.target, rec.z_start)  # limit has no effect beyond it
+        bottom = min(spec.pos_limit, spec.target, rec.z_start)
+        tol = POS_TOL
+        if rec.range.direct:  # Z may enter moving with the path: allow its stopping distance
+            k = int(np.argmax(mask))
+            vz = abs(z[k] - z[k - 1]) / dt if k > 0 else 0.0
+            tol += vz * vz / (2 * zax.a_max) + vz * zax.a_max / zax.j_max
+        if (not spec.down and seg.max() > top + tol) or (spec.down and seg.min() < bottom - tol):
+            out.append(f"POS_LIMIT exceeded in lift line {spec.line}")
+        if rec.arrival_error > 1e-6:
+            out.append(f"arrival error {rec.arrival_error * 1e6:.3f} µm line {spec.line}")
+    late = [e for s in snaps for e in s.events if e.name == "lift.late"]
+    if late:
+        out.append(f"{len(late)} late lift(s)")
+    return out
+
+
+def describe(sc: Scenario) -> str:
+    ax = sc.channel.axes[2]
+    return (
+        f"seed {sc.seed}: Z {ax.v_max:.2f} m/s {ax.a_max:.1f} m/s² {ax.j_max:.0f} m/s³, "
+        f"cycle {sc.channel.cycle_time * 1e3:g} ms, override {sc.schedule.override}, "
+        f"hold {sc.schedule.feed_hold}\n{sc.text}"
+    )
+
+
+def replace_method(sc: Scenario, method: LiftMethod) -> Scenario:
+    return dataclasses.replace(sc, channel=dataclasses.replace(sc.channel, lift_method=method))
+
+
+__all__ = ["Scenario", "describe", "math", "replace_method", "scenario", "violations"]

@@ -1,0 +1,172 @@
+"""`liftd simulate` as users and other tools rely on it (DESIGN.md §3.1–3.3)."""
+
+from __future__ import annotations
+
+import csv
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from liftd import cli, plot
+from tests.conftest import REPO
+
+pytestmark = pytest.mark.integration
+DEMO = str(REPO / "config" / "programs" / "demo.nc")
+CONTRACT_COLUMNS = [
+    "t",
+    "line",
+    "x",
+    "y",
+    "z",
+    "v_path",
+    "override",
+    "lift_active",
+    "lift_suppressed",
+]
+LIFT_KEYS = {
+    "start_line",
+    "end_line",
+    "method",
+    "suppressed",
+    "z_start",
+    "z_target",
+    "pos_limit",
+    "peak",
+    "mean_clearance",
+    "t_start",
+    "t_end",
+    "arrival_error",
+    "path_delay_s",
+}
+
+
+def simulate(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "liftd", "simulate", *args],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
+
+
+@pytest.fixture(scope="module")
+def demo_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict, list[list[str]], Path]:
+    out = tmp_path_factory.mktemp("demo")
+    trace = out / "demo.csv"
+    png = out / "demo.png"
+    r = simulate(DEMO, "--trace", str(trace), "--plot", str(png), "--json")
+    assert r.returncode == 0, r.stderr
+    with trace.open(newline="") as f:
+        rows = list(csv.reader(f))
+    return json.loads(r.stdout), rows, png
+
+
+def test_trace_columns_and_one_row_per_cycle(demo_run: tuple[dict, list[list[str]], Path]) -> None:
+    summary, rows, _ = demo_run
+    assert rows[0][: len(CONTRACT_COLUMNS)] == CONTRACT_COLUMNS
+    assert rows[0][len(CONTRACT_COLUMNS) :] == ["lift_phase", "vz", "az", "state", "override_max"]
+    data = rows[1:]
+    assert len(data) == summary["cycles"]
+    dt = summary["cycle_time_s"]
+    assert [float(r[0]) for r in data[:3]] == pytest.approx([dt, 2 * dt, 3 * dt])
+    assert float(data[-1][0]) == pytest.approx(summary["duration_s"])
+    assert {r[7] for r in data} == {"0", "1"} and {r[8] for r in data} == {"0", "1"}
+    assert all(r[6] == "1.000000" for r in data)  # override fraction, 1.0 = 100 %
+
+
+def test_summary_schema(demo_run: tuple[dict, list[list[str]], Path]) -> None:
+    summary, _, _ = demo_run
+    assert set(summary) == {
+        "cycle_time_s",
+        "duration_s",
+        "cycles",
+        "method",
+        "lifts",
+        "limits",
+        "errors",
+    }
+    assert summary["method"] == "advanced" and summary["errors"] == []
+    assert len(summary["lifts"]) == 5
+    for lift in summary["lifts"]:
+        assert set(lift) == LIFT_KEYS
+        assert lift["arrival_error"] <= 0.001  # mm
+    assert {"z_v_max_ratio", "z_a_max_ratio", "z_j_max_ratio"} <= set(summary["limits"])
+    assert max(summary["limits"].values()) <= 1 + 1e-9
+    suppressed = [x for x in summary["lifts"] if x["suppressed"]]
+    assert [x["start_line"] for x in suppressed] == [48]
+
+
+def test_trace_agrees_with_the_summary(demo_run: tuple[dict, list[list[str]], Path]) -> None:
+    summary, rows, _ = demo_run
+    z = [float(r[4]) for r in rows[1:]]
+    assert max(z) == pytest.approx(max(x["peak"] for x in summary["lifts"]), abs=1e-6)
+
+
+def test_plot_is_a_png(demo_run: tuple[dict, list[list[str]], Path]) -> None:
+    _, _, png = demo_run
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 20000
+
+
+def test_same_run_twice_gives_identical_trace(tmp_path: Path) -> None:
+    a, b = tmp_path / "a.csv", tmp_path / "b.csv"
+    for out in (a, b):
+        r = simulate(
+            DEMO, "--trace", str(out), "--override", "0:100,3:150,6:70", "--feedhold", "2:0.5"
+        )
+        assert r.returncode == 0, r.stderr
+    assert a.read_bytes() == b.read_bytes()
+
+
+def test_program_error_exit_1_with_partial_trace(tmp_path: Path) -> None:
+    prog = tmp_path / "bad.nc"
+    prog.write_text("G01 X10 Y10 Z1 F6000\nX50\nQ3\nX80\nM30\n")
+    trace = tmp_path / "bad.csv"
+    r = simulate(str(prog), "--trace", str(trace), "--json")
+    assert r.returncode == 1
+    assert f"{prog}:3: error 990018:" in r.stderr
+    summary = json.loads(r.stdout)
+    assert summary["errors"][0]["line"] == 3 and summary["errors"][0]["id"] == 990018
+    rows = trace.read_text().splitlines()
+    assert float(rows[-1].split(",")[2]) == pytest.approx(50.0)  # ran up to the last good block
+
+
+@pytest.mark.parametrize(
+    ("args", "code", "fragment"),
+    [
+        (["--override", "0:250"], 2, "PERCENT <= 200"),
+        (["--override", "x"], 2, "expected T:PERCENT"),
+        (["--feedhold", "1:-2"], 2, "DURATION > 0"),
+        (["--trace", "/nonexistent/dir/x.csv"], 3, "cannot write the trace"),
+    ],
+)
+def test_bad_options(args: list[str], code: int, fragment: str) -> None:
+    r = simulate(DEMO, *args)
+    assert r.returncode == code and fragment in r.stderr
+
+
+def test_missing_program_and_config(tmp_path: Path) -> None:
+    r = simulate(str(tmp_path / "none.nc"))
+    assert r.returncode == 1 and "cannot read program" in r.stderr
+    r = simulate(DEMO, "-c", str(tmp_path / "none.toml"))
+    assert r.returncode == 2
+
+
+def test_plot_without_matplotlib_says_how_to_get_it(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    monkeypatch.setattr(plot, "available", lambda: False)
+    code = cli.main(["simulate", DEMO, "--plot", str(tmp_path / "x.png")])
+    assert code == 3
+    assert "pip install 'liftd[plot]'" in capsys.readouterr().err
+
+
+def test_override_schedule_reaches_the_core(tmp_path: Path) -> None:
+    trace = tmp_path / "o.csv"
+    r = simulate(DEMO, "--override", "0:100,1:50", "--trace", str(trace))
+    assert r.returncode == 0
+    rows = list(csv.reader(trace.open()))[1:]
+    assert {r[6] for r in rows if float(r[0]) > 1.001} == {"0.500000"}
