@@ -205,7 +205,9 @@ class AdvancedLift:
         now = self.prof.to_rest(self.q, self.v, self.a, self.target)
         if now.duration >= t_rem - TIME_TOL:
             tau, plan = 0.0, now  # overdue: descend time-optimally now
-        else:
+        elif self._descent_fits(desc, nxt[0]):
+            tau, plan = self._switch_time(up, now, desc, dt, t_rem)
+        else:  # the limit, not the time, ends the rise: bisection on both conditions
             lo, hi = 0.0, dt
             plan = now
             for _ in range(30):
@@ -222,6 +224,36 @@ class AdvancedLift:
         self.late = max(0.0, tau + plan.duration - t_rem)
         self.phase = Phase.DOWN
         self._follow(self.t + dt)
+
+    def _switch_time(
+        self, up: Trajectory, now: Trajectory, desc: Trajectory, dt: float, t_rem: float
+    ) -> tuple[float, Trajectory]:
+        """Root of f(τ) = τ + t_min(state(τ) → POS) − T_rem on [0, dt] by regula falsi (Illinois):
+        f(0) < 0 < f(dt), f is smooth and increasing; ~5 ruckig calls instead of ~30 for
+        bisection. Returns the last τ with f ≤ 0 (lands at most 1e-11 s early) and its plan."""
+        lo, f_lo, plan = 0.0, now.duration - t_rem, now
+        hi, f_hi = dt, dt + desc.duration - t_rem
+        side = 0
+        for _ in range(40):
+            if f_lo > -1e-11 or hi - lo < 1e-13:
+                break
+            mid = (lo * f_hi - hi * f_lo) / (f_hi - f_lo)
+            if not lo < mid < hi:
+                mid = 0.5 * (lo + hi)
+            s = state_at(up, mid)
+            trial = self.prof.to_rest(s[0], s[1], s[2], self.target)
+            f_mid = mid + trial.duration - t_rem
+            if f_mid <= 0.0:
+                lo, f_lo, plan = mid, f_mid, trial
+                if side == -1:
+                    f_hi *= 0.5
+                side = -1
+            else:
+                hi, f_hi = mid, f_mid
+                if side == 1:
+                    f_lo *= 0.5
+                side = 1
+        return lo, plan
 
     def _down(self, dt: float, t_rem: float) -> None:
         assert self.plan is not None
