@@ -119,6 +119,9 @@ def violations(sc: Scenario, snaps: list, records: list) -> list[str]:  # type: 
     late = [e for s in snaps for e in s.events if e.name == "lift.late"]
     if late:
         out.append(f"{len(late)} late lift(s)")
+    clamped = [e for s in snaps for e in s.events if e.name == "lift.guard_clamped"]
+    if clamped:
+        out.append(f"{len(clamped)} guard clamp(s)")
     return out
 
 

@@ -145,6 +145,22 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     return EXIT_OK if result.finished else EXIT_RUNTIME
 
 
+def cmd_run(args: argparse.Namespace) -> int:
+    """Until the real-time daemon lands: validate what it would run, and say so."""
+    try:
+        settings = _load(args, args.program)
+    except ConfigError as err:
+        _print_config_error(err)
+        return EXIT_CONFIG
+    errors = check_program(settings, settings.program) if settings.program else 0
+    print(
+        "liftd run: configuration and program are valid; the real-time daemon (ADS server, "
+        "fixed-tick GEO loop) is not built yet. Meanwhile: liftd simulate "
+        f"{settings.program or 'PROGRAM'} --plot run.png"
+    )
+    return EXIT_PROGRAM if errors else EXIT_OK
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="liftd",
@@ -161,6 +177,11 @@ def build_parser() -> argparse.ArgumentParser:
     )
     check.add_argument("programs", nargs="*", help="NC programs (default: the configured one)")
     check.set_defaults(func=cmd_check)
+
+    run = sub.add_parser("run", help="run the GEO task in real time and serve it over ADS")
+    run.add_argument("-c", "--config", help="liftd.toml")
+    run.add_argument("--program", help="NC program (default: the configured one)")
+    run.set_defaults(func=cmd_run)
 
     sim = sub.add_parser("simulate", help="run a program on a virtual clock, as fast as possible")
     sim.add_argument("program", help="NC program")

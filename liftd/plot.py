@@ -18,6 +18,18 @@ def available() -> bool:
     return importlib.util.find_spec("matplotlib") is not None
 
 
+def _spans(t: np.ndarray, flag: np.ndarray) -> list[tuple[float, float]]:
+    """Time intervals where flag is True."""
+    edges = np.flatnonzero(np.diff(flag.astype(int)))
+    starts = [t[0]] if flag[0] else []
+    ends: list[float] = []
+    for e in edges:
+        (starts if not flag[e] else ends).append(t[e + 1] if not flag[e] else t[e])
+    if flag[-1]:
+        ends.append(t[-1])
+    return list(zip(starts, ends, strict=False))
+
+
 def plot_run(
     path: Path,
     rows: np.ndarray,
@@ -40,64 +52,107 @@ def plot_run(
     active = rows[:, 3 + n] > 0.5
     suppressed = rows[:, 4 + n] > 0.5
     z = pos[:, z_index]
+    zn = axis_names[z_index]
 
-    fig = plt.figure(figsize=(13, 9), constrained_layout=True)
-    grid = fig.add_gridspec(3, 2, width_ratios=[1.0, 1.3])
-    ax_xy = fig.add_subplot(grid[:, 0])
-    ax_z = fig.add_subplot(grid[0, 1])
-    ax_v = fig.add_subplot(grid[1, 1], sharex=ax_z)
-    ax_f = fig.add_subplot(grid[2, 1], sharex=ax_z)
+    fig = plt.figure(figsize=(14, 11), constrained_layout=True)
+    grid = fig.add_gridspec(4, 2, height_ratios=[1.25, 1.0, 0.28, 0.85])
+    ax_xy = fig.add_subplot(grid[0, :])
+    ax_z = fig.add_subplot(grid[1, :])
+    ax_f = fig.add_subplot(grid[2, :], sharex=ax_z)
+    ax_v = fig.add_subplot(grid[3, 0], sharex=ax_z)
+    ax_zoom = fig.add_subplot(grid[3, 1])
 
+    # 1. the path in the plane, coloured by lift state
     colours = np.where(suppressed, "tab:orange", np.where(active, "tab:red", "tab:blue"))
-    ax_xy.scatter(pos[:, 0], pos[:, 1], c=colours, s=1.5, linewidths=0)
-    ax_xy.set_aspect("equal", adjustable="box")
-    margin = max(np.ptp(pos[:, 0]), np.ptp(pos[:, 1]), 1.0) * 0.05
-    ax_xy.set_xlim(pos[:, 0].min() - margin, pos[:, 0].max() + margin)
-    ax_xy.set_ylim(pos[:, 1].min() - margin, pos[:, 1].max() + margin)
+    ax_xy.scatter(pos[:, 0], pos[:, 1], c=colours, s=2, linewidths=0)
+    ax_xy.set_aspect("equal", adjustable="datalim")
     ax_xy.set_xlabel(f"{axis_names[0]} [mm]")
     ax_xy.set_ylabel(f"{axis_names[1]} [mm]")
-    ax_xy.set_title("path: blue = cutting/travel, red = lift active, orange = suppressed")
+    ax_xy.set_title(
+        "path: blue = cutting and travel, red = lift active, orange = lift suppressed", fontsize=10
+    )
     for rec in records:
-        k = int(np.searchsorted(t, rec.t_start))
-        if k < len(t):
-            ax_xy.annotate(f"N{rec.range.start.line}", (pos[k, 0], pos[k, 1]), fontsize=7)
+        k = min(int(np.searchsorted(t, rec.t_start)), len(t) - 1)
+        ax_xy.annotate(
+            f"N{rec.range.start.line}",
+            (pos[k, 0], pos[k, 1]),
+            fontsize=8,
+            xytext=(4, 4),
+            textcoords="offset points",
+        )
+    ax_xy.grid(alpha=0.25)
 
-    ax_z.plot(t, z, color="tab:red", lw=1.2, label=f"{axis_names[z_index]} command")
+    # 2. Z over time with each lift's POS_LIMIT and target; lift flags shaded
+    for t0, t1 in _spans(t, active):
+        ax_z.axvspan(t0, t1, color="tab:red", alpha=0.08, lw=0)
+    ax_z.plot(t, z, color="tab:red", lw=1.3, label=f"{zn} command")
     for i, rec in enumerate(records):
         spec = rec.range.start
         span = [rec.t_start, rec.t_end]
         ax_z.plot(
-            span, [spec.pos_limit * MM] * 2, "k--", lw=0.8, label="POS_LIMIT" if i == 0 else None
+            span, [spec.pos_limit * MM] * 2, "k--", lw=0.9, label="POS_LIMIT" if i == 0 else None
         )
         ax_z.plot(
             span,
             [spec.target * MM] * 2,
             color="tab:green",
-            lw=0.8,
+            lw=1.2,
             label="POS (target)" if i == 0 else None,
         )
-    ax_z.set_ylabel(f"{axis_names[z_index]} [mm]")
-    ax_z.legend(loc="upper right", fontsize=8)
+    ax_z.set_ylabel(f"{zn} [mm]")
+    ax_z.legend(loc="upper left", fontsize=8, ncol=3)
     ax_z.grid(alpha=0.3)
 
-    ax_v.plot(t, v_path, color="tab:blue", lw=1.0, label="path velocity")
-    ax_v.set_ylabel("v_path [mm/s]")
+    # 3. the two CNC objects as the PLC sees them
+    ax_f.step(t, active.astype(float) + 1.2, where="post", color="tab:red")
+    ax_f.step(t, suppressed.astype(float), where="post", color="tab:orange")
+    ax_f.set_yticks([0.5, 1.7], ["lift_suppressed", "lift_active"], fontsize=8)
+    ax_f.set_ylim(-0.2, 2.4)
+    ax_f.tick_params(labelbottom=False)
+    ax_f.grid(alpha=0.3, axis="x")
+
+    # 4. path velocity and override
+    ax_v.plot(t, v_path, color="tab:blue", lw=1.0)
+    ax_v.set_ylabel("path velocity [mm/s]", color="tab:blue")
+    ax_v.set_xlabel("t [s]")
     ax_o = ax_v.twinx()
-    ax_o.plot(t, override, color="tab:gray", lw=0.8, ls=":", label="override")
-    ax_o.set_ylabel("override [%]")
+    ax_o.plot(t, override, color="tab:gray", lw=1.0, ls=":")
+    ax_o.set_ylabel("override [%]", color="tab:gray")
     ax_o.set_ylim(0, max(210.0, float(override.max()) + 10.0))
     ax_v.grid(alpha=0.3)
 
-    ax_f.step(t, active.astype(float) + 1.1, where="post", color="tab:red", label="lift_active")
-    ax_f.step(
-        t, suppressed.astype(float), where="post", color="tab:orange", label="lift_suppressed"
+    # 5. zoom on the longest lift: Z against the time the path needs to LIFT_END
+    best = max(
+        (r for r in records if not r.range.suppressed),
+        key=lambda r: r.t_end - r.t_start,
+        default=None,
     )
-    ax_f.set_yticks([0, 1, 1.1, 2.1], ["0", "1", "0", "1"])
-    ax_f.set_xlabel("t [s]")
-    ax_f.legend(loc="upper right", fontsize=8)
-    ax_f.grid(alpha=0.3)
-    fig.suptitle(title)
-    fig.savefig(path, dpi=110)
+    if best is not None:
+        m = (t >= best.t_start - 0.02) & (t <= best.t_end + 0.02)
+        spec = best.range.start
+        ax_zoom.plot(t[m] - best.t_end, z[m], color="tab:red", lw=1.5, label=zn)
+        ax_zoom.axhline(spec.pos_limit * MM, color="k", ls="--", lw=0.9, label="POS_LIMIT")
+        ax_zoom.axhline(spec.target * MM, color="tab:green", lw=1.2, label="POS")
+        ax_zoom.axvline(0.0, color="tab:gray", lw=0.8, ls=":")
+        ax_zoom.annotate(
+            "path reaches LIFT_END",
+            (0.0, spec.target * MM),
+            fontsize=8,
+            xytext=(-120, 20),
+            textcoords="offset points",
+            arrowprops={"arrowstyle": "->", "lw": 0.7},
+        )
+        ax_zoom.set_title(
+            f"lift N{spec.line}: peak {best.peak * MM:.1f} mm, mean clearance "
+            f"{best.area / max(best.t_end - best.t_start, 1e-9) * MM:.1f} mm",
+            fontsize=9,
+        )
+        ax_zoom.set_xlabel("t − t(LIFT_END) [s]")
+        ax_zoom.set_ylabel(f"{zn} [mm]")
+        ax_zoom.legend(fontsize=8, loc="lower center")
+        ax_zoom.grid(alpha=0.3)
+    fig.suptitle(title, fontsize=12)
+    fig.savefig(path, dpi=100)
     plt.close(fig)
 
 

@@ -244,6 +244,9 @@ class GeoTask:
         if self.lift.current is not None:
             arrival = self._arrival()
             self.lift.step(t, arrival - self.lift.gen.t, self.ov_eff)
+            for finding in self.lift.findings:
+                self._emit(finding.name, t, self.line, finding.value)
+            self.lift.findings.clear()
             if self.lift.ending and self.lift.z_done:
                 self._close_lift(t, self.line)
         self._settle(t)

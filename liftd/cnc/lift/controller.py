@@ -20,6 +20,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from liftd.cnc.lift.advanced import AdvancedLift, Phase
+from liftd.cnc.lift.guard import GuardFinding, LiftGuard
 from liftd.cnc.lift.profile import LiftProfileError, LiftProfiles
 from liftd.cnc.lift.ranges import LiftRange
 from liftd.cnc.params import AxisParams
@@ -57,6 +58,8 @@ class LiftController:
         self.suppressed = False
         self.ov_at_descent: float | None = None
         self.ending = False  # LIFT_END passed while Z still moved: close when Z is there
+        self.guard = LiftGuard(axis)
+        self.findings: list[GuardFinding] = []  # consumed by the GEO task each cycle
 
     # -- path-side limits -------------------------------------------------------------------------
     def z_time(self, z0: float, target: float) -> float:
@@ -72,9 +75,11 @@ class LiftController:
     def start(self, rng: LiftRange, t: float, z: float, vz: float, az: float) -> None:
         spec = rng.start
         beyond = rng.beyond_limit or ((z < spec.pos_limit) if spec.down else (z > spec.pos_limit))
-        self.gen.start(
-            t, z, vz, az, spec.target, spec.pos_limit, spec.down, rng.suppressed or beyond
-        )
+        direct = rng.suppressed or beyond
+        self.gen.start(t, z, vz, az, spec.target, spec.pos_limit, spec.down, direct)
+        a, j = self.axis.a_max, self.axis.j_max
+        margin = vz * vz / (2.0 * a) + (abs(vz) * a / j if j != INF else 0.0)
+        self.guard.arm(z, spec.target, spec.pos_limit, spec.down, direct, margin)
         self.current = rng
         self.suppressed = rng.suppressed
         self.active = not rng.suppressed or rng.moves_z or abs(z - spec.target) > 1e-12
@@ -119,6 +124,7 @@ class LiftController:
         t_old = self.gen.t
         z_old = self.gen.z
         self.gen.step(t_new, t_rem)
+        self._guard(t_new)
         if self.gen.phase is Phase.DOWN and not was_down:
             self.ov_at_descent = override
         elif self.gen.phase is Phase.UP:
@@ -130,6 +136,16 @@ class LiftController:
             sign = -1.0 if spec.down else 1.0
             rec.area += 0.5 * sign * ((z_old - base) + (self.gen.z - base)) * (t_new - t_old)
             rec.peak = max(rec.peak, self.gen.z) if not spec.down else min(rec.peak, self.gen.z)
+
+    def _guard(self, t: float) -> None:
+        z, findings = self.guard.check(self.gen.z, self.gen.fallbacks)
+        if not findings:
+            return
+        self.findings.extend(findings)
+        if z != self.gen.z and self.current is not None:
+            # never expected: stop at the bound and go straight (time-optimally) to POS
+            spec = self.current.start
+            self.gen.start(t, z, 0.0, 0.0, spec.target, spec.pos_limit, spec.down, True)
 
     @property
     def z_done(self) -> bool:
