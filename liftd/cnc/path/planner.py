@@ -176,7 +176,21 @@ class Plan:
             else:
                 length = (z.s1 - z.s0) * (1.0 - MARGIN)
                 low = max(lowest_reachable(v, length, z.a_max, z.j_max), 1e-9)
-                traj = self.calc.position(s, v, 0.0, z.s1, low, low, z.a_max, z.j_max)
+                try:
+                    traj = self.calc.position(s, v, 0.0, z.s1, low, low, z.a_max, z.j_max)
+                except PlanError:
+                    # `low` is just below v on a very short zone: ruckig's brake pre-phase to
+                    # v_max = low cannot also meet the position (lifting seed 1651); allowing
+                    # the current velocity reaches the same end state a little later
+                    try:
+                        traj = self.calc.position(
+                            s, v, 0.0, z.s1, low, max(v, low), z.a_max, z.j_max
+                        )
+                    except PlanError:
+                        self.failures += 1  # last resort, as above
+                        self.pieces.append(Piece(t, brake.duration, brake, s_stop, -1))
+                        t, s = t + brake.duration, s_stop
+                        break
             self.pieces.append(Piece(t, traj.duration, traj, z.s1, k + 1, low))
             t, s, v, a = t + traj.duration, z.s1, low, 0.0
         self.pieces.append(Piece(t, INF, None, s, -1))
