@@ -1,11 +1,14 @@
-"""≥ 1000 seeded random closed-loop Advanced-Lifting runs (issue 4, safety figure).
+"""≥ 1000 seeded random closed-loop lift runs (issue 4 safety figure; issue 5 with `lifting`).
 
 Each run: random Z dynamics, cycle time, program (1–3 lift ranges, DOWN, waits), override steps
 and feed holds. Checks: |v|, |a|, |j| of every axis ≤ limit (+1e-9 relative, finite
 differences), no excursion beyond POS_LIMIT or the software limits (+0.1 µm), arrival error
 ≤ 1 µm, never late (no lift.late). Prints one JSON line with the counts and the first failures.
 
-Run: .venv/bin/python bench/bench_lift_safety.py [RUNS]
+Path-based Lifting (METHOD = lifting) is checked the same way except Z's acceleration, which
+may reach a_max·(1 + P442/1000·override²) by the method's design (lift/path_based.py).
+
+Run: .venv/bin/python bench/bench_lift_safety.py [RUNS [FIRST_SEED [advanced|lifting]]]
 """
 
 from __future__ import annotations
@@ -18,17 +21,19 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from bench.stress_cases import describe, scenario, violations
+from liftd.cnc.params import LiftMethod
 from tests.helpers import run_task
 
 
 def main() -> None:
     runs = int(sys.argv[1]) if len(sys.argv) > 1 else 1000
     first = int(sys.argv[2]) if len(sys.argv) > 2 else 0
+    method = LiftMethod(sys.argv[3]) if len(sys.argv) > 3 else LiftMethod.ADVANCED
     failures: list[dict[str, object]] = []
     cycles = lifts = 0
     t0 = time.perf_counter()
     for seed in range(first, first + runs):
-        sc = scenario(seed)
+        sc = scenario(seed, method)
         try:
             task, snaps = run_task(sc.channel, sc.text, sc.schedule, max_time=120)
         except Exception as exc:  # a crash is a failure to report, not the end of the bench
@@ -45,6 +50,7 @@ def main() -> None:
         json.dumps(
             {
                 "bench": "lift_safety",
+                "method": method.value,
                 "runs": runs,
                 "first_seed": first,
                 "cycles": cycles,

@@ -4,14 +4,19 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING, Any, TextIO
 
 from liftd import __version__
 from liftd.cnc.nc import DecoderContext, Severity, decode
 from liftd.settings import ConfigError, Settings, load_settings
+
+if TYPE_CHECKING:
+    from liftd.simulate import Schedule, SimResult
 
 EXIT_OK = 0
 EXIT_PROGRAM = 1
@@ -76,10 +81,8 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     from liftd.simulate import (  # noqa: PLC0415
         Schedule,
         SpecError,
-        channel_for,
         parse_feedhold_spec,
         parse_override_spec,
-        simulate,
     )
 
     try:
@@ -89,6 +92,9 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         )
     except SpecError as exc:
         print(f"liftd simulate: {exc}", file=sys.stderr)
+        return EXIT_CONFIG
+    if args.compare and args.method != "config":
+        print("liftd simulate: --compare runs both methods; drop --method", file=sys.stderr)
         return EXIT_CONFIG
     if args.plot and not plot.available():
         print(f"liftd simulate: --plot: {plot.HINT}", file=sys.stderr)
@@ -104,28 +110,56 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     except OSError as exc:
         print(f"{program}: error: cannot read program: {exc.strerror or exc}", file=sys.stderr)
         return EXIT_PROGRAM
-    ch = channel_for(settings.channel, args.method)
-    delay = settings.config.plc.m_ack_delay_ms * 1e-3
+    methods = ("advanced", "lifting") if args.compare else (args.method,)
+    names = _trace_names(args.trace, methods) if args.trace else {}
+    traces: dict[str, TextIO] = {}
     try:
-        trace = open(args.trace, "w", encoding="utf-8", newline="") if args.trace else None  # noqa: SIM115
+        with contextlib.ExitStack() as stack:
+            for method, name in names.items():
+                traces[method] = stack.enter_context(open(name, "w", encoding="utf-8", newline=""))
+            if args.compare:
+                return _compare(args, settings, program, text, schedule, traces)
+            return _simulate(args, settings, program, text, schedule, traces.get(args.method))
     except OSError as exc:
-        print(
-            f"{args.trace}: error: cannot write the trace: {exc.strerror or exc}", file=sys.stderr
-        )
+        print(f"{exc.filename}: error: cannot write the trace: {exc.strerror}", file=sys.stderr)
         return EXIT_RUNTIME
-    try:
-        result = simulate(ch, text, schedule, delay, trace, args.max_time)
-    finally:
-        if trace is not None:
-            trace.close()
+
+
+def _trace_names(trace: str, methods: tuple[str, ...]) -> dict[str, str]:
+    """One trace per run: OUT.csv, or OUT.advanced.csv and OUT.lifting.csv with --compare."""
+    if len(methods) == 1:
+        return {methods[0]: trace}
+    out = Path(trace)
+    return {m: str(out.with_name(f"{out.stem}.{m}{out.suffix or '.csv'}")) for m in methods}
+
+
+def _report_run(program: Path, result: SimResult, max_time: float, tag: str = "") -> None:
     if not result.finished:
         print(
-            f"liftd simulate: the program did not end within {args.max_time} s simulated "
-            "(--max-time)",
+            f"liftd simulate: the program did not end within {max_time} s simulated (--max-time)",
             file=sys.stderr,
         )
     for item in result.summary["errors"]:
-        print(f"{program}:{item['line']}: error {item['id']}: {item['message']}", file=sys.stderr)
+        print(
+            f"{program}:{item['line']}: error {item['id']}: {item['message']}{tag}", file=sys.stderr
+        )
+
+
+def _simulate(
+    args: argparse.Namespace,
+    settings: Settings,
+    program: Path,
+    text: str,
+    schedule: Schedule,
+    trace: TextIO | None,
+) -> int:
+    from liftd import plot  # noqa: PLC0415
+    from liftd.simulate import channel_for, simulate  # noqa: PLC0415
+
+    ch = channel_for(settings.channel, args.method)
+    delay = settings.config.plc.m_ack_delay_ms * 1e-3
+    result = simulate(ch, text, schedule, delay, trace, args.max_time)
+    _report_run(program, result, args.max_time)
     if args.plot:
         title = f"{program.name}: {plot.describe(result.summary)}"
         plot.plot_run(
@@ -136,13 +170,43 @@ def cmd_simulate(args: argparse.Namespace) -> int:
             result.records,
             title,
         )
-    if args.json:
-        print(json.dumps(result.summary, indent=None))
-    else:
-        print(plot.describe(result.summary))
-    if result.program_error:
+    return _output(args, result.summary, plot.describe, result.program_error, result.finished)
+
+
+def _output(
+    args: argparse.Namespace,
+    summary: dict[str, Any],
+    describe: Callable[[dict[str, Any]], str],
+    program_error: bool,
+    finished: bool,
+) -> int:
+    print(json.dumps(summary, indent=None) if args.json else describe(summary))
+    if program_error:
         return EXIT_PROGRAM
-    return EXIT_OK if result.finished else EXIT_RUNTIME
+    return EXIT_OK if finished else EXIT_RUNTIME
+
+
+def _compare(
+    args: argparse.Namespace,
+    settings: Settings,
+    program: Path,
+    text: str,
+    schedule: Schedule,
+    traces: dict[str, TextIO],
+) -> int:
+    from liftd import compare, plot  # noqa: PLC0415
+
+    ch = settings.channel
+    delay = settings.config.plc.m_ack_delay_ms * 1e-3
+    result = compare.compare(ch, text, schedule, delay, traces, args.max_time, program.name)
+    for method, run in result.results.items():
+        _report_run(program, run, args.max_time, f" ({method} run)")
+    if args.plot:
+        z = ch.axis(ch.lift_axis)
+        warn = result.summary["lifting"]["z_overload"]["warning_ratio"]
+        title = f"{program.name}: Advanced Lifting (red) vs path-based Lifting (blue)"
+        plot.plot_compare(Path(args.plot), result, z.a_max, warn, title)
+    return _output(args, result.summary, compare.describe, result.program_error, result.finished)
 
 
 def cmd_run(args: argparse.Namespace) -> int:
@@ -199,6 +263,13 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--trace", metavar="OUT.csv", help="write one CSV row per GEO cycle")
     sim.add_argument("--plot", metavar="OUT.png", help="write a figure of the run")
     sim.add_argument("--json", action="store_true", help="print the JSON summary on stdout")
+    sim.add_argument(
+        "--compare",
+        action="store_true",
+        help="run Advanced Lifting and path-based Lifting on the same program and schedule; "
+        "--json/--plot then show both per lift, --trace writes OUT.advanced.csv and "
+        "OUT.lifting.csv",
+    )
     sim.add_argument(
         "--max-time",
         type=float,

@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from liftd.cnc.lift.controller import LiftRecord
+from liftd.compare import MAX_PLOTTED, Comparison, as_arrays, occurrence_keys
 
 MM = 1e3
 HINT = "plotting needs matplotlib: pip install 'liftd[plot]' (or: .venv/bin/pip install matplotlib)"
@@ -163,3 +164,76 @@ def describe(summary: dict[str, Any]) -> str:
         f"method {summary['method']}, {len(lifts)} lifts, mean clearance [mm]: "
         f"{', '.join(clear) or '-'}, duration {summary['duration_s']:.2f} s"
     )
+
+
+COLOURS = {"advanced": "tab:red", "lifting": "tab:blue"}
+
+
+def plot_compare(
+    path: Path, comparison: Comparison, a_max: float, warn_ratio: float, title: str
+) -> None:
+    """Per lift (the first MAX_PLOTTED): Z over time and over path distance for both methods,
+    POS_LIMIT and target, and the cycles where Z's sampled acceleration exceeds a_max (dots)
+    or the P-AXIS-00441 warning level (crosses)."""
+    import matplotlib  # noqa: PLC0415
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt  # noqa: PLC0415
+
+    pairs = comparison.summary["lifts"][:MAX_PLOTTED]
+    runs = {
+        m: dict(zip(occurrence_keys(x.start_line for x in s.lifts), s.lifts, strict=True))
+        for m, s in comparison.samples.items()
+    }
+    keys = occurrence_keys(p["start_line"] for p in pairs)
+    rows = max(1, len(keys))
+    fig, axes = plt.subplots(rows, 2, figsize=(13, 2.5 * rows + 0.8), squeeze=False)
+    for i, (key, pair) in enumerate(zip(keys, pairs, strict=False)):
+        ax_t, ax_s = axes[i]
+        ref = pair["advanced"] or pair["lifting"]
+        for method in ("advanced", "lifting"):
+            lift = runs[method].get(key)
+            if lift is None:
+                continue
+            data = as_arrays(lift)
+            t = data[:, 0] - lift.t_start
+            s = (data[:, 1] - lift.s_start) * MM
+            z = data[:, 2] * MM
+            ratio = np.abs(data[:, 3]) / a_max
+            entry = pair[method]
+            label = (
+                f"{method}: clearance {entry['mean_clearance']:.1f} mm, "
+                f"Z a/a_max {entry['z_a_max_ratio']:.2f}"
+                if entry
+                else method
+            )
+            ax_t.plot(t, z, color=COLOURS[method], lw=1.4, label=label)
+            ax_s.plot(s, z, color=COLOURS[method], lw=1.4)
+            over = ratio > 1.0 + 1e-6
+            warn = ratio > warn_ratio
+            for ax, x in ((ax_t, t), (ax_s, s)):
+                ax.scatter(x[over & ~warn], z[over & ~warn], s=7, color="black", zorder=3)
+                ax.scatter(x[warn], z[warn], s=28, marker="x", color="black", zorder=3)
+        for ax in (ax_t, ax_s):
+            ax.axhline(ref["pos_limit"], color="k", ls="--", lw=0.8)
+            ax.axhline(ref["z_target"], color="tab:green", lw=1.0)
+            ax.grid(alpha=0.3)
+            ax.set_ylabel("Z [mm]")
+        ratio_text = f" (×{pair['clearance_ratio']:.2f})" if pair["clearance_ratio"] else ""
+        ax_t.set_title(
+            f"lines {pair['start_line']}–{pair['end_line']}: mean clearance advanced / lifting"
+            f"{ratio_text}{' (suppressed)' if ref['suppressed'] else ''}",
+            fontsize=9,
+        )
+        ax_t.legend(fontsize=7, loc="best")
+        ax_s.set_title("Z over the path distance (coupled: fixed shape)", fontsize=9)
+    axes[-1][0].set_xlabel("t − t(LIFT_START) [s]")
+    axes[-1][1].set_xlabel("path distance from LIFT_START [mm]")
+    fig.suptitle(
+        f"{title}\n--- POS_LIMIT, green: POS; Z acceleration above a_max: dots, above the "
+        f"P-AXIS-00441 warning level ({warn_ratio:.2f} a_max): crosses",
+        fontsize=10,
+    )
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)

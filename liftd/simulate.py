@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Any, TextIO
 
@@ -181,6 +181,7 @@ def simulate(
     m_ack_delay: float,
     trace: TextIO | None = None,
     max_time: float = 3600.0,
+    on_cycle: Callable[[GeoSnapshot], None] | None = None,
 ) -> SimResult:
     dt = ch.cycle_time
     task = GeoTask(ch, text)
@@ -196,6 +197,8 @@ def simulate(
         if writer is not None:
             writer.write(snap)
         monitor.add(snap.positions)
+        if on_cycle is not None:
+            on_cycle(snap)
         if series.wants():
             series.add(
                 (
@@ -235,6 +238,9 @@ def lift_summary(rec: LiftRecord, method: LiftMethod) -> dict[str, Any]:
         "t_end": round(rec.t_end, 6),
         "arrival_error": round(rec.arrival_error * MM, 6),
         "path_delay_s": round(rec.path_delay, 6),
+        "duration_s": round(duration, 6),
+        "z_a_max_ratio": round(rec.z_a_max_ratio, 6),
+        "premature": rec.premature,
     }
 
 
@@ -265,5 +271,11 @@ def build_summary(
         "method": ch.lift_method.value,
         "lifts": [lift_summary(r, ch.lift_method) for r in task.lift.records],
         "limits": limits,
+        "z_overload": {
+            "warning_ratio": task.z_monitor.warn_ratio,
+            "error_ratio": task.z_monitor.err_ratio,
+            "warning_cycles": task.z_monitor.warning_cycles,
+            "error_cycles": task.z_monitor.error_cycles,
+        },
         "errors": errors,
     }

@@ -5,6 +5,11 @@ Advanced Lifting: if Z cannot reach POS in the path time of a range, "the path f
 reduced automatically; in extreme cases (path length 0) the path axes stop" (vendor §2.1.1).
 liftd caps the path velocity inside such a range at length / t_Z, where t_Z is Z's time-optimal
 move to POS; a range without path motion is a stop where the path waits for Z.
+
+Path-based Lifting: z(s) is planned here for every range with path motion (lift/path_based.py)
+and the segments of the range get the reduced feed and the path acceleration and jerk limits
+the coupling needs. A range without path motion, or one ruckig refuses to plan, is run
+time-based like Advanced Lifting (the path waits for Z).
 """
 
 from __future__ import annotations
@@ -12,11 +17,12 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 
+from liftd.cnc.lift.path_based import RangePlan, plan_range
 from liftd.cnc.lift.profile import LiftProfileError, LiftProfiles
 from liftd.cnc.lift.ranges import LiftRange, find_ranges
 from liftd.cnc.nc import DecoderContext, NcError, decode
 from liftd.cnc.nc.blocks import Severity
-from liftd.cnc.params import ChannelParams, LiftMethod
+from liftd.cnc.params import PLANNING_MARGIN, ChannelParams, LiftMethod
 from liftd.cnc.path.geometry import Vec
 from liftd.cnc.path.program import Action, ActionKind, PathProgram, prepare
 
@@ -30,6 +36,7 @@ class GeoProgram:
     first_line: int
     stops: tuple[tuple[int, ...], ...]  # per range: waiting points strictly inside it
     z_index: int
+    plans: tuple[RangePlan | None, ...]  # per range: z(s) of path-based Lifting, else None
 
     def range_at(self, action: Action) -> LiftRange:
         for rng in self.ranges:
@@ -84,6 +91,42 @@ def _cap_for_lifts(
     return dataclasses.replace(path, segments=tuple(segs))
 
 
+def lifting_profiles(ch: ChannelParams) -> LiftProfiles:
+    """Planning dynamics of path-based Lifting: a_max · P-AXIS-00442/1000 (vendor §4.2.2)."""
+    z = ch.axis(ch.lift_axis)
+    share = z.dyn_a_err if z.dyn_a_err > 0.0 else 1.0
+    return LiftProfiles(z.v_max, z.a_max * share, z.j_max)
+
+
+def _couple_lifts(
+    path: PathProgram, ranges: tuple[LiftRange, ...], ch: ChannelParams
+) -> tuple[PathProgram, tuple[RangePlan | None, ...]]:
+    z = ch.axis(ch.lift_axis)
+    prof = lifting_profiles(ch)
+    segs = list(path.segments)
+    plans: list[RangePlan | None] = [None] * len(ranges)
+    for rng in ranges:
+        k_last = rng.k_end if rng.k_end >= 0 else len(path.segments)
+        if k_last <= rng.k_start:  # no path motion in the range: time-based, the path waits
+            continue
+        try:
+            plan, caps = plan_range(path, rng, prof)
+        except LiftProfileError:
+            continue
+        plans[rng.index] = plan
+        for cap in caps:
+            seg = segs[cap.k]
+            a, j, v = seg.a_max, seg.j_max, seg.v_lift
+            if cap.dz_ds > 0.0:  # the coupling term (dz/ds)·s̈ gets a_max of Z (see path_based)
+                a = min(a, z.a_max / cap.dz_ds)
+                j = min(j, z.j_max / cap.dz_ds)
+                # Z is coupled like a path axis: whatever the override, ż = (dz/ds)·ṡ ≤ v_max
+                v = min(v, z.v_max * (1.0 - PLANNING_MARGIN) / cap.dz_ds)
+            v_ov = min(seg.v_lift_ov, cap.v_cap)
+            segs[cap.k] = seg.limited(v_ov, a, j, v)
+    return dataclasses.replace(path, segments=tuple(segs)), tuple(plans)
+
+
 def _stops_inside(path: PathProgram, rng: LiftRange) -> tuple[int, ...]:
     if rng.k_end < 0:
         return ()
@@ -94,8 +137,11 @@ def load_program(text: str, ch: ChannelParams, start: Vec) -> GeoProgram:
     result = decode(text, DecoderContext.from_channel(ch, start))
     path = prepare(result.blocks, ch, start)
     ranges = find_ranges(path, ch)
+    plans: tuple[RangePlan | None, ...] = (None,) * len(ranges)
     if ch.lift_method is LiftMethod.ADVANCED:
         path = _cap_for_lifts(path, ranges, ch)
+    elif ch.lift_method is LiftMethod.LIFTING:
+        path, plans = _couple_lifts(path, ranges, ch)
     first = result.blocks[0].line if result.blocks else 1
     warnings = tuple(e for e in result.errors if e.severity is Severity.WARNING)
     return GeoProgram(
@@ -106,4 +152,5 @@ def load_program(text: str, ch: ChannelParams, start: Vec) -> GeoProgram:
         first_line=first,
         stops=tuple(_stops_inside(path, r) for r in ranges),
         z_index=ch.lift_axis_index,
+        plans=plans,
     )

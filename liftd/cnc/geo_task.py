@@ -8,16 +8,18 @@ same inputs give bit-identical snapshots. Order within a cycle:
 2. the path moves to t; the actions of every boundary it passes run at that boundary's exact
    time; where the path rests, waiting actions (M acknowledge, dwell, M00, Z not yet at POS)
    hold it, and it resumes at the exact time the wait ended;
-3. the lift axis moves to t against the absolute time the path reaches its horizon;
-4. the snapshot is published.
+3. the lift axis moves to t: against the absolute time the path reaches its horizon
+   (time-based), or to the path position (path-based Lifting, coupled);
+4. the lift axis acceleration monitor samples Z; the snapshot is published.
 """
 
 from __future__ import annotations
 
 from liftd.cnc.geo_program import GeoProgram, load_program
 from liftd.cnc.lift.controller import LiftController
+from liftd.cnc.lift.monitor import AccelMonitor
 from liftd.cnc.lift.ranges import LiftRange
-from liftd.cnc.params import ChannelParams, MSync
+from liftd.cnc.params import ChannelParams, LiftMethod, MSync
 from liftd.cnc.path.interpolator import Crossing, Interpolator
 from liftd.cnc.path.program import Action, ActionKind
 from liftd.cnc.snapshot import ChannelState, Command, Event, GeoInputs, GeoSnapshot, LiftPhase
@@ -65,6 +67,7 @@ class GeoTask:
         self.prog: GeoProgram
         self.interp: Interpolator
         self.lift: LiftController
+        self.z_monitor = AccelMonitor(channel.axis(channel.lift_axis), channel.cycle_time)
         self._load(self.home)
 
     # -- program control ---------------------------------------------------------------------------
@@ -72,7 +75,11 @@ class GeoTask:
         self.prog = load_program(self.text, self.ch, start)
         self.interp = Interpolator(self.prog.path, self.ch.look_ahead_blocks)
         self.lift = LiftController(
-            self.ch.axis(self.ch.lift_axis), self.prog.ranges, self.ch.cycle_time
+            self.ch.axis(self.ch.lift_axis),
+            self.prog.ranges,
+            self.ch.cycle_time,
+            self.prog.plans,
+            both_flags=self.ch.lift_method is not LiftMethod.LIFTING,
         )
         self.waiting = []
         self.m_acked.clear()
@@ -154,7 +161,7 @@ class GeoTask:
     def _positions(self) -> tuple[float, ...]:
         pos = self.interp.position()
         if self.lift.current is not None:
-            pos = (*pos[: self.z_index], self.lift.gen.z, *pos[self.z_index + 1 :])
+            pos = (*pos[: self.z_index], self.lift.z, *pos[self.z_index + 1 :])
         return pos
 
     # -- lift horizon and override --------------------------------------------------------------
@@ -187,7 +194,7 @@ class GeoTask:
         if lift.current is None or holding:
             return ov_req
         phase = lift.phase
-        if phase in (LiftPhase.NONE, LiftPhase.DONE, LiftPhase.HOLD_LIMIT):
+        if phase in (LiftPhase.NONE, LiftPhase.DONE, LiftPhase.HOLD_LIMIT, LiftPhase.COUPLED):
             return ov_req
         if phase is LiftPhase.DOWN and lift.ov_at_descent is not None:
             self.ov_max = lift.ov_at_descent
@@ -242,15 +249,30 @@ class GeoTask:
         if self.state is ChannelState.ACTIVE:
             self._run_path(t)
         if self.lift.current is not None:
-            arrival = self._arrival()
-            self.lift.step(t, arrival - self.lift.gen.t, self.ov_eff)
+            if self.lift.coupled is not None:
+                self.lift.couple(t, self.interp.s, self.interp.v, self.interp.a)
+            else:
+                self.lift.step(t, self._arrival() - self.lift.t, self.ov_eff)
             for finding in self.lift.findings:
                 self._emit(finding.name, t, self.line, finding.value)
             self.lift.findings.clear()
             if self.lift.ending and self.lift.z_done:
                 self._close_lift(t, self.line)
         self._settle(t)
-        return self._snapshot(t, inputs)
+        positions = self._positions()
+        self._monitor(positions[self.z_index], t)
+        return self._snapshot(t, inputs, positions)
+
+    def _monitor(self, z: float, t: float) -> None:
+        mon = self.z_monitor
+        entered = mon.sample(z)
+        rec = self.lift.record
+        if rec is not None and mon.ratio > rec.z_a_max_ratio:
+            rec.z_a_max_ratio = mon.ratio
+        if entered == mon.ERROR:
+            self._emit("lift.z_acc_error", t, self.line, mon.ratio)
+        elif entered == mon.WARNING:
+            self._emit("lift.z_acc_warning", t, self.line, mon.ratio)
 
     def _acknowledge(self, number: int, t: float) -> None:
         self.m_pending = -1
@@ -330,8 +352,7 @@ class GeoTask:
 
     def _lift_start(self, rng: LiftRange, t_at: float, crossing: Crossing | None) -> None:
         if self.lift.current is not None:  # the last lift is still finishing (late): go on from Z
-            gen = self.lift.gen
-            z, vz, az = gen.z, gen.vz, gen.az
+            z, vz, az = self.lift.z, self.lift.vz, self.lift.az
             self._close_lift(t_at, rng.start.line)
         else:  # the programmed Z at the start (the decoder tracked every earlier lift's POS)
             u_z = self.prog.z_direction_into(rng.k_start)  # Z moves with the path until here
@@ -339,6 +360,9 @@ class GeoTask:
             vz = crossing.v * u_z if crossing else 0.0
             az = crossing.a * u_z if crossing else 0.0
         self.lift.start(rng, t_at, z, vz, az)
+        if self.lift.coupled is not None:
+            s = self.prog.path.boundaries[rng.k_start].s
+            self.lift.couple(t_at, s, crossing.v if crossing else 0.0, 0.0)
         rec = self.lift.record
         if rec is not None and rng.k_end >= 0:
             arrival = self.interp.trial_time(rng.k_end, self.ov_eff, nominal=True)
@@ -355,13 +379,16 @@ class GeoTask:
         lift = self.lift
         if lift.current is None:
             return True
-        if lift.gen.t < t_at:
-            lift.step(t_at, t_at - lift.gen.t, self.ov_eff)  # Z to the time the path got here
+        if lift.coupled is not None:  # Z to where the path got
+            k = lift.current.k_end
+            lift.couple(t_at, self.prog.path.boundaries[k].s, crossing.v if crossing else 0.0, 0.0)
+        elif lift.t < t_at:
+            lift.step(t_at, t_at - lift.t, self.ov_eff)  # Z to the time the path got here
         if crossing is None and not lift.z_done:
             lift.step(now, 0.0, self.ov_eff)  # the path waits here for Z
             if not self._z_landed():
                 return False
-            t_at = self.wait_since = max(t_at, lift.gen.landed)
+            t_at = self.wait_since = max(t_at, lift.landed)
         if not lift.z_done:
             # Should not happen (the path is limited so Z makes it); Z finishes its move while
             # the path goes on, and the event says by how much it was late.
@@ -382,12 +409,12 @@ class GeoTask:
             rec.path_delay = max(0.0, rec.t_end - rec.t_start - rec.nominal_time)
             self._emit("lift.end", rec.t_end, line, rec.peak)
 
-    def _snapshot(self, t: float, inputs: GeoInputs) -> GeoSnapshot:
+    def _snapshot(self, t: float, inputs: GeoInputs, positions: tuple[float, ...]) -> GeoSnapshot:
         lift = self.lift
         if lift.current is None:
             phase, vz, az = LiftPhase.NONE, 0.0, 0.0
         else:
-            phase, vz, az = lift.phase, lift.gen.vz, lift.gen.az
+            phase, vz, az = lift.phase, lift.vz, lift.az
         # positional: GeoSnapshot field order (keywords cost ~2 µs per cycle here)
         return GeoSnapshot(
             self.cycle,
@@ -395,7 +422,7 @@ class GeoTask:
             self.state,
             self.line,
             self.interp.segment,
-            self._positions(),
+            positions,
             self.interp.v,
             self.ov_eff,
             self.ov_req,

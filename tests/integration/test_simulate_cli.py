@@ -40,6 +40,10 @@ LIFT_KEYS = {
     "t_end",
     "arrival_error",
     "path_delay_s",
+    # compatible extensions of DESIGN.md §3.3
+    "duration_s",
+    "z_a_max_ratio",
+    "premature",
 }
 
 
@@ -87,6 +91,7 @@ def test_summary_schema(demo_run: tuple[dict, list[list[str]], Path]) -> None:
         "method",
         "lifts",
         "limits",
+        "z_overload",
         "errors",
     }
     assert summary["method"] == "advanced" and summary["errors"] == []
@@ -94,6 +99,11 @@ def test_summary_schema(demo_run: tuple[dict, list[list[str]], Path]) -> None:
     for lift in summary["lifts"]:
         assert set(lift) == LIFT_KEYS
         assert lift["arrival_error"] <= 0.001  # mm
+        assert lift["z_a_max_ratio"] <= 1.0 + 1e-9 and not lift["premature"]
+    assert max(x["z_a_max_ratio"] for x in summary["lifts"]) > 0.9  # Z uses its a_max
+    overload = summary["z_overload"]
+    assert overload["warning_cycles"] == overload["error_cycles"] == 0
+    assert (overload["warning_ratio"], overload["error_ratio"]) == (1.5, 2.0)  # list defaults
     assert {"z_v_max_ratio", "z_a_max_ratio", "z_j_max_ratio"} <= set(summary["limits"])
     assert max(summary["limits"].values()) <= 1 + 1e-9
     suppressed = [x for x in summary["lifts"] if x["suppressed"]]

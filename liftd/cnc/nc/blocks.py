@@ -54,6 +54,7 @@ class ErrorId(enum.IntEnum):
     DWELL_MISSING = 990016  # G04 without a time
     LIFT_WRONG_AXIS = 990017  # lift command on an axis that is not the configured lift axis
     UNKNOWN_AXIS = 990018  # address letter that is not an axis of the channel
+    LIFT_STEP_SLOPE = 990019  # warning: STEP slope with path-based Lifting (Z overload)
 
 
 class Severity(enum.Enum):

@@ -531,6 +531,17 @@ class _Decoder:
                 column,
                 "HSC slope (type 3) is not supported with Advanced Lifting",
             )
+        if self.slope is SlopeType.STEP and self.ctx.lift_method is LiftMethod.LIFTING:
+            self.errors.append(
+                NcError(
+                    int(ErrorId.LIFT_STEP_SLOPE),
+                    lineno,
+                    column,
+                    "STEP slope with path-based Lifting: the lift axis can be overloaded "
+                    "(vendor §2.2.1 asks for TRAPEZ)",
+                    Severity.WARNING,
+                )
+            )
         z0 = self.pos[self.z]
         base = z0 if words.incremental else 0.0
         target = z0 if words.pos_mm is None else base + units.mm_to_m(words.pos_mm)
@@ -576,8 +587,15 @@ class _Decoder:
     def _command(self, lineno: int, n: int | None, cmd: CommandResult) -> None:
         if cmd.kind is CommandKind.FLUSH:
             assert cmd.flush is not None
-            if self.open_lift is not None and cmd.flush is not FlushKind.CONTINUE:
-                # #FLUSH / #FLUSH WAIT inside a range: implicit LIFT_END + LIFT_START (§2.4).
+            if (
+                self.open_lift is not None
+                and cmd.flush is not FlushKind.CONTINUE
+                and self.ctx.lift_method is not LiftMethod.LIFTING
+            ):
+                # #FLUSH / #FLUSH WAIT inside a range: implicit LIFT_END + LIFT_START (§2.4),
+                # POS reached in the flush block. Path-based Lifting keeps one range and cuts
+                # its plan at the flush instead, where Z is at POS_LIMIT (vendor §2.2.3 case 2,
+                # lift/path_based.py).
                 interrupted = self.open_lift
                 end = self._close_lift(LiftEndCause.FLUSH)
                 self._emit(Block(lineno, n, flush=cmd.flush, lift_end=end))

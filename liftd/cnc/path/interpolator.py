@@ -77,7 +77,10 @@ class Interpolator:
         k = first
         while k < len(segs):
             seg = segs[k]
-            cap = min(seg.feed * override, seg.v_phys, INF if nominal else seg.v_lift)
+            if nominal:
+                cap = min(seg.feed * override, seg.v_phys)
+            else:
+                cap = min(min(seg.feed, seg.v_lift_ov) * override, seg.v_phys, seg.v_lift)
             entry = 0.0 if k > first and self._is_stop(k) else self.program.boundaries[k].v_cap
             zones.append(Zone(seg.s0, seg.s0 + seg.length, cap, seg.a_max, seg.j_max, entry))
             k += 1

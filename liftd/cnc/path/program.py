@@ -56,6 +56,15 @@ class PathSegment:
     j_max: float
     rapid: bool
     v_lift: float = INF  # cap so a lift range takes at least Z's time (Advanced Lifting)
+    v_lift_ov: float = INF  # reduced feed of a path-based lift range (scales with the override)
+
+    def limited(self, v_lift_ov: float, a_max: float, j_max: float, v_lift: float) -> PathSegment:
+        """A copy with a path-based lift range's limits (positional: ~4× faster than
+        dataclasses.replace, which matters for 10 000 lift ranges)."""
+        return PathSegment(
+            self.index, self.line, self.geom, self.s0, self.length, self.v_phys, self.feed,
+            a_max, j_max, self.rapid, v_lift, v_lift_ov,
+        )  # fmt: skip
 
 
 @dataclass(frozen=True, slots=True)
