@@ -225,6 +225,37 @@ def cmd_run(args: argparse.Namespace) -> int:
     return EXIT_PROGRAM if errors else EXIT_OK
 
 
+def cmd_objects(args: argparse.Namespace) -> int:
+    """Print the CNC object catalogue of the GEO port (what a PLC can read and write)."""
+    from liftd.objects.catalog import Catalog  # noqa: PLC0415
+
+    try:
+        settings = _load(args)
+    except ConfigError as err:
+        _print_config_error(err)
+        return EXIT_CONFIG
+    ads = settings.config.ads
+    catalog = Catalog(settings.channel)
+    if args.json:
+        keys = ("symbol", "index_group", "index_offset", "type", "unit", "access", "comment")
+        objs = [dict(zip(keys, row, strict=True)) for row in catalog.rows()]
+        print(json.dumps({"net_id": ads.net_id, "ams_ports": list(ads.ams_ports), "objects": objs}))
+        return EXIT_OK
+    ports = ", ".join(str(p) for p in ads.ams_ports)
+    print(f"AMS NetId {ads.net_id}, port {ports} (GEO), TCP {ads.host}:{ads.port}")
+    print(
+        f"index-based addressing: IG 0x{catalog.ig_index:X} with IO = position in the "
+        "channel × 0x10000 + element; element attributes at IG + 0x100 (name), + 0x200 "
+        "(type), + 0x300 (length), + 0x400 (unit), + 0x500 (write flag), + 0x600 (address)"
+    )
+    head = ("symbol", "IG", "IO", "type", "unit", "access", "comment")
+    rows = [head, *catalog.rows()]
+    widths = [max(len(r[i]) for r in rows) for i in range(6)]
+    for row in rows:
+        print("  ".join(c.ljust(w) for c, w in zip(row[:6], widths, strict=True)) + "  " + row[6])
+    return EXIT_OK
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="liftd",
@@ -246,6 +277,11 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("-c", "--config", help="liftd.toml")
     run.add_argument("--program", help="NC program (default: the configured one)")
     run.set_defaults(func=cmd_run)
+
+    objects = sub.add_parser("objects", help="print the CNC objects and symbols served over ADS")
+    objects.add_argument("-c", "--config", help="liftd.toml")
+    objects.add_argument("--json", action="store_true", help="as JSON")
+    objects.set_defaults(func=cmd_objects)
 
     sim = sub.add_parser("simulate", help="run a program on a virtual clock, as fast as possible")
     sim.add_argument("program", help="NC program")

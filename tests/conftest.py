@@ -1,12 +1,19 @@
 from __future__ import annotations
 
+import os
 import shutil
 from collections.abc import Callable
 from pathlib import Path
 
 import pytest
+from hypothesis import settings
 
 from liftd.cnc.params import AxisParams, ChannelParams, LiftMethod, MSync, SlopeType
+
+# CI: derandomised and bounded; `HYPOTHESIS_PROFILE=dev` for longer local runs
+settings.register_profile("ci", max_examples=150, deadline=None, derandomize=True)
+settings.register_profile("dev", max_examples=5000, deadline=None)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 
 REPO = Path(__file__).resolve().parents[1]
 GOLDEN = REPO / "tests" / "golden"

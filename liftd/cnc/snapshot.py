@@ -76,3 +76,32 @@ class GeoSnapshot(NamedTuple):
     error_id: int
     error_line: int
     events: tuple[Event, ...]
+    v_block_max: float = 0.0  # highest path velocity of the active block (m/s), with override
+    v_block_end: float = 0.0  # path velocity allowed at the end of the active block (m/s)
+
+
+class LoopStats(NamedTuple):
+    """Timing of the GEO loop as the runtime measures it (all zero in simulation)."""
+
+    cycles: int = 0
+    exceeded: int = 0  # cycles that finished after their deadline (TwinCAT "exceed counter")
+    compute_last_us: float = 0.0
+    compute_max_us: float = 0.0
+    lateness_last_us: float = 0.0
+    lateness_max_us: float = 0.0
+
+
+class PlcSignal(enum.IntEnum):
+    """A PLC input of the GEO task, written over ADS (objects/) and applied by the runtime."""
+
+    OVERRIDE = 1  # value: fraction 0 … 2
+    FEED_HOLD = 2  # value: 0 / 1
+    START = 3
+    STOP = 4
+    RESET = 5
+    M_ACK = 6
+
+
+class PlcWrite(NamedTuple):
+    signal: PlcSignal
+    value: float = 1.0

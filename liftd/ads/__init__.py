@@ -1,0 +1,2 @@
+"""ADS/AMS protocol: sans-IO codec, framer, services and notifications; `server.py` is the only
+module with sockets. Knows nothing about the CNC (it serves an `ObjectProvider`)."""

@@ -1,0 +1,430 @@
+"""ADS services over an `ObjectProvider`: one dispatch table per command and per reserved index
+group, sum commands, symbol handles and notifications per connection. Pure (no IO, no clock:
+`now_ns` is passed in); the one place where an exception becomes an ADS result code, so every
+request gets an answer (reference/ads.md §0.4, style-anchors rule 3).
+"""
+
+from __future__ import annotations
+
+import struct
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import NamedTuple, Protocol
+
+from liftd.ads import wire
+from liftd.ads.constants import SUM_GROUPS, AdsErr, Adst, Command, IndexGroup, SymbolFlag
+from liftd.ads.errors import AdsError
+from liftd.ads.notifications import AmsAddr, NotificationTable
+from liftd.ads.wire import AmsHeader, ReadWriteRequest
+
+STATIC_HANDLE_BIT = 0x8000_0000  # 0xF005 offsets with this bit: a symbol's fixed address
+ENCODING = "cp1252"  # CNC strings (TF5200 "ADS access to CNC", isg-cnc.md §1.1)
+SUM_HEAD = struct.Struct("<III")
+SUM_RW_HEAD = struct.Struct("<IIII")
+
+
+@dataclass(frozen=True, slots=True)
+class Symbol:
+    """A name a client can resolve (0xF003, 0xF009) and the address its value lives at."""
+
+    name: str
+    index_group: int
+    index_offset: int
+    size: int
+    data_type: Adst
+    type_name: str  # PLC type string, e.g. BOOL, UDINT, LREAL (pyads maps it to a ctype)
+    comment: str = ""
+    writable: bool = False
+
+    def entry(self) -> bytes:
+        flags = 0 if self.writable else int(SymbolFlag.READONLY)
+        return wire.encode_symbol_entry(
+            wire.SymbolEntry(
+                self.index_group,
+                self.index_offset,
+                self.size,
+                int(self.data_type),
+                flags,
+                self.name.encode(ENCODING, "replace"),
+                self.type_name.encode(ENCODING, "replace"),
+                self.comment.encode(ENCODING, "replace"),
+            )
+        )
+
+
+class ObjectProvider(Protocol):
+    """What the device behind the port offers. Every method raises AdsError with its code."""
+
+    symbol_version: int  # changes when the symbol table changes (0xF008)
+
+    def read(self, index_group: int, index_offset: int, length: int) -> bytes: ...
+
+    def write(self, index_group: int, index_offset: int, data: bytes) -> None: ...
+
+    def read_write(
+        self, index_group: int, index_offset: int, read_length: int, data: bytes
+    ) -> bytes: ...
+
+    def find_symbol(self, name: str) -> Symbol: ...
+
+    def symbols(self) -> Sequence[Symbol]: ...
+
+    def ads_state(self) -> tuple[int, int]: ...
+
+    def write_control(self, ads_state: int, device_state: int, data: bytes) -> None: ...
+
+
+@dataclass(frozen=True, slots=True)
+class ServiceLimits:
+    max_sum_subcommands: int = 1000
+    max_handles: int = 1024
+    max_notifications: int = 512
+    min_notification_cycle_ns: int = 1_000_000
+    max_notification_length: int = 65536
+    max_notification_payload: int = 256 * 1024
+
+
+@dataclass(frozen=True, slots=True)
+class DeviceInfo:
+    name: str = "liftd GEO"
+    major: int = 0
+    minor: int = 1
+    build: int = 0
+
+
+@dataclass(slots=True)
+class Session:
+    """What one connection owns; freed with it."""
+
+    notifications: NotificationTable
+    handles: dict[int, Symbol] = field(default_factory=dict)
+    next_handle: int = 1
+
+
+class Reply(NamedTuple):
+    payload: bytes
+    failure: BaseException | None = None  # an unexpected exception answered with 0x700
+
+
+def _error_payload(command: int, code: int) -> bytes:
+    if command in (Command.READ, Command.READ_WRITE):
+        return wire.read_response(code)
+    if command == Command.ADD_NOTIFICATION:
+        return wire.add_notification_response(code, 0)
+    if command == Command.READ_STATE:
+        return wire.state_response(code, 0, 0)
+    if command == Command.READ_DEVICE_INFO:
+        return wire.device_info_response(code, 0, 0, 0, b"")
+    return wire.result_only(code)
+
+
+class AdsService:
+    def __init__(
+        self, provider: ObjectProvider, limits: ServiceLimits, device: DeviceInfo | None = None
+    ) -> None:
+        self.provider = provider
+        self.limits = limits
+        self.device = device or DeviceInfo()
+        self._upload: tuple[int, bytes] | None = None
+        self.commands: Mapping[int, Callable[[Session, AmsHeader, bytes, bool, int], bytes]] = {
+            Command.READ_DEVICE_INFO: self._device_info,
+            Command.READ: self._cmd_read,
+            Command.WRITE: self._cmd_write,
+            Command.READ_STATE: self._cmd_state,
+            Command.WRITE_CONTROL: self._cmd_write_control,
+            Command.ADD_NOTIFICATION: self._cmd_add_notification,
+            Command.DEL_NOTIFICATION: self._cmd_del_notification,
+            Command.READ_WRITE: self._cmd_read_write,
+        }
+        self.read_groups: Mapping[int, Callable[[Session, int, int], bytes]] = {
+            IndexGroup.SYM_VALBYHND: self._read_by_handle,
+            IndexGroup.SYM_VERSION: self._sym_version,
+            IndexGroup.SYM_UPLOAD: self._sym_upload,
+            IndexGroup.SYM_UPLOADINFO: self._sym_upload_info,
+            IndexGroup.SYM_UPLOADINFO2: self._sym_upload_info2,
+        }
+        self.write_groups: Mapping[int, Callable[[Session, int, bytes], None]] = {
+            IndexGroup.SYM_VALBYHND: self._write_by_handle,
+            IndexGroup.SYM_RELEASEHND: self._release_handle,
+        }
+        self.read_write_groups: Mapping[int, Callable[[Session, ReadWriteRequest, bool], bytes]] = {
+            IndexGroup.SYM_HNDBYNAME: self._handle_by_name,
+            IndexGroup.SYM_VALBYNAME: self._value_by_name,
+            IndexGroup.SYM_INFOBYNAMEEX: self._info_by_name,
+            IndexGroup.SUMUP_READ: self._sum_read,
+            IndexGroup.SUMUP_WRITE: self._sum_write,
+            IndexGroup.SUMUP_READWRITE: self._sum_read_write,
+        }
+
+    def new_session(self) -> Session:
+        lim = self.limits
+        return Session(
+            NotificationTable(
+                lim.max_notifications,
+                lim.min_notification_cycle_ns,
+                lim.max_notification_length,
+                lim.max_notification_payload,
+            )
+        )
+
+    # -- the boundary -------------------------------------------------------------------------
+    def handle(
+        self, session: Session, header: AmsHeader, payload: bytes, may_write: bool, now_ns: int
+    ) -> Reply:
+        """Answer one request (the caller has checked the address and that the command is
+        1..9 but 8). Never raises."""
+        try:
+            return Reply(self.commands[header.command](session, header, payload, may_write, now_ns))
+        except AdsError as exc:
+            return Reply(_error_payload(header.command, exc.code))
+        except Exception as exc:  # a bug: answer 0x700 (the client must not time out) and report
+            return Reply(_error_payload(header.command, AdsErr.DEVICE_ERROR), exc)
+
+    def rejected(self, command: int, code: int) -> bytes:
+        """The payload answering `command` with `code` (e.g. 0x723 for an unknown source)."""
+        return _error_payload(command, code)
+
+    # -- commands ---------------------------------------------------------------------------------
+    def _device_info(self, s: Session, h: AmsHeader, p: bytes, w: bool, now: int) -> bytes:
+        d = self.device
+        return wire.device_info_response(0, d.major, d.minor, d.build, d.name.encode(ENCODING))
+
+    def _cmd_state(self, s: Session, h: AmsHeader, p: bytes, w: bool, now: int) -> bytes:
+        ads_state, device_state = self.provider.ads_state()
+        return wire.state_response(0, ads_state, device_state)
+
+    def _cmd_read(self, s: Session, h: AmsHeader, p: bytes, w: bool, now: int) -> bytes:
+        req = wire.decode_read(p)
+        data = self.read(s, req.index_group, req.index_offset, req.length)
+        if len(data) > req.length:  # never more than asked for (pyads#186: "Frame too long")
+            raise AdsError(AdsErr.INVALIDSIZE, f"{len(data)} bytes do not fit {req.length}")
+        return wire.read_response(0, data)
+
+    def _cmd_write(self, s: Session, h: AmsHeader, p: bytes, may_write: bool, now: int) -> bytes:
+        req = wire.decode_write(p)
+        self.write(s, req.index_group, req.index_offset, req.data, may_write)
+        return wire.result_only(0)
+
+    def _cmd_read_write(
+        self, s: Session, h: AmsHeader, p: bytes, may_write: bool, now: int
+    ) -> bytes:
+        req = wire.decode_read_write(p)
+        data = self.read_write(s, req, may_write)
+        if len(data) > req.read_length:
+            raise AdsError(AdsErr.INVALIDSIZE, f"{len(data)} bytes do not fit {req.read_length}")
+        return wire.read_response(0, data)
+
+    def _cmd_write_control(
+        self, s: Session, h: AmsHeader, p: bytes, may_write: bool, now: int
+    ) -> bytes:
+        req = wire.decode_write_control(p)
+        if not may_write:
+            raise AdsError(AdsErr.INVALIDACCESS, "WriteControl needs write access")
+        self.provider.write_control(req.ads_state, req.device_state, req.data)
+        return wire.result_only(0)
+
+    def _cmd_add_notification(self, s: Session, h: AmsHeader, p: bytes, w: bool, now: int) -> bytes:
+        req = wire.decode_add_notification(p)
+        if req.index_group in SUM_GROUPS:
+            raise AdsError(AdsErr.SRVNOTSUPP, "notification on a sum command")
+        try:  # the object must exist; a device not ready yet is fine
+            self.read(s, req.index_group, req.index_offset, req.length)
+        except AdsError as exc:
+            if exc.code != AdsErr.NOTREADY:
+                raise
+        client = AmsAddr(h.source_net_id, h.source_port)
+        server = AmsAddr(h.target_net_id, h.target_port)
+        handle = s.notifications.add(req, client, server, now)
+        return wire.add_notification_response(0, handle)
+
+    def _cmd_del_notification(self, s: Session, h: AmsHeader, p: bytes, w: bool, now: int) -> bytes:
+        s.notifications.delete(wire.decode_del_notification(p))
+        return wire.result_only(0)
+
+    # -- routing by index group (also used by sum commands and notifications) ----------------------
+    def read(self, s: Session, ig: int, io: int, length: int) -> bytes:
+        handler = self.read_groups.get(ig)
+        if handler is not None:
+            return handler(s, io, length)
+        if ig in self.read_write_groups or ig in self.write_groups:
+            raise AdsError(AdsErr.SRVNOTSUPP, f"index group 0x{ig:X} is not read with Read")
+        return self.provider.read(ig, io, length)
+
+    def write(self, s: Session, ig: int, io: int, data: bytes, may_write: bool) -> None:
+        handler = self.write_groups.get(ig)
+        if handler is not None and ig == IndexGroup.SYM_RELEASEHND:
+            handler(s, io, data)  # releasing a handle changes nothing on the device
+            return
+        if not may_write:
+            raise AdsError(AdsErr.INVALIDACCESS, "this source has no write access")
+        if handler is not None:
+            handler(s, io, data)
+            return
+        if ig in self.read_groups or ig in self.read_write_groups:
+            raise AdsError(AdsErr.SRVNOTSUPP, f"index group 0x{ig:X} is not written with Write")
+        self.provider.write(ig, io, data)
+
+    def read_write(self, s: Session, req: ReadWriteRequest, may_write: bool) -> bytes:
+        handler = self.read_write_groups.get(req.index_group)
+        if handler is not None:
+            return handler(s, req, may_write)
+        return self.provider.read_write(
+            req.index_group, req.index_offset, req.read_length, req.data
+        )
+
+    # -- symbols -----------------------------------------------------------------------------------
+    def _symbol_of_handle(self, s: Session, handle: int) -> Symbol | None:
+        """A connection's handle, or None for a static symbol address (provider's business)."""
+        if handle & STATIC_HANDLE_BIT:
+            return None
+        sym = s.handles.get(handle)
+        if sym is None:
+            raise AdsError(AdsErr.SYMBOLNOTFOUND, f"symbol handle {handle}")
+        return sym
+
+    def _read_by_handle(self, s: Session, io: int, length: int) -> bytes:
+        sym = self._symbol_of_handle(s, io)
+        if sym is None:
+            return self.provider.read(IndexGroup.SYM_VALBYHND, io, length)
+        return self.read(s, sym.index_group, sym.index_offset, length)
+
+    def _write_by_handle(self, s: Session, io: int, data: bytes) -> None:
+        sym = self._symbol_of_handle(s, io)
+        if sym is None:
+            self.provider.write(IndexGroup.SYM_VALBYHND, io, data)
+        elif not sym.writable:
+            raise AdsError(AdsErr.INVALIDACCESS, f"{sym.name} is read-only")
+        else:
+            self.provider.write(sym.index_group, sym.index_offset, data)
+
+    def _release_handle(self, s: Session, io: int, data: bytes) -> None:
+        if len(data) != 4:
+            raise AdsError(AdsErr.INVALIDSIZE, "release handle: 4 bytes expected")
+        handle = int.from_bytes(data, "little")
+        if s.handles.pop(handle, None) is None:
+            raise AdsError(AdsErr.SYMBOLNOTFOUND, f"symbol handle {handle}")
+
+    def _find(self, raw: bytes) -> Symbol:
+        return self.provider.find_symbol(raw.split(b"\0", 1)[0].decode(ENCODING, "replace"))
+
+    def _handle_by_name(self, s: Session, req: ReadWriteRequest, may_write: bool) -> bytes:
+        if req.read_length < 4:
+            raise AdsError(AdsErr.INVALIDSIZE, "a handle needs 4 bytes")
+        sym = self._find(req.data)
+        if len(s.handles) >= self.limits.max_handles:
+            raise AdsError(AdsErr.NOMOREHDLS, f"{self.limits.max_handles} handles per connection")
+        handle = s.next_handle
+        while handle in s.handles or handle == 0 or handle & STATIC_HANDLE_BIT:
+            handle = (handle + 1) % STATIC_HANDLE_BIT
+        s.next_handle = (handle + 1) % STATIC_HANDLE_BIT
+        s.handles[handle] = sym
+        return handle.to_bytes(4, "little")
+
+    def _value_by_name(self, s: Session, req: ReadWriteRequest, may_write: bool) -> bytes:
+        sym = self._find(req.data)
+        return self.read(s, sym.index_group, sym.index_offset, req.read_length)
+
+    def _info_by_name(self, s: Session, req: ReadWriteRequest, may_write: bool) -> bytes:
+        entry = self._find(req.data).entry()
+        if req.read_length < len(entry):
+            raise AdsError(AdsErr.INVALIDSIZE, f"symbol entry needs {len(entry)} bytes")
+        return entry
+
+    def _upload_data(self) -> bytes:
+        version = self.provider.symbol_version
+        if self._upload is None or self._upload[0] != version:
+            entries = b"".join(sym.entry() for sym in self.provider.symbols())
+            self._upload = (version, entries)
+        return self._upload[1]
+
+    def _sym_upload(self, s: Session, io: int, length: int) -> bytes:
+        data = self._upload_data()
+        if length < len(data):
+            raise AdsError(AdsErr.INVALIDSIZE, f"the symbol upload needs {len(data)} bytes")
+        return data
+
+    def _sym_upload_info(self, s: Session, io: int, length: int) -> bytes:
+        return struct.pack("<II", len(self.provider.symbols()), len(self._upload_data()))[:length]
+
+    def _sym_upload_info2(self, s: Session, io: int, length: int) -> bytes:
+        info = struct.pack("<IIIIII", len(self.provider.symbols()), len(self._upload_data()),
+                           0, 0, 0, 0)  # fmt: skip
+        return info[:length]
+
+    def _sym_version(self, s: Session, io: int, length: int) -> bytes:
+        return bytes([self.provider.symbol_version & 0xFF])[:length]
+
+    # -- sum commands (ads.md §3: sub-results exactly as pyads and ads-client expect) -------------
+    def _sum_count(self, req: ReadWriteRequest, head: int) -> int:
+        n = req.index_offset
+        if n == 0 or n > self.limits.max_sum_subcommands:
+            raise AdsError(
+                AdsErr.INVALIDSIZE,
+                f"{n} sub-commands (1..{self.limits.max_sum_subcommands} accepted)",
+            )
+        if len(req.data) < head * n:
+            raise AdsError(AdsErr.INVALIDSIZE, "sum command headers truncated")
+        return n
+
+    def _sum_read(self, s: Session, req: ReadWriteRequest, may_write: bool) -> bytes:
+        n = self._sum_count(req, 12)
+        subs = [SUM_HEAD.unpack_from(req.data, 12 * i) for i in range(n)]
+        if len(req.data) != 12 * n:
+            raise AdsError(AdsErr.INVALIDSIZE, "sum read: 12 bytes per sub-command")
+        if req.read_length < 4 * n + sum(sub[2] for sub in subs):
+            raise AdsError(AdsErr.INVALIDSIZE, "sum read: read length below results + data")
+        results, blocks = [], []
+        for ig, io, length in subs:
+            code, data = 0, b""
+            try:
+                if ig in SUM_GROUPS:
+                    raise AdsError(AdsErr.SRVNOTSUPP, "nested sum command")
+                data = self.read(s, ig, io, length)
+            except AdsError as exc:
+                code = exc.code
+            results.append(code)
+            # every block exactly the requested length, even on error (pyads steps by it)
+            blocks.append(data[:length].ljust(length, b"\0"))
+        return struct.pack(f"<{n}I", *results) + b"".join(blocks)
+
+    def _sum_write(self, s: Session, req: ReadWriteRequest, may_write: bool) -> bytes:
+        n = self._sum_count(req, 12)
+        subs = [SUM_HEAD.unpack_from(req.data, 12 * i) for i in range(n)]
+        if len(req.data) != 12 * n + sum(sub[2] for sub in subs):
+            raise AdsError(AdsErr.INVALIDSIZE, "sum write: headers + data")
+        results = []
+        pos = 12 * n
+        for ig, io, length in subs:
+            data = req.data[pos : pos + length]
+            pos += length
+            code = 0
+            try:
+                if ig in SUM_GROUPS:
+                    raise AdsError(AdsErr.SRVNOTSUPP, "nested sum command")
+                self.write(s, ig, io, data, may_write)
+            except AdsError as exc:
+                code = exc.code
+            results.append(code)
+        return struct.pack(f"<{n}I", *results)
+
+    def _sum_read_write(self, s: Session, req: ReadWriteRequest, may_write: bool) -> bytes:
+        n = self._sum_count(req, 16)
+        subs = [SUM_RW_HEAD.unpack_from(req.data, 16 * i) for i in range(n)]
+        if len(req.data) != 16 * n + sum(sub[3] for sub in subs):
+            raise AdsError(AdsErr.INVALIDSIZE, "sum read/write: headers + write data")
+        heads, blocks = [], []
+        pos = 16 * n
+        for ig, io, rlen, wlen in subs:
+            data = req.data[pos : pos + wlen]
+            pos += wlen
+            code, out = 0, b""
+            try:
+                if ig in SUM_GROUPS:
+                    raise AdsError(AdsErr.SRVNOTSUPP, "nested sum command")
+                out = self.read_write(s, ReadWriteRequest(ig, io, rlen, data), may_write)
+            except AdsError as exc:
+                code = exc.code
+            out = out[:rlen]
+            heads.append(struct.pack("<II", code, len(out)))
+            blocks.append(out)
+        return b"".join(heads) + b"".join(blocks)

@@ -1,0 +1,1 @@
+"""The CNC object catalogue of the GEO port and its ADS `ObjectProvider`."""
