@@ -51,11 +51,7 @@ class Harness:
         self.catalog = Catalog(ch)
         self.provider = CncProvider(self.catalog, lambda: self.view, self._sink)
         self.service = AdsService(self.provider, limits or ServiceLimits())
-        self.loop = (
-            __import__("uvloop").new_event_loop()
-            if __import__("os").environ.get("UVLOOP")
-            else asyncio.new_event_loop()
-        )
+        self.loop = asyncio.new_event_loop()
         self.thread = threading.Thread(target=self.loop.run_forever, daemon=True)
         self.server: AdsServer | None = None
         self.port = 0
