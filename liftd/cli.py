@@ -210,19 +210,19 @@ def _compare(
 
 
 def cmd_run(args: argparse.Namespace) -> int:
-    """Until the real-time daemon lands: validate what it would run, and say so."""
+    """The real-time daemon: GEO loop process + ADS server (liftd/daemon.py)."""
+    from liftd import daemon, logs  # noqa: PLC0415
+
     try:
         settings = _load(args, args.program)
     except ConfigError as err:
         _print_config_error(err)
         return EXIT_CONFIG
-    errors = check_program(settings, settings.program) if settings.program else 0
-    print(
-        "liftd run: configuration and program are valid; the real-time daemon (ADS server, "
-        "fixed-tick GEO loop) is not built yet. Meanwhile: liftd simulate "
-        f"{settings.program or 'PROGRAM'} --plot run.png"
-    )
-    return EXIT_PROGRAM if errors else EXIT_OK
+    if args.program and not Path(args.program).is_file():
+        print(f"{args.program}: error: cannot read program", file=sys.stderr)
+        return EXIT_CONFIG
+    logs.configure(settings.config.log.level, settings.config.log.format)
+    return daemon.run(settings, args.config, args.program, args.trace)
 
 
 def cmd_objects(args: argparse.Namespace) -> int:
@@ -276,6 +276,9 @@ def build_parser() -> argparse.ArgumentParser:
     run = sub.add_parser("run", help="run the GEO task in real time and serve it over ADS")
     run.add_argument("-c", "--config", help="liftd.toml")
     run.add_argument("--program", help="NC program (default: the configured one)")
+    run.add_argument(
+        "--trace", metavar="OUT.csv", help="record every GEO cycle (the simulate CSV contract)"
+    )
     run.set_defaults(func=cmd_run)
 
     objects = sub.add_parser("objects", help="print the CNC objects and symbols served over ADS")

@@ -30,11 +30,22 @@ ELEMENT_LIFT_SUPPRESSED = 0x0094  # isg-cnc.md §2.1 [S5]
 ELEMENT_LIFT_ACTIVE = 0x0095
 
 
+class AdsStats(NamedTuple):
+    """The ADS server's own counters, served as symbols next to the GEO timing."""
+
+    connections: int = 0
+    requests: int = 0
+    errors: int = 0  # connections closed for protocol errors + requests answered 0x700
+    notifications: int = 0
+
+
 class GeoView(NamedTuple):
-    """What the provider reads from: the last published cycle and the loop's timing."""
+    """What the provider reads from: the last published cycle, the loop's timing and the ADS
+    server's counters."""
 
     snapshot: GeoSnapshot
     stats: LoopStats
+    ads: AdsStats = AdsStats()
 
 
 Getter = Callable[[GeoView], float | int | bool]
@@ -158,6 +169,14 @@ def _objects(ch: ChannelParams) -> list[CncObject]:
                   lambda v: v.stats.lateness_last_us, "wake-up lateness of the last cycle"),
         CncObject("lateness_max_us", "GEO.timing.lateness_max_us", REAL64, "µs",
                   lambda v: v.stats.lateness_max_us, "largest wake-up lateness since start"),
+        CncObject("connections", "GEO.ads.connections", UNS32, "-",
+                  lambda v: v.ads.connections, "open ADS connections"),
+        CncObject("requests", "GEO.ads.requests", UNS64, "-", lambda v: v.ads.requests,
+                  "ADS requests answered since start"),
+        CncObject("errors", "GEO.ads.errors", UNS32, "-", lambda v: v.ads.errors,
+                  "connections closed for protocol errors and requests answered 0x700"),
+        CncObject("notifications", "GEO.ads.notifications", UNS64, "-",
+                  lambda v: v.ads.notifications, "device notification frames sent"),
     ]  # fmt: skip
     plc = f"PLC.ch{cid}"
     out += [

@@ -1,0 +1,136 @@
+"""Lock-free hand-over between the GEO loop process and the daemon, in shared memory.
+
+* `Seqlock`: one writer (the loop) publishes a fixed-size record every cycle; readers copy it
+  and retry while the sequence is odd or changed, at most `MAX_RETRIES` times, then keep the
+  last good copy — the writer never waits (reference/rt-python.md §2.6: 0 torn reads in
+  millions, a plain copy tears 0.08–5 %).
+* `Ring`: single-producer single-consumer queue of fixed-size records (PLC inputs daemon →
+  loop, trace records loop → daemon). The producer writes the record, then advances `head`;
+  the consumer reads, then advances `tail`; a full ring rejects the record (counted).
+
+Both rely on stores becoming visible in program order, which x86-64 (TSO) guarantees for the
+interpreter's byte copies; an ARM target needs a helper with barriers (rt-python.md §5).
+"""
+
+from __future__ import annotations
+
+import struct
+from multiprocessing import shared_memory
+
+U64 = struct.Struct("<Q")
+MAX_RETRIES = 100
+
+
+class Block:
+    """A named shared-memory block; the creator unlinks it."""
+
+    def __init__(self, size: int, name: str | None = None) -> None:
+        self.owner = name is None
+        if name is None:
+            self.shm = shared_memory.SharedMemory(create=True, size=max(size, 8))
+        else:
+            self.shm = shared_memory.SharedMemory(name=name)
+        buf = self.shm.buf
+        assert buf is not None
+        self.buf: memoryview = buf
+        self.name = self.shm.name
+
+    def close(self) -> None:
+        self.buf = memoryview(b"")
+        self.shm.close()
+        if self.owner:
+            self.shm.unlink()
+
+
+class Seqlock:
+    """Layout: seq u64, then the record."""
+
+    def __init__(self, block: Block, offset: int, size: int) -> None:
+        self.buf = block.buf
+        self.seq_at = offset
+        self.data_at = offset + 8
+        self.size = size
+        self._seq = 0
+        self.last = bytes(size)
+        self.retries = 0
+        self.given_up = 0
+
+    @staticmethod
+    def space(size: int) -> int:
+        return 8 + size
+
+    def write(self, record: bytes) -> None:
+        """Writer side (one process only)."""
+        buf = self.buf
+        self._seq += 1
+        U64.pack_into(buf, self.seq_at, self._seq)  # odd: writing
+        buf[self.data_at : self.data_at + self.size] = record
+        self._seq += 1
+        U64.pack_into(buf, self.seq_at, self._seq)  # even: consistent
+
+    def read(self) -> bytes:
+        """Reader side: a consistent copy, or the last one if the writer kept it busy."""
+        buf = self.buf
+        for _ in range(MAX_RETRIES):
+            s1 = U64.unpack_from(buf, self.seq_at)[0]
+            if s1 & 1:
+                self.retries += 1
+                continue
+            data = bytes(buf[self.data_at : self.data_at + self.size])
+            if U64.unpack_from(buf, self.seq_at)[0] == s1:
+                if s1:
+                    self.last = data
+                return self.last
+            self.retries += 1
+        self.given_up += 1
+        return self.last
+
+    @property
+    def sequence(self) -> int:
+        return int(U64.unpack_from(self.buf, self.seq_at)[0])
+
+
+class Ring:
+    """Layout: head u64, tail u64, dropped u64, then `capacity` records of `size` bytes."""
+
+    def __init__(self, block: Block, offset: int, size: int, capacity: int) -> None:
+        self.buf = block.buf
+        self.at = offset
+        self.size = size
+        self.capacity = capacity
+        self.data_at = offset + 24
+
+    @staticmethod
+    def space(size: int, capacity: int) -> int:
+        return 24 + size * capacity
+
+    def _get(self, i: int) -> int:
+        return int(U64.unpack_from(self.buf, self.at + 8 * i)[0])
+
+    def put(self, record: bytes) -> bool:
+        """Producer side; False (and counted) when the ring is full."""
+        head = self._get(0)
+        if head - self._get(1) >= self.capacity:
+            U64.pack_into(self.buf, self.at + 16, self._get(2) + 1)
+            return False
+        pos = self.data_at + (head % self.capacity) * self.size
+        self.buf[pos : pos + self.size] = record
+        U64.pack_into(self.buf, self.at, head + 1)  # publish after the record
+        return True
+
+    def get(self) -> bytes | None:
+        """Consumer side; None when empty."""
+        tail = self._get(1)
+        if tail >= self._get(0):
+            return None
+        pos = self.data_at + (tail % self.capacity) * self.size
+        record = bytes(self.buf[pos : pos + self.size])
+        U64.pack_into(self.buf, self.at + 8, tail + 1)  # free the slot after reading it
+        return record
+
+    def __len__(self) -> int:
+        return self._get(0) - self._get(1)
+
+    @property
+    def dropped(self) -> int:
+        return self._get(2)

@@ -1,0 +1,161 @@
+"""`liftd run` started as a subprocess the way systemd starts it: readiness and watchdog over a
+notification socket, pyads against the real GEO loop, signals, reload, faults, and the trace
+of a real-time run against `liftd simulate`."""
+
+from __future__ import annotations
+
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pyads
+import pytest
+
+from tests.daemon_helper import Daemon, Notify, write_config
+
+pytestmark = pytest.mark.integration
+
+
+def connect(d: Daemon) -> pyads.Connection:
+    plc = pyads.Connection(d.net_id, 551, d.address)
+    plc.open()
+    return plc
+
+
+def read(plc: pyads.Connection, name: str) -> object:
+    return plc.read_by_name(name)
+
+
+def test_ready_watchdog_objects_and_clean_stop(tmp_path: Path) -> None:
+    notify = Notify(tmp_path)
+    cfg = write_config(tmp_path, program={"repeat": True})
+    t0 = time.monotonic()
+    d = Daemon(cfg, env={"NOTIFY_SOCKET": notify.path, "WATCHDOG_USEC": "200000"})
+    try:
+        d.ready()
+        start_s = time.monotonic() - t0
+        plc = connect(d)
+        try:
+            assert plc.read_state() == (5, 0)  # RUN while the GEO task runs
+            assert read(plc, "GEO.ch1.state") == 4  # ACTIVE: the demo autostarted
+            c1 = read(plc, "GEO.cycle")
+            time.sleep(0.3)
+            c2 = read(plc, "GEO.cycle")
+            assert 200 <= c2 - c1 <= 400  # 1 ms cycles
+            assert plc.read(0x121301, 0x30095, pyads.PLCTYPE_BOOL) in (True, False)
+            assert read(plc, "GEO.ads.connections") == 1
+        finally:
+            plc.close()
+        messages = notify.drain()
+        assert messages[0].startswith("READY=1\nSTATUS=GEO cycling")
+        assert messages.count("WATCHDOG=1") >= 2  # every 0.1 s while the loop cycles
+        t_stop = time.monotonic()
+        assert d.stop() == 0
+        assert time.monotonic() - t_stop < 2.0  # clean shutdown within 2 s
+        assert "STOPPING=1" in notify.drain()
+        stopped = d.event("daemon.stopped", 1)
+        assert stopped is not None and stopped["cycles"] > 300
+        assert start_s < 5.0  # READY well within the start-up (figure: bench)
+    finally:
+        d.stop()
+        notify.close()
+
+
+def test_run_trace_is_identical_to_simulate(tmp_path: Path) -> None:
+    cfg = write_config(tmp_path)  # the demo once, autostart, no PLC writes
+    trace = tmp_path / "run.csv"
+    d = Daemon(cfg, "--trace", str(trace))
+    try:
+        d.ready()
+        assert d.event("geo.program_end", 30) is not None
+    finally:
+        assert d.stop() == 0
+    sim = tmp_path / "sim.csv"
+    demo = Path(cfg.read_text().split('file = "')[1].split('"')[0])
+    r = subprocess.run([sys.executable, "-m", "liftd", "simulate", str(demo), "-c", str(cfg),
+                        "--trace", str(sim)], capture_output=True, text=True, timeout=120, check=False)  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    expected = sim.read_text().splitlines()
+    got = trace.read_text().splitlines()
+    assert len(got) >= len(expected) > 14000
+    assert got[: len(expected)] == expected  # every cycle, bit for bit (9 decimals of mm)
+
+
+def test_plc_inputs_reach_the_loop_and_bad_values_are_refused(tmp_path: Path) -> None:
+    d = Daemon(write_config(tmp_path, program={"repeat": True}))
+    try:
+        d.ready()
+        plc = connect(d)
+        try:
+            plc.write_by_name("PLC.ch1.override", 500, pyads.PLCTYPE_UINT)
+            time.sleep(0.05)
+            assert read(plc, "GEO.ch1.override_requested") == 500
+            with pytest.raises(pyads.ADSError) as err:
+                plc.write_by_name("PLC.ch1.override", 2500, pyads.PLCTYPE_UINT)
+            assert err.value.err_code == 0x706
+            plc.write_by_name("PLC.ch1.feed_hold", True, pyads.PLCTYPE_BOOL)
+            time.sleep(0.5)  # the path brakes to a stop
+            assert read(plc, "GEO.ch1.feed_hold") is True
+            assert read(plc, "GEO.ch1.path_velocity") == 0.0
+            cycles = read(plc, "GEO.cycle")
+            time.sleep(0.1)
+            assert read(plc, "GEO.cycle") > cycles  # the loop runs on
+        finally:
+            plc.close()
+    finally:
+        assert d.stop() == 0
+
+
+def test_sighup_reload_rejects_a_broken_config_and_applies_a_good_one(tmp_path: Path) -> None:
+    cfg = write_config(tmp_path, program={"repeat": True})
+    d = Daemon(cfg)
+    try:
+        d.ready()
+        good = cfg.read_text()
+        cfg.write_text(good.replace("[cnc]", "[cnc]\nbogus_key = 1"))
+        d.signal(signal.SIGHUP)
+        rec = d.event("config.reload_rejected")
+        assert rec is not None and "bogus_key" in " ".join(rec["problems"])
+        cfg.write_text(good.replace('"repeat": true', "").replace("repeat = true", "repeat = true"))
+        d.signal(signal.SIGHUP)
+        assert d.event("config.reload_accepted") is not None
+        assert d.event("geo.reloaded", 30) is not None  # at the end of the running program
+        assert d.proc.poll() is None
+    finally:
+        assert d.stop() == 0
+
+
+def test_start_failures_have_clear_messages_and_exit_codes(tmp_path: Path) -> None:
+    missing = subprocess.run([sys.executable, "-m", "liftd", "run", "-c", str(tmp_path / "no.toml")],
+                             capture_output=True, text=True, timeout=60, check=False)  # fmt: skip
+    assert missing.returncode == 2 and "no.toml" in missing.stderr
+    d = Daemon(write_config(tmp_path), "--trace", str(tmp_path / "nodir" / "t.csv"))
+    assert d.wait() == 3
+    assert any("cannot write the trace" in line for line in d.raw)
+    first = Daemon(write_config(tmp_path))
+    try:
+        port = first.ready()
+        (tmp_path / "second").mkdir()
+        second = Daemon(write_config(tmp_path / "second", ads={"port": port}))
+        assert second.wait() == 3
+        assert any("cannot listen" in line for line in second.raw)
+    finally:
+        first.stop()
+
+
+def test_geo_process_death_stops_the_daemon_non_zero(tmp_path: Path) -> None:
+    d = Daemon(write_config(tmp_path, program={"repeat": True}))
+    try:
+        d.ready()
+        children = subprocess.run(["pgrep", "-P", str(d.proc.pid)], capture_output=True,
+                                  text=True, check=False).stdout.split()  # fmt: skip
+        geo = [int(p) for p in children]
+        assert geo, "the GEO process is a child of the daemon"
+        for pid in geo:
+            subprocess.run(["kill", "-KILL", str(pid)], check=False)
+        assert d.proc.wait(10) == 3
+        assert d.event("geo.process_died", 1) is not None
+    finally:
+        d.stop()
