@@ -222,7 +222,10 @@ def cmd_run(args: argparse.Namespace) -> int:
         print(f"{args.program}: error: cannot read program", file=sys.stderr)
         return EXIT_CONFIG
     logs.configure(settings.config.log.level, settings.config.log.format)
-    return daemon.run(settings, args.config, args.program, args.trace)
+    if args.duration is not None and args.duration <= 0:
+        print(f"--duration: must be > 0 seconds, got {args.duration}", file=sys.stderr)
+        return EXIT_CONFIG
+    return daemon.run(settings, args.config, args.program, args.trace, args.duration)
 
 
 def cmd_objects(args: argparse.Namespace) -> int:
@@ -256,6 +259,44 @@ def cmd_objects(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def cmd_plc(args: argparse.Namespace) -> int:
+    """A simulated PLC polling the lift status over ADS (liftd/plc.py)."""
+    from liftd import plc  # noqa: PLC0415
+    from liftd.simulate import (  # noqa: PLC0415
+        Schedule,
+        SpecError,
+        parse_feedhold_spec,
+        parse_override_spec,
+    )
+
+    try:
+        settings = _load(args)
+    except ConfigError as err:
+        _print_config_error(err)
+        return EXIT_CONFIG
+    ads = settings.config.ads
+    try:
+        schedule = Schedule(
+            tuple(parse_override_spec(args.override or "")),
+            tuple(parse_feedhold_spec(args.feedhold or "")),
+        )
+        host, tcp_port = plc.parse_host(args.host or ads.host, ads.port)
+    except (SpecError, ValueError) as exc:
+        print(f"liftd plc: {exc}", file=sys.stderr)
+        return EXIT_CONFIG
+    if not 0.5 <= args.cycle_ms <= 10_000 or (args.duration is not None and args.duration <= 0):
+        print("liftd plc: --cycle-ms must be 0.5..10000 and --duration > 0", file=sys.stderr)
+        return EXIT_CONFIG
+    if host in ("0.0.0.0", "::", ""):
+        host = "127.0.0.1"  # the daemon listens on every address; reach it on loopback
+    target = plc.Target(
+        host=host, tcp_port=tcp_port, net_id=args.net_id or ads.net_id, ams_port=args.port,
+        channel=settings.channel.channel_id, axis=args.axis or settings.channel.lift_axis,
+    )  # fmt: skip
+    return plc.run(target, schedule, args.cycle_ms, args.duration, args.json, args.timeout_ms,
+                   args.start)  # fmt: skip
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="liftd",
@@ -279,12 +320,35 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument(
         "--trace", metavar="OUT.csv", help="record every GEO cycle (the simulate CSV contract)"
     )
+    run.add_argument(
+        "--duration", type=float, metavar="S", help="stop cleanly after S seconds (default: run)"
+    )
     run.set_defaults(func=cmd_run)
 
     objects = sub.add_parser("objects", help="print the CNC objects and symbols served over ADS")
     objects.add_argument("-c", "--config", help="liftd.toml")
     objects.add_argument("--json", action="store_true", help="as JSON")
     objects.set_defaults(func=cmd_objects)
+
+    plc = sub.add_parser(
+        "plc",
+        help="a simulated PLC: poll lift_active/lift_suppressed over ADS, print transitions",
+    )
+    plc.add_argument("-c", "--config", help="liftd.toml the defaults come from")
+    plc.add_argument("--host", metavar="HOST[:PORT]", help="daemon address (default: [ads])")
+    plc.add_argument("--net-id", help="the daemon's AMS NetId (default: [ads] net_id)")
+    plc.add_argument("--port", type=int, default=551, help="AMS port (default 551, GEO)")
+    plc.add_argument("--cycle-ms", type=float, default=10.0, help="PLC cycle (default 10 ms)")
+    plc.add_argument("--duration", type=float, metavar="S", help="stop after S seconds")
+    plc.add_argument("--axis", help="axis whose lift status is polled (default: lift_axis)")
+    plc.add_argument("--override", metavar="SPEC", help='write override steps "T:PERCENT,…"')
+    plc.add_argument("--feedhold", metavar="SPEC", help='write feed hold "T:DURATION,…"')
+    plc.add_argument("--json", action="store_true", help="one JSON object per transition")
+    plc.add_argument("--start", action="store_true", help="send NC start once at connect")
+    plc.add_argument(
+        "--timeout-ms", type=int, default=1000, help="ADS request timeout (default 1000 ms)"
+    )
+    plc.set_defaults(func=cmd_plc)
 
     sim = sub.add_parser("simulate", help="run a program on a virtual clock, as fast as possible")
     sim.add_argument("program", help="NC program")

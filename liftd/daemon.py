@@ -12,6 +12,7 @@ GEO process dies, ADS reports ERROR (reads 0x707) and the daemon exits 3 for sys
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import dataclasses
 import multiprocessing
 import os
@@ -72,9 +73,10 @@ def loop_config(settings: Settings, program: Path | None) -> geo_loop.LoopConfig
 class Daemon:
     def __init__(
         self, settings: Settings, config_arg: str | None, program_arg: str | None,
-        trace_path: str | None,
+        trace_path: str | None, duration_s: float | None = None,
     ) -> None:  # fmt: skip
         self.settings = settings
+        self.duration_s = duration_s
         self.config_arg = config_arg
         self.program_arg = program_arg
         self.trace_path = trace_path
@@ -101,6 +103,7 @@ class Daemon:
         self._trace_thread: threading.Thread | None = None
         self._trace_stop = threading.Event()
         self._metrics: asyncio.Server | None = None
+        self._rss_mb: tuple[float | None, float | None] = (None, None)
 
     # -- what the ADS provider sees -------------------------------------------------------------
     def _view(self) -> GeoView | None:
@@ -165,7 +168,8 @@ class Daemon:
         self.log.info("daemon.ready", seconds=round(time.monotonic() - t0, 3),
                       ads_port=self.server.port, net_id=ads.net_id)  # fmt: skip
         watchdog = asyncio.create_task(self._watchdog())
-        await self.stopping.wait()
+        with contextlib.suppress(TimeoutError):
+            await asyncio.wait_for(self.stopping.wait(), self.duration_s)
         watchdog.cancel()
         await self.shutdown()
         return self.exit_code
@@ -350,6 +354,7 @@ class Daemon:
         await self.server.close()
         if self._metrics is not None:
             self._metrics.close()
+        self._rss_mb = (rss_mb(os.getpid()), rss_mb(self.proc.pid) if self.proc else None)
         self.shared.set("stop", 1)
         if self.proc is not None and self.proc.is_alive():
             loop = asyncio.get_running_loop()
@@ -379,16 +384,30 @@ class Daemon:
             compute_us={q: percentile_us(comp, q) for q in (0.5, 0.99, 0.999)},
             events_dropped=sh.get("events_dropped"),
             stop_seconds=round(stop_s, 3),
+            rss_mb=self._rss_mb[0],
+            geo_rss_mb=self._rss_mb[1],
         )
 
 
+def rss_mb(pid: int) -> float | None:
+    """Resident set size of a process in MiB (Linux /proc), None where unavailable."""
+    try:
+        with open(f"/proc/{pid}/status", encoding="ascii") as f:
+            for line in f:
+                if line.startswith("VmRSS:"):
+                    return round(int(line.split()[1]) / 1024, 1)
+    except OSError:
+        return None
+    return None
+
+
 def run(settings: Settings, config_arg: str | None, program_arg: str | None,
-        trace_path: str | None) -> int:  # fmt: skip
-    """Run the daemon until SIGTERM/SIGINT; the exit code for the CLI."""
+        trace_path: str | None, duration_s: float | None = None) -> int:  # fmt: skip
+    """Run the daemon until SIGTERM/SIGINT (or for duration_s); the exit code for the CLI."""
     import uvloop  # noqa: PLC0415  # the ADS server's loop (measured: pyproject.toml)
 
     try:
-        daemon = Daemon(settings, config_arg, program_arg, trace_path)
+        daemon = Daemon(settings, config_arg, program_arg, trace_path, duration_s)
     except OSError as exc:
         structlog.get_logger("liftd").error("daemon.start_failed", reason=str(exc))
         return EXIT_RUNTIME

@@ -1,0 +1,262 @@
+"""`liftd plc`: a simulated PLC. It connects to the GEO port the way a TwinCAT PLC does (AMS/ADS
+over TCP, through pyads and Beckhoff's AdsLib), reads `lift_active`/`lift_suppressed` and the
+channel state once per PLC cycle with one sum read, prints every transition with a timestamp,
+and can write override and feed-hold schedules (the `simulate` SPEC syntax).
+
+Exit codes: 0 after --duration (or Ctrl-C), 3 when the daemon cannot be reached or a read or
+write fails — a PLC that silently shows stale data is worse than one that stops.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import datetime as dt
+import json
+import math
+import sys
+import time
+from collections.abc import Callable
+from typing import Any, TextIO
+
+import pyads
+
+from liftd.simulate import Schedule
+
+EXIT_OK = 0
+EXIT_UNREACHABLE = 3
+
+STATE_NAMES = {0: "-", 1: "INIT", 2: "IDLE", 3: "READY", 4: "ACTIVE", 5: "HOLD", 6: "ERROR"}
+ADS_RUN = 5
+# AdsLib/pyads error codes that mean "nobody answers" rather than "the daemon refused"
+# (reference/ads.md §5; 0x274C/0x274D are the WSA codes AdsLib reports on Linux too).
+_UNREACHABLE = {0x6, 0x7, 0x745, 0x746, 0x748, 0x274C, 0x274D}
+
+
+@dataclasses.dataclass(frozen=True, slots=True)
+class Target:
+    host: str
+    tcp_port: int
+    net_id: str
+    ams_port: int
+    channel: int
+    axis: str
+
+    @property
+    def address(self) -> str:
+        return f"{self.host}:{self.tcp_port}"
+
+    def symbols(self) -> dict[str, str]:
+        """Short label → symbol name, in the order of the sum read."""
+        ch = f"GEO.ch{self.channel}"
+        return {
+            f"{self.axis}.lift_active": f"{ch}.{self.axis}.lift_active",
+            f"{self.axis}.lift_suppressed": f"{ch}.{self.axis}.lift_suppressed",
+            "state": f"{ch}.state",
+            "line": f"{ch}.line",
+            "override": f"{ch}.override",
+            "feed_hold": f"{ch}.feed_hold",
+            "error_id": f"{ch}.error_id",
+        }
+
+
+# the values whose changes are printed; line/override are context
+WATCHED = ("lift_active", "lift_suppressed", "state", "feed_hold", "error_id")
+
+
+class PlcError(Exception):
+    """The daemon cannot be reached, or a read/write failed: the message says which."""
+
+
+def _describe(exc: Exception, target: Target, what: str) -> str:
+    code = getattr(exc, "err_code", None)
+    where = f"liftd at {target.address} (AMS NetId {target.net_id}, port {target.ams_port})"
+    if code in _UNREACHABLE:
+        return (
+            f"cannot reach {where} ({exc}). Is `liftd run` (or `make run`) running, and do "
+            "--host/--net-id match its [ads] settings?"
+        )
+    return f"{what} failed on {where}: {exc}"
+
+
+class Plc:
+    """One PLC: a pyads connection, the symbols it polls and the schedule it writes."""
+
+    def __init__(
+        self, target: Target, schedule: Schedule, timeout_ms: int, start: bool = False
+    ) -> None:
+        self.target = target
+        self.schedule = schedule
+        self.conn = pyads.Connection(target.net_id, target.ams_port, target.address)
+        self.timeout_ms = timeout_ms
+        self.labels = target.symbols()
+        self.written: dict[str, Any] = {}
+        self.start_pending = start
+
+    def open(self) -> tuple[str, int]:
+        """Connect and check the device; returns (device name, ADS state)."""
+        try:
+            self.conn.open()
+            self.conn.set_timeout(self.timeout_ms)
+            name, _version = self.conn.read_device_info()
+            state, _device = self.conn.read_state()
+        except (pyads.ADSError, RuntimeError, OSError) as exc:
+            raise PlcError(_describe(exc, self.target, "connecting")) from None
+        for symbol in self.labels.values():  # name the symbol a wrong --axis/-c leads to
+            try:
+                self.conn.get_symbol(symbol)
+            except (pyads.ADSError, RuntimeError, OSError) as exc:
+                raise PlcError(_describe(exc, self.target, f"looking up {symbol}")) from None
+        return str(name), int(state)
+
+    def close(self) -> None:
+        self.conn.close()
+
+    def read(self) -> dict[str, Any]:
+        try:
+            values = self.conn.read_list_by_name(list(self.labels.values()))
+        except (pyads.ADSError, RuntimeError, OSError) as exc:
+            raise PlcError(_describe(exc, self.target, "the sum read")) from None
+        out = {}
+        for label, symbol in self.labels.items():
+            value = values.get(symbol)
+            if isinstance(value, str):  # pyads reports a failed sub-read as its error text
+                raise PlcError(f"reading {symbol} failed: {value}")
+            out[label.split(".")[-1]] = value
+        return out
+
+    def write_schedule(self, t: float) -> list[tuple[str, Any]]:
+        """Write the scheduled override (0.1 %) and feed hold where they change at time t."""
+        ch = f"PLC.ch{self.target.channel}"
+        wanted: dict[str, Any] = {}
+        if self.schedule.override:
+            wanted[f"{ch}.override"] = round(self.schedule.override_at(t) * 1000)
+        if self.schedule.feed_hold:
+            wanted[f"{ch}.feed_hold"] = self.schedule.hold_at(t)
+        if self.start_pending:  # NC start: a rising edge on PLC.chN.start, once
+            wanted[f"{ch}.start"] = True
+            self.start_pending = False
+        done = []
+        for symbol, value in wanted.items():
+            if self.written.get(symbol) == value:
+                continue
+            plc_type = pyads.PLCTYPE_UINT if symbol.endswith("override") else pyads.PLCTYPE_BOOL
+            if symbol.endswith(".start"):
+                self.written.pop(symbol, None)  # a command, not a level: never deduplicated
+            try:
+                self.conn.write_by_name(symbol, value, plc_type)
+            except (pyads.ADSError, RuntimeError, OSError) as exc:
+                raise PlcError(_describe(exc, self.target, f"writing {symbol}")) from None
+            self.written[symbol] = value
+            done.append((symbol, value))
+        return done
+
+
+def _fmt(label: str, value: Any) -> str:
+    if label == "state":
+        return f"{value} {STATE_NAMES.get(int(value), '?')}"
+    if isinstance(value, bool):
+        return str(int(value))
+    return str(value)
+
+
+class Printer:
+    def __init__(self, out: TextIO, as_json: bool, axis: str) -> None:
+        self.out, self.as_json, self.axis = out, as_json, axis
+
+    def transition(self, t_rel: float, label: str, old: Any, new: Any, v: dict[str, Any]) -> None:
+        now = dt.datetime.now(dt.UTC)
+        name = f"{self.axis}.{label}" if label.startswith("lift_") else label
+        if self.as_json:
+            rec = {"time": now.isoformat(timespec="milliseconds"), "t": round(t_rel, 4),
+                   "object": name, "from": _plain(old), "to": _plain(new),
+                   "line": v["line"], "state": v["state"]}  # fmt: skip
+            print(json.dumps(rec), file=self.out, flush=True)
+            return
+        stamp = now.astimezone().strftime("%H:%M:%S.%f")[:-3]
+        change = f"{_fmt(label, old) if old is not None else '-'} -> {_fmt(label, new)}"
+        print(f"{stamp}  +{t_rel:8.3f} s  {name:<18} {change:<16} line {v['line']:<5} "
+              f"override {v['override'] / 10:.1f} %", file=self.out, flush=True)  # fmt: skip
+
+    def wrote(self, t_rel: float, symbol: str, value: Any) -> None:
+        if self.as_json:
+            print(json.dumps({"t": round(t_rel, 4), "write": symbol, "value": _plain(value)}),
+                  file=self.out, flush=True)  # fmt: skip
+        else:
+            print(f"{'':12}  +{t_rel:8.3f} s  write {symbol} = {_plain(value)}", file=self.out,
+                  flush=True)  # fmt: skip
+
+
+def _plain(value: Any) -> Any:
+    return int(value) if isinstance(value, bool) else value
+
+
+def poll(
+    plc: Plc,
+    printer: Printer,
+    cycle_s: float,
+    duration_s: float | None,
+    clock: Callable[[], float] = time.monotonic,
+    sleep: Callable[[float], None] = time.sleep,
+) -> dict[str, Any]:
+    """The PLC cycle: write due schedule values, sum-read, print changes. Returns counters."""
+    t0 = clock()
+    last: dict[str, Any] = dict.fromkeys(WATCHED)
+    cycles = transitions = late = 0
+    k = 0
+    while duration_s is None or clock() - t0 < duration_s:
+        t_rel = clock() - t0
+        values = plc.read()  # a PLC cycle: inputs first, then the outputs it computes
+        cycles += 1
+        for label in WATCHED:
+            if values[label] != last[label]:
+                printer.transition(t_rel, label, last[label], values[label], values)
+                transitions += last[label] is not None
+                last[label] = values[label]
+        for symbol, value in plc.write_schedule(t_rel):
+            printer.wrote(t_rel, symbol, value)
+        k += 1
+        wait = t0 + k * cycle_s - clock()
+        if wait > 0:
+            sleep(wait)
+        else:  # a PLC task that overran: keep the grid, count it
+            late += 1
+            k = max(k, math.ceil((clock() - t0) / cycle_s))
+    return {"cycles": cycles, "transitions": transitions, "late_cycles": late}
+
+
+def run(target: Target, schedule: Schedule, cycle_ms: float, duration_s: float | None,
+        as_json: bool, timeout_ms: int = 1000, start: bool = False,
+        out: TextIO = sys.stdout) -> int:  # fmt: skip
+    plc = Plc(target, schedule, timeout_ms, start)
+    printer = Printer(out, as_json, target.axis)
+    try:
+        name, state = plc.open()
+        if not as_json:
+            print(f"connected to {name} at {target.address}, AMS NetId {target.net_id} port "
+                  f"{target.ams_port}; polling {', '.join(plc.labels.values())} every "
+                  f"{cycle_ms:g} ms", file=out, flush=True)  # fmt: skip
+        if state != ADS_RUN:
+            print(f"liftd plc: warning: ADS state {state}, not RUN (5): the GEO task is not "
+                  "cycling", file=sys.stderr)  # fmt: skip
+        counters = poll(plc, printer, cycle_ms * 1e-3, duration_s)
+    except PlcError as exc:
+        print(f"liftd plc: {exc}", file=sys.stderr)
+        return EXIT_UNREACHABLE
+    except KeyboardInterrupt:
+        counters = None
+    finally:
+        plc.close()
+    if counters is not None and not as_json:
+        print(f"{counters['cycles']} PLC cycles, {counters['transitions']} transitions, "
+              f"{counters['late_cycles']} late cycles", file=out)  # fmt: skip
+    return EXIT_OK
+
+
+def parse_host(text: str, default_port: int) -> tuple[str, int]:
+    """HOST or HOST:PORT → (host, port)."""
+    host, sep, port = text.rpartition(":")
+    if not sep:
+        return text, default_port
+    if not port.isdigit() or not 0 < int(port) < 65536:
+        raise ValueError(f"--host {text!r}: PORT must be 1..65535")
+    return host, int(port)

@@ -1,0 +1,97 @@
+"""`liftd plc`, the simulated PLC, against a running daemon: it sees every lift the GEO loop
+makes, its schedule writes reach the loop, and it fails loudly when it cannot read."""
+
+from __future__ import annotations
+
+import csv
+import json
+import socket
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from tests.daemon_helper import Daemon, write_config
+
+pytestmark = pytest.mark.integration
+
+TWO_LIFTS = """%two
+N10 G90 G17 G94
+N20 G00 X0 Y0 Z1
+N30 Z[LIFT_START POS=1 POS_LIMIT=30]
+N40 G01 X100 Y0 F24000
+N50 Z[LIFT_END]
+N60 G01 X110 F3000
+N70 Z[LIFT_START POS=1 POS_LIMIT=30]
+N80 G01 X10 Y10 F24000
+N90 Z[LIFT_END]
+N100 M30
+"""
+
+
+def plc(cfg: Path, *args: str, timeout: float = 30) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "liftd", "plc", "-c", str(cfg), *args],
+                          capture_output=True, text=True, timeout=timeout, check=False)  # fmt: skip
+
+
+def rising_edges_s(rows: list[dict[str, str]], column: str) -> list[float]:
+    edges, last = [], "0"
+    for row in rows:
+        if row[column] == "1" and last == "0":
+            edges.append(float(row["t"]))
+        last = row[column]
+    return edges
+
+
+def test_plc_sees_every_lift_and_its_writes_reach_the_loop(tmp_path: Path) -> None:
+    program = tmp_path / "two.nc"
+    program.write_text(TWO_LIFTS)
+    cfg = write_config(tmp_path, program_file=str(program), program={"autostart": False})
+    trace = tmp_path / "run.csv"
+    d = Daemon(cfg, "--trace", str(trace))
+    try:
+        port = d.ready()
+        r = plc(cfg, "--host", f"127.0.0.1:{port}", "--start", "--override", "0:50",
+                "--duration", "3", "--json")  # fmt: skip
+        assert r.returncode == 0, r.stderr
+    finally:
+        assert d.stop() == 0
+    records = [json.loads(line) for line in r.stdout.splitlines()]
+    writes = {rec["write"]: rec["value"] for rec in records if "write" in rec}
+    assert writes == {"PLC.ch1.override": 500, "PLC.ch1.start": True}
+    seen = [rec for rec in records if rec.get("object") == "Z.lift_active"]
+    ups = [rec["t"] for rec in seen if rec["to"] == 1]
+    assert [rec["to"] for rec in seen] == [0, 1, 0, 1, 0]
+    states = [rec["to"] for rec in records if rec.get("object") == "state"]
+    assert states[0] == 3 and 4 in states and states[-1] == 3  # READY → ACTIVE → READY
+    with trace.open() as f:
+        rows = list(csv.DictReader(f))
+    trace_ups = rising_edges_s(rows, "lift_active")
+    assert len(trace_ups) == 2
+    # the PLC samples every 10 ms: the gap between the lifts agrees within two PLC cycles
+    assert abs((ups[1] - ups[0]) - (trace_ups[1] - trace_ups[0])) < 0.025
+    active = [row for row in rows if row["state"] == "4"]
+    assert active and all(row["override"] == "0.500000" for row in active)
+
+
+def test_plc_exits_non_zero_when_the_daemon_is_unreachable_or_a_read_fails(
+    tmp_path: Path,
+) -> None:
+    cfg = write_config(tmp_path)
+    with socket.socket() as s:  # a port nobody listens on
+        s.bind(("127.0.0.1", 0))
+        free = s.getsockname()[1]
+    r = plc(cfg, "--host", f"127.0.0.1:{free}", "--duration", "1", "--timeout-ms", "300")
+    assert r.returncode == 3
+    assert "cannot reach liftd at 127.0.0.1:" in r.stderr and "liftd run" in r.stderr
+    d = Daemon(cfg)
+    try:
+        port = d.ready()
+        r = plc(cfg, "--host", f"127.0.0.1:{port}", "--axis", "Q", "--duration", "1")
+        assert r.returncode == 3
+        assert "GEO.ch1.Q.lift_active" in r.stderr
+        bad = plc(cfg, "--override", "0:500")
+        assert bad.returncode == 2 and "PERCENT" in bad.stderr
+    finally:
+        assert d.stop() == 0

@@ -1,0 +1,58 @@
+"""The simulated PLC's cycle on a virtual clock: reads first, then writes; transitions printed
+once each; an overrun PLC cycle is counted and the grid kept."""
+
+from __future__ import annotations
+
+import io
+import json
+from typing import Any
+
+from liftd.plc import Printer, poll
+
+
+class FakeClock:
+    def __init__(self) -> None:
+        self.now = 100.0
+
+    def __call__(self) -> float:
+        return self.now
+
+    def sleep(self, s: float) -> None:
+        self.now += s
+
+
+class FakePlc:
+    """lift_active is 1 from t=0.045 s to t=0.075 s; the read at t≈0.03 s takes 25 ms."""
+
+    def __init__(self, clock: FakeClock) -> None:
+        self.clock = clock
+        self.t0 = clock.now
+        self.log: list[str] = []
+
+    def read(self) -> dict[str, Any]:
+        t = self.clock.now - self.t0
+        self.log.append("read")
+        if 0.029 < t < 0.031:
+            self.clock.now += 0.025  # a slow answer: this PLC cycle overruns
+        return {"lift_active": 0.045 <= t < 0.075, "lift_suppressed": False, "state": 4,
+                "feed_hold": False, "error_id": 0, "line": 10, "override": 1000}  # fmt: skip
+
+    def write_schedule(self, t: float) -> list[tuple[str, Any]]:
+        self.log.append("write")
+        return [("PLC.ch1.override", 500)] if t == 0 else []
+
+
+def test_poll_prints_each_transition_once_and_counts_overruns() -> None:
+    clock = FakeClock()
+    fake = FakePlc(clock)
+    out = io.StringIO()
+    counters = poll(fake, Printer(out, True, "Z"), 0.01, 0.2, clock, clock.sleep)  # type: ignore[arg-type]
+    records = [json.loads(line) for line in out.getvalue().splitlines()]
+    lift = [(r["t"], r["to"]) for r in records if r.get("object") == "Z.lift_active"]
+    assert [to for _, to in lift] == [0, 1, 0]
+    assert lift[1][0] == 0.055 and lift[2][0] == 0.08  # late read at once, then on the grid
+    assert fake.log[:2] == ["read", "write"]  # inputs before outputs
+    assert records[5] == {"t": 0.0, "write": "PLC.ch1.override", "value": 500}
+    assert counters["late_cycles"] == 1
+    assert counters["transitions"] == 2  # the first sample is not a transition
+    assert counters["cycles"] == 18  # 20 slots of 10 ms, two lost to the overrun
