@@ -297,6 +297,47 @@ def cmd_plc(args: argparse.Namespace) -> int:
                    args.start)  # fmt: skip
 
 
+def cmd_healthcheck(args: argparse.Namespace) -> int:
+    """0 when the daemon answers over ADS in state RUN and its GEO cycle counter advances,
+    1 otherwise (the Docker HEALTHCHECK convention). Raw AMS/TCP: no AdsLib, no route."""
+    import struct  # noqa: PLC0415
+    import time  # noqa: PLC0415
+
+    from liftd.ads.client import RawClient  # noqa: PLC0415
+    from liftd.ads.wire import net_id_bytes  # noqa: PLC0415
+
+    try:
+        settings = _load(args)
+    except ConfigError as err:
+        _print_config_error(err)
+        return 1
+    ads = settings.config.ads
+    host = args.host or ("127.0.0.1" if ads.host in ("0.0.0.0", "::") else ads.host)
+    port = args.port or ads.port
+    try:
+        client = RawClient(port, net_id_bytes(ads.net_id), host=host, timeout_s=args.timeout)
+        try:
+            result, state, _ = client.read_state()
+            counts = []
+            for _ in range(2):
+                code, raw = client.read_by_name("GEO.cycle", 8)
+                counts.append(struct.unpack("<Q", raw)[0] if code == 0 and len(raw) == 8 else -1)
+                time.sleep(0.05)
+        finally:
+            client.close()
+    except (OSError, ValueError) as exc:
+        print(f"unhealthy: no ADS answer from {host}:{port}: {exc}", file=sys.stderr)
+        return 1
+    if result or state != 5:
+        print(f"unhealthy: ADS state {state} (result 0x{result:X}), not RUN", file=sys.stderr)
+        return 1
+    if counts[1] <= counts[0]:
+        print(f"unhealthy: the GEO cycle counter does not advance ({counts})", file=sys.stderr)
+        return 1
+    print(f"healthy: RUN, GEO cycle {counts[1]}")
+    return EXIT_OK
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="liftd",
@@ -349,6 +390,15 @@ def build_parser() -> argparse.ArgumentParser:
         "--timeout-ms", type=int, default=1000, help="ADS request timeout (default 1000 ms)"
     )
     plc.set_defaults(func=cmd_plc)
+
+    health = sub.add_parser(
+        "healthcheck", help="exit 0 when the running daemon is in RUN and its GEO loop cycles"
+    )
+    health.add_argument("-c", "--config", help="liftd.toml")
+    health.add_argument("--host", help="daemon address (default: [ads] host, loopback if any)")
+    health.add_argument("--port", type=int, help="TCP port (default: [ads] port)")
+    health.add_argument("--timeout", type=float, default=2.0, help="seconds (default 2)")
+    health.set_defaults(func=cmd_healthcheck)
 
     sim = sub.add_parser("simulate", help="run a program on a virtual clock, as fast as possible")
     sim.add_argument("program", help="NC program")

@@ -11,8 +11,8 @@ from collections.abc import Iterator
 import pytest
 
 from liftd.ads import wire
+from liftd.ads.client import RawClient
 from liftd.ads.wire import net_id_bytes
-from tests.ads_client import RawClient
 from tests.ads_harness import Harness
 from tests.conftest import make_channel
 

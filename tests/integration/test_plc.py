@@ -35,6 +35,11 @@ def plc(cfg: Path, *args: str, timeout: float = 30) -> subprocess.CompletedProce
                           capture_output=True, text=True, timeout=timeout, check=False)  # fmt: skip
 
 
+def healthcheck(cfg: Path, *args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "liftd", "healthcheck", "-c", str(cfg), *args],
+                          capture_output=True, text=True, timeout=30, check=False)  # fmt: skip
+
+
 def rising_edges_s(rows: list[dict[str, str]], column: str) -> list[float]:
     edges, last = [], "0"
     for row in rows:
@@ -93,5 +98,9 @@ def test_plc_exits_non_zero_when_the_daemon_is_unreachable_or_a_read_fails(
         assert "GEO.ch1.Q.lift_active" in r.stderr
         bad = plc(cfg, "--override", "0:500")
         assert bad.returncode == 2 and "PERCENT" in bad.stderr
+        health = healthcheck(cfg, "--port", str(port))
+        assert health.returncode == 0 and health.stdout.startswith("healthy: RUN")
     finally:
         assert d.stop() == 0
+    down = healthcheck(cfg, "--port", str(port))
+    assert down.returncode == 1 and "no ADS answer" in down.stderr

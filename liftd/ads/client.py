@@ -1,9 +1,11 @@
-"""A minimal raw AMS client for tests that need to send what real clients never would."""
+"""A minimal blocking AMS/TCP client built on the codec: `liftd healthcheck` uses it (no AdsLib,
+no route needed), and tests use it to send what real clients never would."""
 
 from __future__ import annotations
 
 import socket
 import struct
+from typing import Any
 
 from liftd.ads import wire
 from liftd.ads.framing import AmsFramer
@@ -12,12 +14,19 @@ SOURCE = bytes([10, 1, 2, 3, 1, 1])
 
 
 class RawClient:
-    def __init__(self, port: int, target: bytes, source: bytes = SOURCE, rcvbuf: int = 0) -> None:
+    def __init__(
+        self, port: int, target: bytes, source: bytes = SOURCE, rcvbuf: int = 0,
+        host: str = "127.0.0.1", timeout_s: float = 3.0,
+    ) -> None:  # fmt: skip
         self.sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
         if rcvbuf:
             self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, rcvbuf)
-        self.sock.settimeout(3.0)
-        self.sock.connect(("127.0.0.1", port))
+        self.sock.settimeout(timeout_s)
+        try:
+            self.sock.connect((host, port))
+        except OSError:
+            self.sock.close()
+            raise
         self.sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         self.target = target
         self.source = source
@@ -43,9 +52,19 @@ class RawClient:
             self.pending += self.framer.feed(data)
         return wire.decode_frame(self.pending.pop(0))
 
-    def request(self, command: int, payload: bytes, **kw: object) -> wire.Frame:
-        self.send(self.frame(command, payload, **kw))  # type: ignore[arg-type]
+    def request(self, command: int, payload: bytes, **kw: Any) -> wire.Frame:
+        self.send(self.frame(command, payload, **kw))
         return self.recv_frame()
+
+    def read_state(self) -> tuple[int, int, int]:
+        """(result, ADS state, device state)"""
+        return wire.decode_state_response(self.request(4, b"").payload)
+
+    def read_by_name(self, name: str, n: int) -> tuple[int, bytes]:
+        """ReadWrite SYM_VALBYNAME: one round trip, no handle left behind."""
+        raw = name.encode("ascii") + b"\0"
+        reply = self.request(9, struct.pack("<IIII", 0xF004, 0, n, len(raw)) + raw)
+        return wire.decode_read_response(reply.payload)
 
     def read(self, ig: int, io: int, n: int) -> tuple[int, bytes]:
         reply = self.request(2, struct.pack("<III", ig, io, n))
