@@ -66,7 +66,7 @@ def loop_config(settings: Settings, program: Path | None) -> geo_loop.LoopConfig
         repeat=cfg.program.repeat,
         m_ack_auto=cfg.plc.m_ack == "auto",
         m_ack_delay_s=cfg.plc.m_ack_delay_ms * 1e-3,
-        rt=RtRequest(**rt.model_dump()),
+        rt=RtRequest(**rt.model_dump(exclude={"stall_timeout_ms"})),
     )
 
 
@@ -168,9 +168,11 @@ class Daemon:
         self.log.info("daemon.ready", seconds=round(time.monotonic() - t0, 3),
                       ads_port=self.server.port, net_id=ads.net_id)  # fmt: skip
         watchdog = asyncio.create_task(self._watchdog())
+        supervisor = asyncio.create_task(self._supervise())
         with contextlib.suppress(TimeoutError):
             await asyncio.wait_for(self.stopping.wait(), self.duration_s)
         watchdog.cancel()
+        supervisor.cancel()
         await self.shutdown()
         return self.exit_code
 
@@ -249,6 +251,25 @@ class Daemon:
                        detail="ADS now reports ERROR; exiting for a restart")  # fmt: skip
         self.exit_code = EXIT_RUNTIME
         self.stopping.set()
+
+    async def _supervise(self) -> None:
+        """A GEO loop that lives but no longer cycles serves stale data: stop serving, exit 3."""
+        timeout = self.settings.config.rt.stall_timeout_ms * 1e-3
+        last, since = self.shared.get("cycles"), time.monotonic()
+        while not self.stopping.is_set():
+            await asyncio.sleep(min(0.05, timeout / 4))
+            cycles = self.shared.get("cycles")
+            now = time.monotonic()
+            if cycles != last:
+                last, since = cycles, now
+            elif now - since > timeout and self.alive:
+                self.alive = False
+                self.provider.down_state = AdsState.ERROR
+                self.log.error("geo.stalled", cycles=cycles, seconds=round(now - since, 3),
+                               detail="ADS now reports ERROR; exiting for a restart")  # fmt: skip
+                self.exit_code = EXIT_RUNTIME
+                self.proc.kill()  # hung: there is no cycle boundary to wait for
+                self.stopping.set()
 
     async def _watchdog(self) -> None:
         interval = systemd.watchdog_interval_s()

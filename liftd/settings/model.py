@@ -100,6 +100,9 @@ class RtSection(_Section):
     lock_memory: bool = True
     hold_cpu_dma_latency: bool = True
     timer_slack_ns: int = Field(1, ge=0, le=1_000_000)
+    # the daemon stops serving and exits 3 when the GEO cycle counter stands still this long
+    # (a stopped or hung loop; with no systemd watchdog, e.g. in Docker, this is the restart)
+    stall_timeout_ms: int = Field(1000, ge=20, le=60_000)
 
 
 class LogSection(_Section):

@@ -145,6 +145,24 @@ def test_start_failures_have_clear_messages_and_exit_codes(tmp_path: Path) -> No
         first.stop()
 
 
+def test_a_stalled_geo_loop_stops_the_daemon_non_zero(tmp_path: Path) -> None:
+    d = Daemon(write_config(tmp_path, rt={"stall_timeout_ms": 300}))
+    try:
+        d.ready()
+        geo = subprocess.run(["pgrep", "-P", str(d.proc.pid)], capture_output=True, text=True,
+                             check=False).stdout.split()  # fmt: skip
+        assert geo
+        t0 = time.monotonic()
+        for pid in geo:
+            subprocess.run(["kill", "-STOP", pid], check=False)  # alive, but no longer cycling
+        assert d.proc.wait(10) == 3
+        assert time.monotonic() - t0 < 2.0
+        rec = d.event("geo.stalled", 1)
+        assert rec is not None and rec["seconds"] >= 0.3
+    finally:
+        d.stop()
+
+
 def test_geo_process_death_stops_the_daemon_non_zero(tmp_path: Path) -> None:
     d = Daemon(write_config(tmp_path, program={"repeat": True}))
     try:
