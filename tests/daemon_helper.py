@@ -9,6 +9,7 @@ import json
 import os
 import signal
 import socket
+import struct
 import subprocess
 import sys
 import threading
@@ -113,6 +114,22 @@ class Daemon:
     @property
     def address(self) -> str:
         return f"127.0.0.1:{self.port}"
+
+    def read_symbol(self, name: str, fmt: str) -> Any:
+        """One symbol by name over raw AMS/TCP (no AdsLib route involved)."""
+        from liftd.ads.client import RawClient  # noqa: PLC0415
+        from liftd.ads.wire import net_id_bytes  # noqa: PLC0415
+
+        client = RawClient(self.port, net_id_bytes(self.net_id))
+        try:
+            code, raw = client.read_by_name(name, struct.calcsize(fmt))
+        finally:
+            client.close()
+        assert code == 0, hex(code)
+        return struct.unpack(fmt, raw)[0]
+
+    def read_exceeded(self) -> int:
+        return int(self.read_symbol("GEO.timing.exceeded", "<I"))
 
     def signal(self, sig: int) -> None:
         self.proc.send_signal(sig)
