@@ -38,7 +38,9 @@ def geo_pid(daemon_pid: int) -> int | None:
     return max(pids, key=lambda p: rss_mb(p) or 0.0) if pids else None  # the loop, not the tracker
 
 
-def one_run(minutes: float, rt: bool) -> dict[str, object]:
+def one_run(minutes: float, rt: bool, pollers: int = 4, notifiers: int = 1,
+            subscriptions: int = 10, window_s: float = 60.0) -> dict[str, object]:  # fmt: skip
+    """One daemon run under client load; exceed counts are also reported per window_s."""
     seconds = minutes * 60
     with tempfile.TemporaryDirectory() as tmp:
         tmpd = Path(tmp)
@@ -53,12 +55,15 @@ def one_run(minutes: float, rt: bool) -> dict[str, object]:
                 time.sleep(0.001)
             to_ready = time.monotonic() - t0
             geo = geo_pid(d.proc.pid)
-            procs, out = load.start(d.net_id, d.address, seconds, 4, 1000.0, 1, 10, 10)
+            procs, out = load.start(d.net_id, d.address, seconds, pollers, 1000.0, notifiers, 10,
+                                    subscriptions)  # fmt: skip
             rss: list[tuple[float | None, float | None]] = []
+            exceeded: list[tuple[float, int]] = []
             end = time.monotonic() + seconds
             time.sleep(2.0)  # clients connected, caches warm
             while time.monotonic() < end:
                 rss.append((rss_mb(d.proc.pid), rss_mb(geo) if geo else None))
+                exceeded.append((time.monotonic(), d.read_exceeded()))
                 time.sleep(min(10.0, max(0.0, end - time.monotonic())))
             results = load.collect(procs, out, 120)
             time.sleep(0.3)
@@ -85,8 +90,21 @@ def one_run(minutes: float, rt: bool) -> dict[str, object]:
             "subscriptions": sum(r["subscriptions"] for r in notifiers),
             "lift_changes_seen": [len(r["lift_active_changes_at"]) for r in notifiers],
             "lift_changes_lost": load.lost_changes(notifiers, trace),
+            "exceeded_per_window": windows(exceeded, window_s), "window_s": window_s,
             "rt_settings": rt_settings, "stop_s": stopped.get("stop_seconds"),
         }  # fmt: skip
+
+
+def windows(samples: list[tuple[float, int]], window_s: float) -> list[int]:
+    """Exceeded-cycle increments per window of the run (is the exceed rate stable?)."""
+    if not samples:
+        return []
+    out, (t_start, c_start) = [], samples[0]
+    for t, c in samples[1:]:
+        if t - t_start >= window_s - 1.0:
+            out.append(c - c_start)
+            t_start, c_start = t, c
+    return out
 
 
 def main() -> None:

@@ -16,4 +16,9 @@ class AdsError(Exception):
 
 
 class FramingError(Exception):
-    """The AMS/TCP stream is broken (length over the cap, impossible header)."""
+    """The AMS/TCP stream is broken (length over the cap, impossible header). `frames` holds
+    the complete frames that arrived before the break: they are still answered."""
+
+    def __init__(self, message: str, frames: list[bytes] | None = None) -> None:
+        super().__init__(message)
+        self.frames: list[bytes] = frames or []

@@ -18,7 +18,8 @@ class AmsFramer:
 
     def feed(self, data: bytes) -> list[bytes]:
         """Add received bytes; return every frame now complete (6-byte AMS/TCP header
-        included). Raises FramingError for a frame the stream cannot recover from."""
+        included). Raises FramingError for a frame the stream cannot recover from; the frames
+        complete before it travel in the exception."""
         buf = self._buf
         buf += data
         frames: list[bytes] = []
@@ -27,9 +28,11 @@ class AmsFramer:
         while end_buf - pos >= TCP_SIZE:
             reserved, length = TCP_HEADER.unpack_from(buf, pos)
             if length > self.max_frame_bytes:
-                raise FramingError(f"frame of {length} bytes over the cap {self.max_frame_bytes}")
+                raise FramingError(
+                    f"frame of {length} bytes over the cap {self.max_frame_bytes}", frames
+                )
             if reserved == 0 and length < AMS_SIZE:
-                raise FramingError(f"AMS/TCP length {length} cannot hold an AMS header")
+                raise FramingError(f"AMS/TCP length {length} cannot hold an AMS header", frames)
             end = pos + TCP_SIZE + length
             if end > end_buf:
                 break

@@ -134,16 +134,18 @@ class AdsConnection(asyncio.Protocol):
         self.queue.clear()
 
     def data_received(self, data: bytes) -> None:
+        broken: FramingError | None = None
         try:
             frames = self.framer.feed(data)
-        except FramingError as exc:
-            self.close_for("ads.framing_error", str(exc))
-            return
+        except FramingError as exc:  # answer what came before the break, then close
+            frames, broken = exc.frames, exc
         self.partial_since = time.monotonic() if self.framer.pending else None
         for raw in frames:
             if self.closed:
                 return
             self.handle(raw)
+        if broken is not None and not self.closed:
+            self.close_for("ads.framing_error", str(broken))
 
     def pause_writing(self) -> None:
         self.paused = True

@@ -10,7 +10,7 @@ import ipaddress
 import re
 from typing import Literal
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator
+from pydantic import BaseModel, ConfigDict, Field, StrictBool, field_validator
 
 NET_ID = re.compile(r"^(\d{1,3})\.(\d{1,3})\.(\d{1,3})\.(\d{1,3})\.(\d{1,3})\.(\d{1,3})$")
 
@@ -35,8 +35,8 @@ class CncSection(_Section):
 
 class ProgramSection(_Section):
     file: str | None = "programs/demo.nc"  # relative to liftd.toml; optional
-    autostart: bool = True
-    repeat: bool = False
+    autostart: StrictBool = True
+    repeat: StrictBool = False
 
 
 class AdsSection(_Section):
@@ -97,8 +97,8 @@ class RtSection(_Section):
 
     sched_fifo_priority: int = Field(80, ge=0, le=99)  # 0 = do not ask for SCHED_FIFO
     cpu: int = Field(-1, ge=-1, le=1023)  # -1 = no pinning
-    lock_memory: bool = True
-    hold_cpu_dma_latency: bool = True
+    lock_memory: StrictBool = True
+    hold_cpu_dma_latency: StrictBool = True
     timer_slack_ns: int = Field(1, ge=0, le=1_000_000)
     # the daemon stops serving and exits 3 when the GEO cycle counter stands still this long
     # (a stopped or hung loop; with no systemd watchdog, e.g. in Docker, this is the restart)

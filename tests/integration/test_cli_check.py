@@ -72,6 +72,20 @@ def test_golden_bad_programs(program: Path) -> None:
     assert f" error {m.group(1)}: " in first
 
 
+def config_cases() -> list[Path]:
+    return sorted((GOLDEN / "config" / "bad").glob("*/liftd.toml"))
+
+
+@pytest.mark.parametrize("config", config_cases(), ids=lambda p: p.parent.name)
+def test_golden_bad_configurations(config: Path) -> None:
+    """Each broken liftd.toml says on its first line what `liftd check` must answer."""
+    m = re.match(r"# expect (\d): (.+)$", config.read_text().splitlines()[0])
+    assert m, "first line must be '# expect <exit code>: <text in the first message>'"
+    r = liftd("check", "-c", str(config))
+    assert r.returncode == int(m.group(1)), r.stderr
+    assert m.group(2) in r.stderr.splitlines()[0], r.stderr
+
+
 def test_unreadable_program_is_a_program_error(tmp_path: Path) -> None:
     r = liftd("check", "-c", str(REPO / "config" / "liftd.toml"), str(tmp_path / "none.nc"))
     assert r.returncode == 1 and "cannot read program" in r.stderr

@@ -1,5 +1,5 @@
 """What a deployment relies on: the systemd unit keeps the RT split and verifies, the image's
-files exist and its configuration loads, and a wheel carries the default configuration."""
+files exist and its configuration loads."""
 
 from __future__ import annotations
 
@@ -7,7 +7,6 @@ import configparser
 import shutil
 import subprocess
 import sys
-import zipfile
 from pathlib import Path
 
 import pytest
@@ -64,15 +63,3 @@ def test_the_image_files_exist_and_its_configuration_loads(tmp_path: Path) -> No
     r = subprocess.run([sys.executable, "-m", "liftd", "check", "-c", str(etc / "liftd.toml")],
                        capture_output=True, text=True, timeout=60, check=False)  # fmt: skip
     assert r.returncode == 0, r.stderr
-
-
-def test_a_wheel_carries_the_default_configuration(tmp_path: Path) -> None:
-    r = subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation",
-                        "-q", "-w", str(tmp_path), str(REPO)],
-                       capture_output=True, text=True, timeout=120, check=False)  # fmt: skip
-    assert r.returncode == 0, r.stderr
-    (wheel,) = tmp_path.glob("liftd-*.whl")
-    names = set(zipfile.ZipFile(wheel).namelist())
-    for needed in ("liftd/_config/liftd.toml", "liftd/_config/cnc/hochlauf.lis",
-                   "liftd/_config/programs/demo.nc", "liftd/py.typed"):  # fmt: skip
-        assert needed in names

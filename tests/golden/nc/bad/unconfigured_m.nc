@@ -1,0 +1,3 @@
+; expect 990014 line 3
+N10 G90 G17 G94 G00 X0 Y0 Z1
+N20 M77
