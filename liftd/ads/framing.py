@@ -28,10 +28,12 @@ class AmsFramer:
         while end_buf - pos >= TCP_SIZE:
             reserved, length = TCP_HEADER.unpack_from(buf, pos)
             if length > self.max_frame_bytes:
+                buf.clear()  # the stream is dead: hold nothing of it
                 raise FramingError(
                     f"frame of {length} bytes over the cap {self.max_frame_bytes}", frames
                 )
             if reserved == 0 and length < AMS_SIZE:
+                buf.clear()
                 raise FramingError(f"AMS/TCP length {length} cannot hold an AMS header", frames)
             end = pos + TCP_SIZE + length
             if end > end_buf:

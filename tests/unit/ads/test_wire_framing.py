@@ -135,9 +135,11 @@ def test_frames_over_the_cap_and_impossible_lengths_break_the_stream() -> None:
     # an AMS router command (reserved ≠ 0) is framed by its length; the server decides
     assert AmsFramer(2048).feed(struct.pack("<HIH", 0x1000, 2, 551)) != []
     # frames complete before the break are handed over with it (they are still answered)
+    framer = AmsFramer(2048)
     with pytest.raises(FramingError) as err:
-        AmsFramer(2048).feed(FRAMES[0] + FRAMES[1] + b"\xff" * 64)
+        framer.feed(FRAMES[0] + FRAMES[1] + b"\xff" * 64)
     assert err.value.frames == FRAMES[:2]
+    assert framer.pending == 0  # a dead stream holds no memory
 
 
 @given(st.lists(st.integers(1, 200), min_size=1, max_size=40))
