@@ -299,12 +299,8 @@ def cmd_plc(args: argparse.Namespace) -> int:
 
 def cmd_healthcheck(args: argparse.Namespace) -> int:
     """0 when the daemon answers over ADS in state RUN and its GEO cycle counter advances,
-    1 otherwise (the Docker HEALTHCHECK convention). Raw AMS/TCP: no AdsLib, no route."""
-    import struct  # noqa: PLC0415
-    import time  # noqa: PLC0415
-
-    from liftd.ads.client import RawClient  # noqa: PLC0415
-    from liftd.ads.wire import net_id_bytes  # noqa: PLC0415
+    1 otherwise (the Docker HEALTHCHECK convention)."""
+    from liftd import healthcheck  # noqa: PLC0415
 
     try:
         settings = _load(args)
@@ -313,29 +309,9 @@ def cmd_healthcheck(args: argparse.Namespace) -> int:
         return 1
     ads = settings.config.ads
     host = args.host or ("127.0.0.1" if ads.host in ("0.0.0.0", "::") else ads.host)
-    port = args.port or ads.port
-    try:
-        client = RawClient(port, net_id_bytes(ads.net_id), host=host, timeout_s=args.timeout)
-        try:
-            result, state, _ = client.read_state()
-            counts = []
-            for _ in range(2):
-                code, raw = client.read_by_name("GEO.cycle", 8)
-                counts.append(struct.unpack("<Q", raw)[0] if code == 0 and len(raw) == 8 else -1)
-                time.sleep(0.05)
-        finally:
-            client.close()
-    except (OSError, ValueError) as exc:
-        print(f"unhealthy: no ADS answer from {host}:{port}: {exc}", file=sys.stderr)
-        return 1
-    if result or state != 5:
-        print(f"unhealthy: ADS state {state} (result 0x{result:X}), not RUN", file=sys.stderr)
-        return 1
-    if counts[1] <= counts[0]:
-        print(f"unhealthy: the GEO cycle counter does not advance ({counts})", file=sys.stderr)
-        return 1
-    print(f"healthy: RUN, GEO cycle {counts[1]}")
-    return EXIT_OK
+    healthy, message = healthcheck.probe(host, args.port or ads.port, ads.net_id, args.timeout)
+    print(message, file=sys.stdout if healthy else sys.stderr)
+    return EXIT_OK if healthy else 1
 
 
 def build_parser() -> argparse.ArgumentParser:
