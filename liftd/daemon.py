@@ -237,7 +237,8 @@ class Daemon:
                 ev.name == "geo.rt_setting" and not ev.value
             ):
                 level = "warning"
-            getattr(self.log, level)(ev.name, t=round(ev.t, 6), line=ev.line, value=ev.value,
+            value = float(f"{ev.value:.9g}")  # no float noise in the log
+            getattr(self.log, level)(ev.name, t=round(ev.t, 6), line=ev.line, value=value,
                                      text=ev.text or None)  # fmt: skip
 
     def _on_geo_exit(self) -> None:
