@@ -14,9 +14,7 @@ from __future__ import annotations
 
 import os
 import struct
-from typing import Any
 
-import structlog
 from hypothesis import HealthCheck, settings
 from hypothesis import strategies as st
 from hypothesis.stateful import RuleBasedStateMachine, initialize, invariant, rule
@@ -24,19 +22,11 @@ from hypothesis.stateful import RuleBasedStateMachine, initialize, invariant, ru
 from liftd.ads import wire
 from liftd.ads.constants import IndexGroup
 from liftd.ads.framing import AmsFramer
-from liftd.ads.server import AdsConnection, AdsServer, ServerConfig
-from liftd.ads.service import AdsService, ServiceLimits
+from liftd.ads.server import AdsConnection
 from liftd.ads.wire import net_id_bytes
-from liftd.cnc.snapshot import LoopStats
-from liftd.objects.catalog import Catalog, GeoView
-from liftd.objects.provider import CncProvider
-from tests.ads_harness import snapshot
-from tests.conftest import make_channel
+from tests.ads_fake import LIMITS, NET, QUEUE, FakeTransport, make_server
 
-NET = net_id_bytes("127.0.0.1.1.1")
 SOURCE = bytes([10, 0, 0, 9, 1, 1])
-LIMITS = ServiceLimits(max_handles=8, max_notifications=6, max_sum_subcommands=500)
-QUEUE = 32
 STATS = {"chunks": 0, "bytes": 0}  # for bench/fuzz_connection.py
 EXAMPLES = int(os.environ.get("LIFTD_FUZZ_EXAMPLES", "200"))
 
@@ -45,42 +35,6 @@ IGS = [0x121301, 0x21301, 0x121401, 0x121501, 0x121601, 0x121701, 0x121801, 0x12
 IOS = [0x30095, 0x30094, 0x10095, 0xF, 0x10, 0x15, 0, 1, 0xFFFFFFFF]
 NAMES = [b"GEO.ch1.Z.lift_active\0", b"gpAx[3].ipo_state.lift_active\0", b"PLC.ch1.override\0",
          b"PLC.ch1.start\0", b"GEO.cycle\0", b"nope\0", b"", b"GEO.ch1.Z.lift_active"]  # fmt: skip
-
-
-class FakeTransport:
-    def __init__(self) -> None:
-        self.out = bytearray()
-        self.aborted = False
-        self.reading = True
-
-    def write(self, data: bytes) -> None:
-        self.out += data
-
-    def abort(self) -> None:
-        self.aborted = True
-
-    def pause_reading(self) -> None:
-        self.reading = False
-
-    def resume_reading(self) -> None:
-        self.reading = True
-
-    def get_extra_info(self, name: str) -> Any:
-        return ("127.0.0.1", 40000) if name == "peername" else None
-
-
-class Silent:
-    def __getattr__(self, name: str) -> Any:
-        return lambda *a, **k: None
-
-
-def make_server() -> AdsServer:
-    catalog = Catalog(make_channel())
-    view = GeoView(snapshot(), LoopStats())
-    provider = CncProvider(catalog, lambda: view, lambda w: None)
-    cfg = ServerConfig(host="127.0.0.1", port=0, net_ids=frozenset({NET}),
-                       max_frame_bytes=4096, write_queue_frames=QUEUE)  # fmt: skip
-    return AdsServer(cfg, AdsService(provider, LIMITS), structlog.wrap_logger(Silent()))
 
 
 payloads = st.one_of(

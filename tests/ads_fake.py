@@ -1,0 +1,57 @@
+"""One real AdsConnection without a socket: the server objects of a test channel and a fake
+transport that records what the server writes (for the fuzz machine and the malformed corpus)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import structlog
+
+from liftd.ads.server import AdsServer, ServerConfig
+from liftd.ads.service import AdsService, ServiceLimits
+from liftd.ads.wire import net_id_bytes
+from liftd.cnc.snapshot import LoopStats
+from liftd.objects.catalog import Catalog, GeoView
+from liftd.objects.provider import CncProvider
+from tests.ads_harness import snapshot
+from tests.conftest import make_channel
+
+NET = net_id_bytes("127.0.0.1.1.1")
+LIMITS = ServiceLimits(max_handles=8, max_notifications=6, max_sum_subcommands=500)
+QUEUE = 32
+
+
+class FakeTransport:
+    def __init__(self) -> None:
+        self.out = bytearray()
+        self.aborted = False
+        self.reading = True
+
+    def write(self, data: bytes) -> None:
+        self.out += data
+
+    def abort(self) -> None:
+        self.aborted = True
+
+    def pause_reading(self) -> None:
+        self.reading = False
+
+    def resume_reading(self) -> None:
+        self.reading = True
+
+    def get_extra_info(self, name: str) -> Any:
+        return ("127.0.0.1", 40000) if name == "peername" else None
+
+
+class Silent:
+    def __getattr__(self, name: str) -> Any:
+        return lambda *a, **k: None
+
+
+def make_server() -> AdsServer:
+    catalog = Catalog(make_channel())
+    view = GeoView(snapshot(), LoopStats())
+    provider = CncProvider(catalog, lambda: view, lambda w: None)
+    cfg = ServerConfig(host="127.0.0.1", port=0, net_ids=frozenset({NET}),
+                       max_frame_bytes=4096, write_queue_frames=QUEUE)  # fmt: skip
+    return AdsServer(cfg, AdsService(provider, LIMITS), structlog.wrap_logger(Silent()))
