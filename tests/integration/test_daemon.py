@@ -5,9 +5,11 @@ of a real-time run against `liftd simulate`."""
 from __future__ import annotations
 
 import signal
+import socket
 import subprocess
 import sys
 import time
+import urllib.request
 from pathlib import Path
 
 import pyads
@@ -143,6 +145,25 @@ def test_start_failures_have_clear_messages_and_exit_codes(tmp_path: Path) -> No
         assert any("cannot listen" in line for line in second.raw)
     finally:
         first.stop()
+
+
+def test_prometheus_endpoint(tmp_path: Path) -> None:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    d = Daemon(write_config(tmp_path, metrics={"prometheus_port": port}))
+    try:
+        d.ready()
+        body = urllib.request.urlopen(f"http://127.0.0.1:{port}/metrics", timeout=5).read().decode()
+        values = dict(line.rsplit(" ", 1) for line in body.splitlines() if not line.startswith("#"))
+        assert int(values["liftd_geo_cycles_total"]) > 0
+        assert values["liftd_geo_running"] == "1"
+        count = int(values["liftd_geo_lateness_seconds_count"])
+        assert int(values['liftd_geo_lateness_seconds_bucket{le="+Inf"}']) == count > 0
+        health = urllib.request.urlopen(f"http://127.0.0.1:{port}/healthz", timeout=5)
+        assert health.status == 200
+    finally:
+        assert d.stop() == 0
 
 
 def test_a_stalled_geo_loop_stops_the_daemon_non_zero(tmp_path: Path) -> None:
