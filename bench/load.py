@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 import pyads
 
+LIFT_SYMBOLS = ("GEO.ch1.Z.lift_active", "GEO.ch1.Z.lift_suppressed")
 NOTIFY_SYMBOLS = [
     "GEO.ch1.Z.lift_active", "GEO.ch1.Z.lift_suppressed", "GEO.ch1.X.lift_active",
     "GEO.ch1.X.lift_suppressed", "GEO.ch1.Y.lift_active", "GEO.ch1.Y.lift_suppressed",
@@ -88,7 +89,7 @@ def notifier(net_id: str, address: str, cycle_ms: int, duration_s: float, out: A
              subscriptions: int = len(NOTIFY_SYMBOLS)) -> None:  # fmt: skip
     plc = pyads.Connection(net_id, 551, address)
     plc.open()
-    lift: list[tuple[int, bool]] = []  # (the GEO cycle last notified, lift_active)
+    lift: dict[str, list[tuple[int, bool]]] = {s: [] for s in LIFT_SYMBOLS}  # (cycle, value)
     cycle_t: list[float] = []
     count = [0]
     last_cycle = [0]
@@ -100,8 +101,8 @@ def notifier(net_id: str, address: str, cycle_ms: int, duration_s: float, out: A
         def callback(notification: Any, _name: str) -> None:
             _, _, value = plc.parse_notification(notification, plc_type)
             count[0] += 1
-            if symbol == "GEO.ch1.Z.lift_active":
-                lift.append((last_cycle[0], bool(value)))
+            if symbol in lift:  # tagged with the GEO cycle notified last
+                lift[symbol].append((last_cycle[0], bool(value)))
             elif symbol == "GEO.cycle":
                 cycle_t.append(time.perf_counter())
                 last_cycle[0] = int(value)
@@ -120,10 +121,13 @@ def notifier(net_id: str, address: str, cycle_ms: int, duration_s: float, out: A
     for h in handles:
         plc.del_device_notification(*h)
     plc.close()
-    changes = [c for (_, a), (c, b) in itertools.pairwise(lift) if a != b]
+    changes = {sym: [(c, b) for (_, a), (c, b) in itertools.pairwise(samples) if a != b]
+               for sym, samples in lift.items()}  # fmt: skip
     gaps = np.diff(np.array(cycle_t)) * 1e3 if len(cycle_t) > 1 else np.zeros(1)
     out.put({"kind": "notifier", "subscriptions": len(handles), "samples": count[0],
-             "lift_active_samples": len(lift), "lift_active_changes_at": changes,
+             "lift_active_samples": len(lift[LIFT_SYMBOLS[0]]),
+             "lift_active_changes_at": [c for c, _ in changes[LIFT_SYMBOLS[0]]],
+             "lift_changes": changes,
              "cycles_seen": [first_cycle[0], last_cycle[0]],
              "cycle_gap_ms": {"p50": round(float(np.median(gaps)), 2),
                               "p99": round(float(np.percentile(gaps, 99)), 2),
@@ -160,29 +164,49 @@ def collect(procs: list[mp.Process], out: Any, timeout_s: float) -> list[dict[st
     return results
 
 
-def lift_changes(trace: Path, first: int, last: int, dt: float = 1e-3) -> int:
-    """lift_active changes in the trace between two GEO cycles."""
-    changes, prev = 0, None
+def trace_transitions(trace: Path, dt: float = 1e-3) -> dict[str, list[tuple[int, bool]]]:
+    """(GEO cycle, new value) of every lift_active / lift_suppressed change in a run's trace."""
+    out: dict[str, list[tuple[int, bool]]] = {s: [] for s in LIFT_SYMBOLS}
+    prev: dict[str, str] = {}
     with trace.open() as f:
         for row in csv.DictReader(f):
             k = round(float(row["t"]) / dt)
-            if k < first:
-                prev = row["lift_active"]
-                continue
-            if k > last:
-                break
-            changes += prev is not None and row["lift_active"] != prev
-            prev = row["lift_active"]
-    return changes
+            for sym in LIFT_SYMBOLS:
+                v = row[sym.rsplit(".", 1)[1]]
+                if sym in prev and v != prev[sym]:
+                    out[sym].append((k, v == "1"))
+                prev[sym] = v
+    return out
+
+
+def mismatches(notifiers: list[dict[str, Any]], trace: Path, margin: int = 25) -> dict[str, int]:
+    """Transitions of the lift status (Z lift_active and lift_suppressed) in the trace that a
+    notification client did not see (`lost`), and ones it saw that the trace does not have at
+    that cycle with that value (`extra`), summed over clients and over the GEO cycles each client
+    covered. A sample is tagged with the GEO.cycle notified before it, so a change observed at
+    cycle c matches a trace change to the same value within ±margin cycles."""
+    truth = trace_transitions(trace)
+    lost = extra = matched = 0
+    for r in notifiers:
+        first, last = r["cycles_seen"]
+        lo, hi = first + margin, last - margin
+        for sym, seen_all in r["lift_changes"].items():
+            expected = [(k, v) for k, v in truth[sym] if lo <= k <= hi]
+            seen = [(c, v) for c, v in seen_all if lo <= c <= hi]
+            used = [False] * len(seen)
+            for k, v in expected:
+                j = next((j for j, (c, w) in enumerate(seen)
+                          if not used[j] and w == v and abs(c - k) <= margin), None)  # fmt: skip
+                if j is None:
+                    lost += 1
+                else:
+                    used[j] = True
+                    matched += 1
+            extra += used.count(False)
+    return {"matched": matched, "lost": lost, "extra": extra}
 
 
 def lost_changes(notifiers: list[dict[str, Any]], trace: Path) -> int:
-    """lift_active changes in the trace that a notification client did not see (or saw extra),
-    summed over clients, over the GEO cycles each client covered."""
-    lost = 0
-    for r in notifiers:
-        first, last = r["cycles_seen"]
-        margin = 25  # a lift sample is tagged with the GEO.cycle notified before it (±10 ms)
-        seen = sum(1 for c in r["lift_active_changes_at"] if first + margin <= c <= last - margin)
-        lost += abs(lift_changes(trace, first + margin, last - margin) - seen)
-    return lost
+    """Lift status changes lost or invented by the notification clients (0 = all match)."""
+    m = mismatches(notifiers, trace)
+    return m["lost"] + m["extra"]
