@@ -1,0 +1,33 @@
+"""PLC writes as the GEO loop applies them at the start of a cycle."""
+
+from __future__ import annotations
+
+from liftd.cnc.snapshot import ChannelState, Command, GeoInputs, PlcSignal, PlcWrite
+from liftd.runtime.plc_inputs import PlcInputs
+from tests.ads_harness import snapshot
+
+
+def test_levels_hold_and_commands_are_edges() -> None:
+    plc = PlcInputs(auto=False, ack_delay_s=0.02)
+    assert plc.inputs(None, 0.001) == GeoInputs()  # nothing written: what simulate feeds
+    plc.apply(PlcWrite(PlcSignal.OVERRIDE, 0.5))
+    plc.apply(PlcWrite(PlcSignal.FEED_HOLD, 1.0))
+    plc.apply(PlcWrite(PlcSignal.START, 1.0))
+    plc.apply(PlcWrite(PlcSignal.M_ACK, 1.0))
+    assert plc.inputs(None, 0.002) == GeoInputs(0.5, True, Command.START, True)
+    assert plc.inputs(None, 0.003) == GeoInputs(0.5, True, Command.NONE, False)  # levels stay
+    plc.apply(PlcWrite(PlcSignal.OVERRIDE, 7.0))
+    assert plc.inputs(None, 0.004).override == 2.0  # clamped to 200 %
+
+
+def test_the_automatic_plc_acknowledges_but_never_undoes_a_plc_stop() -> None:
+    plc = PlcInputs(auto=True, ack_delay_s=0.0)
+    waiting_m = snapshot(m_pending=8)
+    assert plc.inputs(waiting_m, 0.010).m_ack  # synchronised M: acknowledged
+    held = snapshot(state=ChannelState.HOLD)
+    assert plc.inputs(held, 0.020).command is Command.START  # after M00: continued
+    plc.apply(PlcWrite(PlcSignal.STOP, 1.0))
+    assert plc.inputs(snapshot(), 0.030).command is Command.STOP
+    assert plc.inputs(held, 0.040).command is Command.NONE  # stopped by the PLC: stays held
+    plc.apply(PlcWrite(PlcSignal.START, 1.0))
+    assert plc.inputs(held, 0.050).command is Command.START
