@@ -108,10 +108,12 @@ class GeoLoop:
                 sleep_until(deadline)
             wake = now_ns()
             late = wake - deadline
-            while (raw := shared.inputs.get()) is not None:
-                self.plc.apply(unpack_input(raw))
             k += 1
             t = k * dt
+            while (raw := shared.inputs.get()) is not None:  # rare: only when the PLC writes
+                w = unpack_input(raw)
+                if self.plc.apply(w):  # logged with the cycle it takes effect in
+                    self.events.send(Event("geo.plc_input", t, 0, w.value, w.signal.name.lower()))
             snap = self.task.step(self.plc.inputs(last, t), t)
             stats = LoopStats(k, exceeded, compute_ns / 1e3, compute_max / 1e3, late / 1e3,
                               late_max / 1e3)  # fmt: skip

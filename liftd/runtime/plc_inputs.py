@@ -28,18 +28,23 @@ class PlcInputs:
         self.auto = SimPlc(ack_delay_s) if auto else None
         self.plc_stopped = False  # a STOP from the PLC: the automatic PLC must not continue
 
-    def apply(self, w: PlcWrite) -> None:
+    def apply(self, w: PlcWrite) -> bool:
+        """Take one PLC write; True if it changes what the GEO task gets (a new override or
+        feed-hold level, or a command), False for a level written again unchanged."""
         sig = w.signal
         if sig is PlcSignal.OVERRIDE:
-            self.override = min(max(w.value, 0.0), 2.0)
-        elif sig is PlcSignal.FEED_HOLD:
-            self.feed_hold = w.value != 0.0
-        elif sig is PlcSignal.M_ACK:
+            old, self.override = self.override, min(max(w.value, 0.0), 2.0)
+            return self.override != old
+        if sig is PlcSignal.FEED_HOLD:
+            old_hold, self.feed_hold = self.feed_hold, w.value != 0.0
+            return self.feed_hold != old_hold
+        if sig is PlcSignal.M_ACK:
             self.m_ack = True
         else:
             cmd = _COMMANDS[sig]
             self.commands.append(cmd)
             self.plc_stopped = cmd is Command.STOP
+        return True
 
     def request(self, cmd: Command) -> None:
         """A command of the loop itself (program repeat)."""

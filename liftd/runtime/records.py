@@ -44,6 +44,7 @@ EVENT_NAMES = (
     "geo.regrid",
     "geo.reloaded",
     "geo.plan_error",
+    "geo.plc_input",
 )
 EVENT_IDS = {name: i for i, name in enumerate(EVENT_NAMES)}
 

@@ -10,10 +10,11 @@ from tests.ads_harness import snapshot
 def test_levels_hold_and_commands_are_edges() -> None:
     plc = PlcInputs(auto=False, ack_delay_s=0.02)
     assert plc.inputs(None, 0.001) == GeoInputs()  # nothing written: what simulate feeds
-    plc.apply(PlcWrite(PlcSignal.OVERRIDE, 0.5))
-    plc.apply(PlcWrite(PlcSignal.FEED_HOLD, 1.0))
-    plc.apply(PlcWrite(PlcSignal.START, 1.0))
-    plc.apply(PlcWrite(PlcSignal.M_ACK, 1.0))
+    assert plc.apply(PlcWrite(PlcSignal.OVERRIDE, 0.5))  # changes: the loop logs it
+    assert not plc.apply(PlcWrite(PlcSignal.OVERRIDE, 0.5))  # a PLC writing it every cycle
+    assert plc.apply(PlcWrite(PlcSignal.FEED_HOLD, 1.0))
+    assert plc.apply(PlcWrite(PlcSignal.START, 1.0))
+    assert plc.apply(PlcWrite(PlcSignal.M_ACK, 1.0))
     assert plc.inputs(None, 0.002) == GeoInputs(0.5, True, Command.START, True)
     assert plc.inputs(None, 0.003) == GeoInputs(0.5, True, Command.NONE, False)  # levels stay
     plc.apply(PlcWrite(PlcSignal.OVERRIDE, 7.0))
