@@ -15,7 +15,8 @@ from liftd.cnc.nc.blocks import (
     NcError,
     Severity,
 )
-from liftd.cnc.nc.decoder import DecoderContext, decode
+from liftd.cnc.nc.context import DecoderContext
+from liftd.cnc.nc.decoder import decode
 
 __all__ = [
     "Block",

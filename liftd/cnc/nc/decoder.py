@@ -7,9 +7,8 @@ can report every problem of a program.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 from liftd import units
+from liftd.cnc.nc import lift_rules
 from liftd.cnc.nc.arcs import build_arc
 from liftd.cnc.nc.blocks import (
     Block,
@@ -26,66 +25,20 @@ from liftd.cnc.nc.blocks import (
     Severity,
 )
 from liftd.cnc.nc.commands import CommandKind, CommandResult, parse_command
-from liftd.cnc.nc.lexer import LexError, Token, TokenKind, tokenize
-from liftd.cnc.nc.lift_words import (
-    LiftKeyword,
-    LiftSyntaxError,
-    LiftWords,
-    is_lift_command,
-    parse_lift_words,
-)
-from liftd.cnc.params import ChannelParams, LiftMethod, SlopeType
+from liftd.cnc.nc.context import DecoderContext
+from liftd.cnc.nc.lexer import LexError, tokenize
+from liftd.cnc.nc.lift_words import LiftKeyword, LiftWords
+from liftd.cnc.nc.words import Words, collect, collect_plain
+from liftd.cnc.params import LiftMethod, SlopeType
 from liftd.cnc.path.geometry import ArcSeg
 
 # M functions the ISG kernel handles internally when m_synch does not configure them
 # (P-CHAN-00041 default NO_SYNCH for M0/1/2/17/29/30/3/4/19, isg-cnc.md §3.3); any other
 # unconfigured M function is an error.
 INTERNAL_M = frozenset({0, 1, 2, 3, 4, 17, 19, 29, 30})
-TECHNOLOGY_LETTERS = frozenset("STDH")  # laser power, tool, ...: accepted and ignored
 MOTION_G = {0: MotionKind.RAPID, 1: MotionKind.LINEAR, 2: MotionKind.ARC_CW, 3: MotionKind.ARC_CCW}
 INF = float("inf")
-NUMBER_CHARS = frozenset("0123456789.+-eE")
 MODE_G = frozenset({17, 71, 94, 163})  # XY plane, metric, F in mm/min, radius programming
-
-
-@dataclass(frozen=True, slots=True)
-class DecoderContext:
-    axis_names: tuple[str, ...]
-    lift_axis: str
-    lift_method: LiftMethod
-    sw_limits: tuple[tuple[float, float], ...]  # (neg, pos) per axis, m
-    start_position: tuple[float, ...]  # m
-    max_radius_diff: float  # m, P-CHAN-00171
-    slope: SlopeType
-    configured_m: frozenset[int]
-
-    @staticmethod
-    def from_channel(ch: ChannelParams, start: tuple[float, ...] | None = None) -> DecoderContext:
-        return DecoderContext(
-            axis_names=ch.axis_names,
-            lift_axis=ch.lift_axis,
-            lift_method=ch.lift_method,
-            sw_limits=tuple((ax.sw_limit_neg, ax.sw_limit_pos) for ax in ch.axes),
-            start_position=start if start is not None else tuple(0.0 for _ in ch.axes),
-            max_radius_diff=ch.max_radius_diff,
-            slope=ch.slope,
-            configured_m=frozenset(num for num, _ in ch.m_synch),
-        )
-
-
-class _Words:
-    """The words of one block, collected before they are interpreted."""
-
-    __slots__ = ("bare", "command", "gcodes", "lift", "m", "n", "values")
-
-    def __init__(self) -> None:
-        self.n: int | None = None
-        self.gcodes: list[tuple[int, int]] = []
-        self.values: dict[str, tuple[float, int]] = {}  # letter -> (value, column)
-        self.m: list[tuple[int, int]] = []
-        self.lift: tuple[str, LiftWords, int] | None = None
-        self.bare: list[tuple[float, int]] = []
-        self.command: Token | None = None
 
 
 def decode(text: str, ctx: DecoderContext) -> DecodeResult:
@@ -178,111 +131,12 @@ class _Decoder:
         self.open_lift = None
         return LiftEnd(start.axis, cause, start.line)
 
-    def _collect(self, tokens: list[Token]) -> _Words:
-        w = _Words()
-        axes = self.axes
-        values = w.values
-        for tok in tokens:
-            letter = tok.letter
-            if tok.kind is TokenKind.WORD and letter in axes and letter not in values:
-                values[letter] = (float(tok.text), tok.column)  # the common case first
-                continue
-            if tok.kind is TokenKind.COMMAND:
-                others = [t for t in tokens if t is not tok and t.letter != "N"]
-                if others:
-                    raise NcFault(
-                        ErrorId.SYNTAX,
-                        others[0].column,
-                        "a # command excludes other words in its block (except N)",
-                    )
-                w.command = tok
-            elif tok.kind is TokenKind.NUMBER:
-                w.bare.append((float(tok.text), tok.column))
-            elif tok.kind is TokenKind.BRACKET:
-                self._bracket(tok, w, axes)
-            elif tok.letter == "N":
-                w.n = int(float(tok.text))
-            elif tok.letter in "GM":
-                code = float(tok.text)
-                if code != int(code) or code < 0:
-                    raise NcFault(
-                        ErrorId.UNSUPPORTED,
-                        tok.column,
-                        f"{tok.letter}{tok.text} is not emulated by liftd",
-                    )
-                (w.gcodes if tok.letter == "G" else w.m).append((int(code), tok.column))
-            elif tok.letter in TECHNOLOGY_LETTERS:
-                continue
-            elif tok.letter in axes or tok.letter in "FIJKR":
-                if tok.letter in w.values or (w.lift is not None and w.lift[0] == tok.letter):
-                    eid = ErrorId.DOUBLE_F if tok.letter == "F" else ErrorId.AXIS_TWICE
-                    raise NcFault(eid, tok.column, f"{tok.letter} programmed twice in one block")
-                w.values[tok.letter] = (float(tok.text), tok.column)
-            else:
-                raise NcFault(
-                    ErrorId.UNKNOWN_AXIS,
-                    tok.column,
-                    f"{tok.letter} is not an axis of the channel nor a known address",
-                )
-        return w
-
-    def _bracket(self, tok: Token, w: _Words, axes: frozenset[str]) -> None:
-        if tok.letter not in axes:
-            raise NcFault(ErrorId.UNKNOWN_AXIS, tok.column, f"{tok.letter} is not an axis")
-        if not is_lift_command(tok.text):
-            raise NcFault(
-                ErrorId.UNSUPPORTED,
-                tok.column,
-                f"{tok.letter}[{tok.text}] is not "
-                "emulated by liftd (lift commands and plain numbers are)",
-            )
-        if w.lift is not None or tok.letter in w.values:
-            raise NcFault(ErrorId.AXIS_TWICE, tok.column, f"{tok.letter} programmed twice")
-        try:
-            w.lift = (tok.letter, parse_lift_words(tok.text), tok.column)
-        except LiftSyntaxError as exc:
-            raise NcFault(ErrorId.LIFT_SYNTAX, tok.column, str(exc)) from None
-
     # -- one line ----------------------------------------------------------------------------
-    def _collect_plain(self, line: str) -> _Words | None:
-        """Fast path for blank-separated plain address words ("G01 X20.5 Y10 F6000"), which
-        is what CAM post-processors emit; None means "use the full lexer"."""
-        w = _Words()
-        values = w.values
-        axes = self.axes
-        col = 0
-        for word in line.split():
-            col = line.find(word, col) + 1
-            letter = word[0]
-            number = word[1:]
-            if not number or not letter.isalpha() or not NUMBER_CHARS.issuperset(number):
-                return None
-            try:
-                value = float(number)
-            except ValueError:
-                return None
-            if letter.islower():
-                letter = letter.upper()
-            if letter in axes or letter in "FIJKR":
-                if letter in values:
-                    return None
-                values[letter] = (value, col)
-            elif letter == "G" or letter == "M":  # noqa: PLR1714
-                if value != int(value) or value < 0:
-                    return None
-                (w.gcodes if letter == "G" else w.m).append((int(value), col))
-            elif letter == "N":
-                w.n = int(value)
-            elif letter not in TECHNOLOGY_LETTERS:
-                return None
-            col += len(word) - 1
-        return w
-
     def _line(self, lineno: int, line: str) -> None:
         plain = None
         if "[" not in line and "#" not in line and "(" not in line and ";" not in line:
-            plain = self._collect_plain(line)
-        w = plain if plain is not None else self._collect(tokenize(line))
+            plain = collect_plain(line, self.axes)
+        w = plain if plain is not None else collect(tokenize(line), self.axes)
         if w.command is not None:
             self._command(lineno, w.n, parse_command(w.command))
             return
@@ -332,7 +186,7 @@ class _Decoder:
         )
         self.ended = program_end
 
-    def _gcodes(self, w: _Words) -> bool:
+    def _gcodes(self, w: Words) -> bool:
         dwell = False
         motion_seen = False
         for code, col in w.gcodes:
@@ -351,7 +205,7 @@ class _Decoder:
                 raise NcFault(ErrorId.UNSUPPORTED, col, f"G{code:02d} is not emulated by liftd")
         return dwell
 
-    def _dwell(self, lineno: int, w: _Words) -> float:
+    def _dwell(self, lineno: int, w: Words) -> float:
         """G04 X<s> (first main axis), G04 <s>, lenient G04 F<s> (isg-cnc.md §4.9)."""
         first_axis = self.ctx.axis_names[0]
         direct = w.bare[0] if w.bare else None
@@ -376,7 +230,7 @@ class _Decoder:
                 )
         return chosen[0]
 
-    def _m_functions(self, w: _Words) -> tuple[tuple[int, ...], bool]:
+    def _m_functions(self, w: Words) -> tuple[tuple[int, ...], bool]:
         numbers = []
         for number, col in w.m:
             if number in (17, 29):
@@ -391,7 +245,7 @@ class _Decoder:
             numbers.append(number)
         return tuple(numbers), any(n in (2, 30) for n in numbers)
 
-    def _motion(self, lineno: int, w: _Words) -> Motion | None:
+    def _motion(self, lineno: int, w: Words) -> Motion | None:
         values = w.values
         start = self.pos
         end = list(start)
@@ -462,125 +316,23 @@ class _Decoder:
         # the start was checked as the previous end
         for k, (value, (neg, pos)) in enumerate(zip(motion.end, self.ctx.sw_limits, strict=True)):
             if not neg - 1e-12 <= value <= pos + 1e-12:
-                self._check_position(k, value, column)
+                self.ctx.check_position(k, value, column)
         if motion.center is not None:
             arc = ArcSeg.make(motion.start, motion.end, motion.center, motion.sweep)
             for k, (lo, hi) in enumerate(arc.axis_extent()):
-                self._check_position(k, lo, column)
-                self._check_position(k, hi, column)
-
-    def _check_position(self, k: int, value: float, column: int) -> None:
-        neg, pos = self.ctx.sw_limits[k]
-        name = self.ctx.axis_names[k]
-        if value > pos + 1e-12:
-            raise NcFault(
-                ErrorId.SW_LIMIT_POS,
-                column,
-                f"{name} {value * 1e3:.4f} mm beyond the "
-                f"positive software limit {pos * 1e3:.4f} mm (P-AXIS-00178)",
-            )
-        if value < neg - 1e-12:
-            raise NcFault(
-                ErrorId.SW_LIMIT_NEG,
-                column,
-                f"{name} {value * 1e3:.4f} mm beyond the "
-                f"negative software limit {neg * 1e3:.4f} mm (P-AXIS-00177)",
-            )
+                self.ctx.check_position(k, lo, column)
+                self.ctx.check_position(k, hi, column)
 
     # -- lift commands -------------------------------------------------------------------------
-    def _lift_common(self, axis: str, column: int) -> None:
-        if self.ctx.lift_method is LiftMethod.NONE:
-            raise NcFault(
-                ErrorId.LIFT_NO_METHOD,
-                column,
-                "lift command, but no lift method is "
-                "enabled (FCT_LIFT_UP_TIME or FCT_LIFT_UP in the start-up list)",
-            )
-
     def _lift_start(self, lineno: int, axis: str, words: LiftWords, column: int) -> LiftStart:
-        self._lift_common(axis, column)
-        if self.open_lift is not None:
-            if words.keyword is LiftKeyword.SINGLE:
-                raise NcFault(
-                    ErrorId.LIFT_SECOND_START,
-                    column,
-                    f"LIFT while the lift started in line {self.open_lift.line} is active",
-                )
-            raise NcFault(
-                ErrorId.LIFT_ALREADY_ACTIVE,
-                column,
-                f"LIFT already active (started in line {self.open_lift.line}), LIFT_END expected",
-            )
-        if axis != self.ctx.lift_axis:
-            raise NcFault(
-                ErrorId.LIFT_WRONG_AXIS,
-                column,
-                f"{axis} is not the lift axis {self.ctx.lift_axis} (liftd.toml cnc.lift_axis)",
-            )
-        if words.pos_limit_mm is None:
-            raise NcFault(ErrorId.LIFT_POS_LIMIT_MISSING, column, "POS_LIMIT= is mandatory")
-        if words.down and self.ctx.lift_method is LiftMethod.LIFTING:
-            raise NcFault(
-                ErrorId.LIFT_DOWN_PATH_BASED,
-                column,
-                "DOWN cannot be programmed with path-based Lifting (vendor §2.2)",
-            )
-        if self.slope is SlopeType.HSC and self.ctx.lift_method is LiftMethod.ADVANCED:
-            raise NcFault(
-                ErrorId.LIFT_HSC_SLOPE,
-                column,
-                "HSC slope (type 3) is not supported with Advanced Lifting",
-            )
-        if self.slope is SlopeType.STEP and self.ctx.lift_method is LiftMethod.LIFTING:
-            self.errors.append(
-                NcError(
-                    int(ErrorId.LIFT_STEP_SLOPE),
-                    lineno,
-                    column,
-                    "STEP slope with path-based Lifting: the lift axis can be overloaded "
-                    "(vendor §2.2.1 asks for TRAPEZ)",
-                    Severity.WARNING,
-                )
-            )
-        z0 = self.pos[self.z]
-        base = z0 if words.incremental else 0.0
-        target = z0 if words.pos_mm is None else base + units.mm_to_m(words.pos_mm)
-        limit = base + units.mm_to_m(words.pos_limit_mm)
-        self._check_position(self.z, target, column)
-        self._check_position(self.z, limit, column)
-        if words.down and limit > max(z0, target):
-            raise NcFault(
-                ErrorId.LIFT_DOWN_LIMIT_SIDE,
-                column,
-                "DOWN with POS_LIMIT above the "
-                "start and the target: the lowering depth is on the wrong side",
-            )
-        start = LiftStart(
-            axis,
-            z0,
-            target,
-            limit,
-            words.down,
-            lineno,
-            single_block=words.keyword is LiftKeyword.SINGLE,
-        )
-        self.open_lift = start
-        return start
+        self.open_lift = lift_rules.open_range(
+            self.ctx, words, axis=axis, z0=self.pos[self.z], slope=self.slope,
+            open_lift=self.open_lift, lineno=lineno, column=column, warnings=self.errors,
+        )  # fmt: skip
+        return self.open_lift
 
     def _lift_end(self, axis: str, column: int) -> LiftEnd:
-        self._lift_common(axis, column)
-        if self.open_lift is None:
-            raise NcFault(
-                ErrorId.LIFT_NOT_ACTIVE, column, "LIFT already deactivated, LIFT_START expected"
-            )
-        if axis != self.open_lift.axis:
-            raise NcFault(
-                ErrorId.LIFT_AXIS_MISMATCH,
-                column,
-                f"LIFT_END for {axis}, but "
-                f"LIFT_START (line {self.open_lift.line}) was for "
-                f"{self.open_lift.axis}",
-            )
+        lift_rules.check_end(self.ctx, axis, self.open_lift, column)
         return self._close_lift(LiftEndCause.PROGRAMMED)
 
     # -- # commands ----------------------------------------------------------------------------

@@ -1,0 +1,120 @@
+"""What a lift command means in its program and when it is refused (vendor text §2–§4,
+isg-cnc.md §4): LIFT_START / single-block LIFT and LIFT_END checked against the lift method,
+the lift axis, the open range, the slope and the software limits; POS and POS_LIMIT made
+absolute (G91: relative to the lift axis at LIFT_START). The syntax of the words is in
+lift_words.py; the decoder keeps the state and calls these."""
+
+from __future__ import annotations
+
+from liftd import units
+from liftd.cnc.nc.blocks import ErrorId, LiftStart, NcError, NcFault, Severity
+from liftd.cnc.nc.context import DecoderContext
+from liftd.cnc.nc.lift_words import LiftKeyword, LiftWords
+from liftd.cnc.params import LiftMethod, SlopeType
+
+
+def require_method(ctx: DecoderContext, column: int) -> None:
+    if ctx.lift_method is LiftMethod.NONE:
+        raise NcFault(
+            ErrorId.LIFT_NO_METHOD,
+            column,
+            "lift command, but no lift method is "
+            "enabled (FCT_LIFT_UP_TIME or FCT_LIFT_UP in the start-up list)",
+        )
+
+
+def open_range(
+    ctx: DecoderContext,
+    words: LiftWords,
+    *,
+    axis: str,
+    z0: float,
+    slope: SlopeType,
+    open_lift: LiftStart | None,
+    lineno: int,
+    column: int,
+    warnings: list[NcError],
+) -> LiftStart:
+    """The range a LIFT_START / LIFT opens with the lift axis at z0 (m); NcFault if it is
+    refused, warnings appended as found."""
+    require_method(ctx, column)
+    if open_lift is not None:
+        if words.keyword is LiftKeyword.SINGLE:
+            raise NcFault(
+                ErrorId.LIFT_SECOND_START,
+                column,
+                f"LIFT while the lift started in line {open_lift.line} is active",
+            )
+        raise NcFault(
+            ErrorId.LIFT_ALREADY_ACTIVE,
+            column,
+            f"LIFT already active (started in line {open_lift.line}), LIFT_END expected",
+        )
+    if axis != ctx.lift_axis:
+        raise NcFault(
+            ErrorId.LIFT_WRONG_AXIS,
+            column,
+            f"{axis} is not the lift axis {ctx.lift_axis} (liftd.toml cnc.lift_axis)",
+        )
+    if words.pos_limit_mm is None:
+        raise NcFault(ErrorId.LIFT_POS_LIMIT_MISSING, column, "POS_LIMIT= is mandatory")
+    if words.down and ctx.lift_method is LiftMethod.LIFTING:
+        raise NcFault(
+            ErrorId.LIFT_DOWN_PATH_BASED,
+            column,
+            "DOWN cannot be programmed with path-based Lifting (vendor §2.2)",
+        )
+    if slope is SlopeType.HSC and ctx.lift_method is LiftMethod.ADVANCED:
+        raise NcFault(
+            ErrorId.LIFT_HSC_SLOPE,
+            column,
+            "HSC slope (type 3) is not supported with Advanced Lifting",
+        )
+    if slope is SlopeType.STEP and ctx.lift_method is LiftMethod.LIFTING:
+        warnings.append(
+            NcError(
+                int(ErrorId.LIFT_STEP_SLOPE),
+                lineno,
+                column,
+                "STEP slope with path-based Lifting: the lift axis can be overloaded "
+                "(vendor §2.2.1 asks for TRAPEZ)",
+                Severity.WARNING,
+            )
+        )
+    base = z0 if words.incremental else 0.0
+    target = z0 if words.pos_mm is None else base + units.mm_to_m(words.pos_mm)
+    limit = base + units.mm_to_m(words.pos_limit_mm)
+    z = ctx.axis_names.index(ctx.lift_axis)
+    ctx.check_position(z, target, column)
+    ctx.check_position(z, limit, column)
+    if words.down and limit > max(z0, target):
+        raise NcFault(
+            ErrorId.LIFT_DOWN_LIMIT_SIDE,
+            column,
+            "DOWN with POS_LIMIT above the "
+            "start and the target: the lowering depth is on the wrong side",
+        )
+    return LiftStart(
+        axis,
+        z0,
+        target,
+        limit,
+        words.down,
+        lineno,
+        single_block=words.keyword is LiftKeyword.SINGLE,
+    )
+
+
+def check_end(ctx: DecoderContext, axis: str, open_lift: LiftStart | None, column: int) -> None:
+    """NcFault unless a LIFT_END on `axis` closes the open range."""
+    require_method(ctx, column)
+    if open_lift is None:
+        raise NcFault(
+            ErrorId.LIFT_NOT_ACTIVE, column, "LIFT already deactivated, LIFT_START expected"
+        )
+    if axis != open_lift.axis:
+        raise NcFault(
+            ErrorId.LIFT_AXIS_MISMATCH,
+            column,
+            f"LIFT_END for {axis}, but LIFT_START (line {open_lift.line}) was for {open_lift.axis}",
+        )
