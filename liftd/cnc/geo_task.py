@@ -437,16 +437,5 @@ class GeoTask:
             self.error_id,
             self.error_line,
             tuple(self.events),
-            *self._block_velocities(),
+            *self.prog.path.block_velocities(self.interp.segment, self.ov_eff),
         )
-
-    def _block_velocities(self) -> tuple[float, float]:
-        """Highest velocity of the active block (programmed feed within the axis and lift
-        limits) and the velocity allowed at its end (corner rule; 0 at a stop)."""
-        path = self.prog.path
-        k = self.interp.segment
-        if k >= len(path.segments):
-            return 0.0, 0.0
-        seg = path.segments[k]
-        v_max = min(min(seg.feed, seg.v_lift_ov) * self.ov_eff, seg.v_phys, seg.v_lift)
-        return v_max, min(path.boundaries[k + 1].v_cap, v_max)

@@ -89,6 +89,16 @@ class PathProgram:
     def length(self) -> float:
         return self.boundaries[-1].s
 
+    def block_velocities(self, k: int, override: float) -> tuple[float, float]:
+        """Highest velocity of segment k at `override` (programmed feed within the axis and lift
+        limits) and the velocity allowed at its end (corner rule; 0 at a stop); 0, 0 past the
+        end."""
+        if k >= len(self.segments):
+            return 0.0, 0.0
+        seg = self.segments[k]
+        v_max = min(min(seg.feed, seg.v_lift_ov) * override, seg.v_phys, seg.v_lift)
+        return v_max, min(self.boundaries[k + 1].v_cap, v_max)
+
 
 _STOPPING = {
     ActionKind.M_WAIT,
