@@ -154,3 +154,31 @@ def load_program(text: str, ch: ChannelParams, start: Vec) -> GeoProgram:
         z_index=ch.lift_axis_index,
         plans=plans,
     )
+
+
+class PreparedPrograms:
+    """One NC program prepared for the start positions it runs from. Decoding and planning
+    cost time in proportion to the program (≈ 40 µs per block here), so the program prepared
+    for each of the last `capacity` start positions is kept and reused when the axes start
+    within SAME_START_M of one: a repeated program then starts without decoding in the GEO
+    cycle. Programs are immutable; a run's state lives in the interpolator and lift controller."""
+
+    SAME_START_M = 1e-9
+
+    def __init__(self, text: str, ch: ChannelParams, capacity: int = 2) -> None:
+        self.text = text
+        self.ch = ch
+        self.capacity = capacity
+        self._by_start: dict[Vec, GeoProgram] = {}
+        self.loads = 0  # programs decoded and planned
+
+    def from_start(self, start: Vec) -> GeoProgram:
+        for key, prog in self._by_start.items():
+            if all(abs(a - b) <= self.SAME_START_M for a, b in zip(key, start, strict=True)):
+                return prog
+        prog = load_program(self.text, self.ch, start)
+        self.loads += 1
+        if len(self._by_start) >= self.capacity:
+            del self._by_start[next(iter(self._by_start))]
+        self._by_start[start] = prog
+        return prog

@@ -15,7 +15,7 @@ same inputs give bit-identical snapshots. Order within a cycle:
 
 from __future__ import annotations
 
-from liftd.cnc.geo_program import GeoProgram, load_program
+from liftd.cnc.geo_program import GeoProgram, PreparedPrograms
 from liftd.cnc.lift.controller import LiftController
 from liftd.cnc.lift.monitor import AccelMonitor
 from liftd.cnc.lift.ranges import LiftRange
@@ -68,11 +68,17 @@ class GeoTask:
         self.interp: Interpolator
         self.lift: LiftController
         self.z_monitor = AccelMonitor(channel.axis(channel.lift_axis), channel.cycle_time)
+        self.programs = PreparedPrograms(program_text, channel)
         self._load(self.home)
 
     # -- program control ---------------------------------------------------------------------------
+    def prepare_next_run(self) -> None:
+        """Prepare now (outside the GEO cycle, e.g. before the loop starts) the program for a
+        run from where this one ends, so that a repeat START costs no decoding in the cycle."""
+        self.programs.from_start(self.prog.path.end_position)
+
     def _load(self, start: tuple[float, ...]) -> None:
-        self.prog = load_program(self.text, self.ch, start)
+        self.prog = self.programs.from_start(start)
         self.interp = Interpolator(self.prog.path, self.ch.look_ahead_blocks)
         self.lift = LiftController(
             self.ch.axis(self.ch.lift_axis),
@@ -233,7 +239,10 @@ class GeoTask:
     def step(self, inputs: GeoInputs, t: float) -> GeoSnapshot:
         """Advance the channel to absolute time t (a multiple of the cycle time)."""
         self.cycle += 1
-        t_in = self.t_cycle  # inputs take effect at the start of the cycle
+        # inputs take effect at the start of the cycle; a task's first cycle (which may come
+        # mid-run, after a reload) starts at the previous cycle's t = (k − 1)·dt, not at 0
+        dt = self.ch.cycle_time
+        t_in = self.t_cycle if self.cycle > 1 else (round(t / dt) - 1) * dt
         self.t_cycle = t
         self.events = []
         if self.autostart and self.runs == 0:
