@@ -46,6 +46,7 @@ EXIT_OK, EXIT_CONFIG, EXIT_RUNTIME = 0, 2, 3
 READY_CYCLES = 10
 START_TIMEOUT_S = 20.0
 STOP_JOIN_S = 1.5
+LOAD_TIMEOUT_S = 60.0  # a cycle that decodes and plans a program (START, reload) may take this
 TRACE_CAPACITY_S = 10.0  # trace ring: this many seconds of cycles
 QUIET_EVENTS = {"lift.override_limited": 1.0, "geo.m_output": 0.0, "geo.m_ack": 0.0}
 
@@ -96,6 +97,7 @@ class Daemon:
         self.alive = False
         self._cache: tuple[int, GeoView | None] = (-1, None)
         self.reload_gen = 0
+        self._reload_lock = asyncio.Lock()
         self._control: Any = None
         self._events_conn: Any = None
         self._event_reader = EventReader()
@@ -261,9 +263,10 @@ class Daemon:
             await asyncio.sleep(min(0.05, timeout / 4))
             cycles = self.shared.get("cycles")
             now = time.monotonic()
+            limit = LOAD_TIMEOUT_S if self.shared.get("loading") else timeout
             if cycles != last:
                 last, since = cycles, now
-            elif now - since > timeout and self.alive:
+            elif now - since > limit and self.alive:
                 self.alive = False
                 self.provider.down_state = AdsState.ERROR
                 self.log.error("geo.stalled", cycles=cycles, seconds=round(now - since, 3),
@@ -279,7 +282,8 @@ class Daemon:
         last = -1
         while True:
             cycles = self.shared.get("cycles")
-            if cycles != last and self.alive:  # only while the control loop really runs
+            # only while the control loop really runs (or prepares a program at a START)
+            if (cycles != last or self.shared.get("loading")) and self.alive:
                 systemd.notify("WATCHDOG=1")
                 last = cycles
             await asyncio.sleep(interval)
@@ -314,9 +318,16 @@ class Daemon:
             self.server.config, allow_ips=fresh.allow_ips, allow_net_ids=fresh.allow_net_ids,
             write_net_ids=fresh.write_net_ids, reject=fresh.reject,
         )  # fmt: skip
-        self._control.send(cfg)
-        self.reload_gen += 1
-        self.shared.set("reload", self.reload_gen)
+        async with self._reload_lock:  # one message at a time, in generation order
+            self.reload_gen += 1
+            self.shared.set("reload", self.reload_gen)  # the loop reads the pipe from now on
+            # a program above the pipe buffer (64 KiB) blocks the send until the loop reads it:
+            # off the event loop (a dead GEO process breaks the pipe and ends the send)
+            try:
+                await loop.run_in_executor(None, self._control.send, (self.reload_gen, cfg))
+            except OSError as exc:
+                self.log.error("config.reload_rejected", detail=f"GEO process: {exc}")
+                return
         self.settings = new
         self.log.info("config.reload_accepted", files=list(new.files),
                       detail="takes effect at the next program boundary")  # fmt: skip

@@ -65,22 +65,28 @@ class GeoLoop:
         self.events = events
         self.control = control
         self.task = GeoTask(cfg.channel, cfg.program_text, autostart=cfg.autostart)
+        if cfg.repeat:
+            self.task.prepare_next_run()  # now, not in the cycle of the first repeat
         self.plc = PlcInputs(cfg.m_ack_auto, cfg.m_ack_delay_s)
         self.pending: LoopConfig | None = None
         self.reload_gen = 0
 
     def _check_reload(self, snap: GeoSnapshot) -> None:
-        gen = self.shared.get("reload")
-        if gen != self.reload_gen and self.control.poll():
-            self.reload_gen = gen
-            self.pending = self.control.recv()  # once per SIGHUP
+        if self.shared.get("reload") != self.reload_gen and self.control.poll():
+            self.shared.set("loading", 1)  # a large program takes a while to arrive
+            self.reload_gen, self.pending = self.control.recv()  # once per SIGHUP, in order
+            self.shared.set("loading", 0)
         pending = self.pending
         if pending is None or snap.state not in (ChannelState.READY, ChannelState.ERROR):
             return
         # the program boundary: the new lists and program take effect from where the axes are
         self.cfg, self.pending = pending, None
+        self.shared.set("loading", 1)  # decoding and planning: tell the supervisor it works
         self.task = GeoTask(pending.channel, pending.program_text, autostart=False,
                             start_position=snap.positions)  # fmt: skip
+        if pending.repeat:
+            self.task.prepare_next_run()
+        self.shared.set("loading", 0)
         self.plc = PlcInputs(pending.m_ack_auto, pending.m_ack_delay_s)
         self.shared.set("reloads", self.shared.get("reloads") + 1)
         self.events.send(Event("geo.reloaded", snap.t, 0, 0.0, pending.program_name))
@@ -114,7 +120,13 @@ class GeoLoop:
                 w = unpack_input(raw)
                 if self.plc.apply(w):  # logged with the cycle it takes effect in
                     self.events.send(Event("geo.plc_input", t, 0, w.value, w.signal.name.lower()))
-            snap = self.task.step(self.plc.inputs(last, t), t)
+            inputs = self.plc.inputs(last, t)
+            starting = inputs.command is Command.START  # may decode and plan the program
+            if starting:
+                shared.set("loading", 1)
+            snap = self.task.step(inputs, t)
+            if starting:
+                shared.set("loading", 0)
             stats = LoopStats(k, exceeded, compute_ns / 1e3, compute_max / 1e3, late / 1e3,
                               late_max / 1e3)  # fmt: skip
             record = codec.pack(snap, stats)

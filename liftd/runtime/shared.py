@@ -12,7 +12,7 @@ from liftd.runtime.records import INPUT, SnapshotCodec
 from liftd.runtime.shm import Block, Ring, Seqlock
 
 CONTROL_WORDS = ("stop", "reload", "ready")
-COUNTER_WORDS = ("exceeded", "regridded", "events_dropped", "cycles", "reloads")
+COUNTER_WORDS = ("exceeded", "regridded", "events_dropped", "cycles", "reloads", "loading")
 INPUT_CAPACITY = 256
 U64 = struct.Struct("<Q")
 

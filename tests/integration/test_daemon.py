@@ -10,11 +10,13 @@ import subprocess
 import sys
 import time
 import urllib.request
+from itertools import pairwise
 from pathlib import Path
 
 import pyads
 import pytest
 
+from bench.gen import nesting_program
 from tests.daemon_helper import Daemon, Notify, write_config
 
 pytestmark = pytest.mark.integration
@@ -178,6 +180,39 @@ def test_sighup_reload_rejects_a_broken_config_and_applies_a_good_one(tmp_path: 
         assert d.proc.poll() is None
     finally:
         assert d.stop() == 0
+
+
+def test_reloading_a_large_program_neither_stalls_the_daemon_nor_jumps_the_axes(
+    tmp_path: Path,
+) -> None:
+    """SIGHUP to an 11 200-block program: the loop decodes and plans it at the program boundary
+    (≈ 0.5 s here, twice with repeat), far beyond stall_timeout_ms; the supervisor knows the loop
+    is loading, and the new program starts from where the axes are, in its first cycle."""
+    big = tmp_path / "big.nc"
+    big.write_text(nesting_program(800))
+    cfg = write_config(tmp_path, rt={"stall_timeout_ms": 200})  # the demo once, then reload
+    trace = tmp_path / "run.csv"
+    d = Daemon(cfg, "--trace", str(trace))
+    try:
+        d.ready()
+        assert d.event("geo.program_end", 30) is not None
+        demo = cfg.read_text().split('file = "')[1].split('"')[0]
+        cfg.write_text(cfg.read_text().replace(demo, str(big)).replace('"repeat": false', "true")
+                       .replace("repeat = false", "repeat = true"))  # fmt: skip
+        d.signal(signal.SIGHUP)
+        assert d.event("geo.reloaded", 30) is not None
+        c1 = d.read_symbol("GEO.cycle", "<Q")
+        time.sleep(0.5)
+        assert d.read_symbol("GEO.cycle", "<Q") > c1 + 300
+        assert d.proc.poll() is None and d.event("geo.stalled", 0) is None
+    finally:
+        assert d.stop() == 0
+    time.sleep(0.2)
+    rows = trace.read_text().splitlines()[1:]
+    xyz = [tuple(float(v) for v in row.split(",")[2:5]) for row in rows]  # mm
+    step = max(max(abs(a - b) for a, b in zip(p, q, strict=True)) for p, q in pairwise(xyz))
+    assert step <= 1.5 * (1 + 1e-6)  # v_max 1.5 m/s: at most 1.5 mm per 1 ms cycle
+    assert xyz[-1][:2] != xyz[0][:2]  # the new program moved the axes
 
 
 def test_start_failures_have_clear_messages_and_exit_codes(tmp_path: Path) -> None:
