@@ -17,7 +17,6 @@ import dataclasses
 import multiprocessing
 import os
 import signal
-import threading
 import time
 from pathlib import Path
 from typing import Any, TextIO
@@ -39,8 +38,8 @@ from liftd.runtime.cycle import percentile_us
 from liftd.runtime.records import EventReader, pack_input
 from liftd.runtime.rt import RtRequest
 from liftd.runtime.shared import Shared
+from liftd.runtime.trace_recorder import TraceRecorder
 from liftd.settings import ConfigError, Settings, load_settings
-from liftd.trace import TraceWriter
 
 EXIT_OK, EXIT_CONFIG, EXIT_RUNTIME = 0, 2, 3
 READY_CYCLES = 10
@@ -102,8 +101,7 @@ class Daemon:
         self._events_conn: Any = None
         self._event_reader = EventReader()
         self._event_times: dict[str, float] = {}
-        self._trace_thread: threading.Thread | None = None
-        self._trace_stop = threading.Event()
+        self._trace: TraceRecorder | None = None
         self._metrics: asyncio.Server | None = None
         self._rss_mb: tuple[float | None, float | None] = (None, None)
 
@@ -156,7 +154,11 @@ class Daemon:
             self.alive = True
             await self._listen()
             if trace_file is not None:
-                self._start_trace(trace_file)
+                ring = self.shared.trace
+                assert ring is not None
+                self._trace = TraceRecorder(trace_file, ring, self.shared.codec,
+                                            self.settings.channel.axis_names, self.log)  # fmt: skip
+                self._trace.start()
             await self._start_metrics()
         except StartError as exc:
             self.log.error("daemon.start_failed", reason=str(exc))
@@ -333,38 +335,6 @@ class Daemon:
                       detail="takes effect at the next program boundary")  # fmt: skip
 
     # -- trace ------------------------------------------------------------------------------------
-    def _start_trace(self, out: TextIO) -> None:
-        ring = self.shared.trace
-        assert ring is not None
-        writer = TraceWriter(out, self.settings.channel.axis_names)
-        codec = self.shared.codec
-
-        def drain() -> None:
-            ok = True
-            while True:
-                stop = self._trace_stop.is_set()
-                while (raw := ring.get()) is not None:
-                    if ok:
-                        try:
-                            writer.write(codec.unpack(raw)[0])
-                        except OSError as exc:  # disk full: stop tracing, never the loop
-                            ok = False
-                            self.log.error("trace.stopped", reason=exc.strerror)
-                if stop:
-                    break
-                time.sleep(0.02)
-            try:
-                if ok:
-                    writer.flush()
-                out.close()
-            except OSError as exc:
-                self.log.error("trace.stopped", reason=exc.strerror)
-            if ring.dropped:
-                self.log.warning("trace.dropped", records=ring.dropped)
-
-        self._trace_thread = threading.Thread(target=drain, name="liftd-trace", daemon=True)
-        self._trace_thread.start()
-
     # -- metrics ----------------------------------------------------------------------------------
     async def _start_metrics(self) -> None:
         m = self.settings.config.metrics
@@ -397,9 +367,8 @@ class Daemon:
                 self.proc.kill()
                 await loop.run_in_executor(None, self.proc.join, 1.0)
         self.alive = False
-        if self._trace_thread is not None:
-            self._trace_stop.set()
-            self._trace_thread.join(5.0)
+        if self._trace is not None:
+            self._trace.stop()
         self._log_summary(time.monotonic() - t0)
         self.shared.close()
 

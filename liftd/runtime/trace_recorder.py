@@ -1,0 +1,59 @@
+"""`liftd run --trace`: a daemon-side thread drains the GEO loop's trace ring into the CSV of
+`liftd simulate` (trace.py), off the loop's CPU time. A write error (disk full) stops the
+trace, never the loop; records the ring had to drop are reported at the end."""
+
+from __future__ import annotations
+
+import threading
+import time
+from typing import Any, TextIO
+
+from liftd.runtime.records import SnapshotCodec
+from liftd.runtime.shm import Ring
+from liftd.trace import TraceWriter
+
+DRAIN_PERIOD_S = 0.02
+
+
+class TraceRecorder:
+    def __init__(self, out: TextIO, ring: Ring, codec: SnapshotCodec,
+                 axis_names: tuple[str, ...], log: Any) -> None:  # fmt: skip
+        self.out = out
+        self.ring = ring
+        self.codec = codec
+        self.writer = TraceWriter(out, axis_names)
+        self.log = log
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._drain, name="liftd-trace", daemon=True)
+
+    def start(self) -> None:
+        self._thread.start()
+
+    def stop(self, timeout_s: float = 5.0) -> None:
+        """Drain what is left and close the file (the loop has stopped writing)."""
+        self._stop.set()
+        if self._thread.is_alive():
+            self._thread.join(timeout_s)
+
+    def _drain(self) -> None:
+        ring, ok = self.ring, True
+        while True:
+            stop = self._stop.is_set()
+            while (raw := ring.get()) is not None:
+                if ok:
+                    try:
+                        self.writer.write(self.codec.unpack(raw)[0])
+                    except OSError as exc:  # disk full: stop tracing, never the loop
+                        ok = False
+                        self.log.error("trace.stopped", reason=exc.strerror)
+            if stop:
+                break
+            time.sleep(DRAIN_PERIOD_S)
+        try:
+            if ok:
+                self.writer.flush()
+            self.out.close()
+        except OSError as exc:
+            self.log.error("trace.stopped", reason=exc.strerror)
+        if ring.dropped:
+            self.log.warning("trace.dropped", records=ring.dropped)
