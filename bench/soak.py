@@ -32,8 +32,8 @@ def main() -> None:
     # grows by at most 4 MiB in the hour and the mlockall'd GEO process not at all; every lift
     # status change the notification clients saw is in the trace and none is missing.
     start, daemon, geo = rec["rss_at_1min"], rec["rss_daemon_mb"], rec["rss_geo_mb"]
-    rec["rss_growth_after_1min_mb"] = {"daemon": round(daemon[1] - start[0], 1),  # type: ignore[index]
-                                       "geo": round(geo[1] - start[1], 1)}  # type: ignore[index]  # fmt: skip
+    rec["rss_growth_after_1min_mb"] = {"daemon": round(daemon[1] - start[0], 1),
+                                       "geo": round(geo[1] - start[1], 1)}  # fmt: skip
     rec["goal"] = {"rss_growth_after_1min_mb": {"daemon": RSS_GROWTH_MB, "geo": 0.5},
                    "lift_status_vs_trace": {"lost": 0, "extra": 0},
                    "exceeded_per_window": "stable"}  # fmt: skip

@@ -42,7 +42,6 @@ class GeoTask:
         start_position: tuple[float, ...] | None = None,
     ) -> None:
         self.ch = channel
-        self.text = program_text
         self.autostart = autostart
         self.z_index = channel.lift_axis_index
         self.home = start_position or tuple(0.0 for _ in channel.axes)
