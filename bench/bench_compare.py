@@ -25,9 +25,9 @@ from liftd.cnc.lift.ranges import find_ranges  # noqa: E402
 from liftd.cnc.nc import DecoderContext, decode  # noqa: E402
 from liftd.cnc.params import ChannelParams, LiftMethod  # noqa: E402
 from liftd.cnc.path.program import prepare  # noqa: E402
-from liftd.compare import compare  # noqa: E402
+from liftd.cnc.plc import Schedule, parse_override_spec  # noqa: E402
 from liftd.settings import load_settings  # noqa: E402
-from liftd.simulate import Schedule, parse_override_spec  # noqa: E402
+from liftd.sim.compare import compare  # noqa: E402
 
 START = "G90 G17 G94\n#SLOPE[TYPE=TRAPEZ]\nG00 X20 Y20 Z1\n"
 

@@ -27,7 +27,7 @@ sys.path.insert(0, str(ROOT))
 
 from bench import load  # noqa: E402
 from bench.bench_ads import RT_OFF, RT_ON  # noqa: E402
-from liftd.daemon import rss_mb  # noqa: E402
+from liftd.service.daemon import rss_mb  # noqa: E402
 from tests.daemon_helper import Daemon, Notify, write_config  # noqa: E402
 
 

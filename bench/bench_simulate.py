@@ -17,8 +17,9 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from bench.gen import count_blocks, nesting_program  # noqa: E402
+from liftd.cnc.plc import Schedule  # noqa: E402
 from liftd.settings import load_settings  # noqa: E402
-from liftd.simulate import Schedule, simulate  # noqa: E402
+from liftd.sim.simulate import simulate  # noqa: E402
 
 
 class Sink(io.TextIOBase):

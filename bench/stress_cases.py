@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from liftd.cnc.params import AxisParams, ChannelParams, LiftMethod, MSync, SlopeType
-from liftd.simulate import Schedule
+from liftd.cnc.plc import Schedule
 
 POS_TOL = 1e-7  # 0.1 µm
 

@@ -16,7 +16,8 @@ from liftd.cnc.nc import DecoderContext, Severity, decode
 from liftd.settings import ConfigError, Settings, load_settings
 
 if TYPE_CHECKING:
-    from liftd.simulate import Schedule, SimResult
+    from liftd.cnc.plc import Schedule
+    from liftd.sim.simulate import SimResult
 
 EXIT_OK = 0
 EXIT_PROGRAM = 1
@@ -77,13 +78,13 @@ def cmd_check(args: argparse.Namespace) -> int:
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
-    from liftd import plot  # noqa: PLC0415
-    from liftd.simulate import (  # noqa: PLC0415
+    from liftd.cnc.plc import (  # noqa: PLC0415
         Schedule,
         SpecError,
         parse_feedhold_spec,
         parse_override_spec,
     )
+    from liftd.sim import plot  # noqa: PLC0415
 
     try:
         schedule = Schedule(
@@ -153,8 +154,8 @@ def _simulate(
     schedule: Schedule,
     trace: TextIO | None,
 ) -> int:
-    from liftd import plot  # noqa: PLC0415
-    from liftd.simulate import channel_for, simulate  # noqa: PLC0415
+    from liftd.sim import plot  # noqa: PLC0415
+    from liftd.sim.simulate import channel_for, simulate  # noqa: PLC0415
 
     ch = channel_for(settings.channel, args.method)
     delay = settings.config.plc.m_ack_delay_ms * 1e-3
@@ -194,7 +195,7 @@ def _compare(
     schedule: Schedule,
     traces: dict[str, TextIO],
 ) -> int:
-    from liftd import compare, plot  # noqa: PLC0415
+    from liftd.sim import compare, plot  # noqa: PLC0415
 
     ch = settings.channel
     delay = settings.config.plc.m_ack_delay_ms * 1e-3
@@ -211,7 +212,7 @@ def _compare(
 
 def cmd_run(args: argparse.Namespace) -> int:
     """The real-time daemon: GEO loop process + ADS server (liftd/daemon.py)."""
-    from liftd import daemon, logs  # noqa: PLC0415
+    from liftd.service import daemon, logs  # noqa: PLC0415
 
     try:
         settings = _load(args, args.program)
@@ -261,8 +262,8 @@ def cmd_objects(args: argparse.Namespace) -> int:
 
 def cmd_plc(args: argparse.Namespace) -> int:
     """A simulated PLC polling the lift status over ADS (liftd/plc.py)."""
-    from liftd import plc  # noqa: PLC0415
-    from liftd.simulate import (  # noqa: PLC0415
+    from liftd.clients import plc  # noqa: PLC0415
+    from liftd.cnc.plc import (  # noqa: PLC0415
         Schedule,
         SpecError,
         parse_feedhold_spec,
@@ -300,7 +301,7 @@ def cmd_plc(args: argparse.Namespace) -> int:
 def cmd_healthcheck(args: argparse.Namespace) -> int:
     """0 when the daemon answers over ADS in state RUN and its GEO cycle counter advances,
     1 otherwise (the Docker HEALTHCHECK convention)."""
-    from liftd import healthcheck  # noqa: PLC0415
+    from liftd.clients import healthcheck  # noqa: PLC0415
 
     try:
         settings = _load(args)

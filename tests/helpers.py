@@ -8,8 +8,8 @@ import numpy as np
 
 from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.params import ChannelParams
+from liftd.cnc.plc import Schedule, SimPlc
 from liftd.cnc.snapshot import ChannelState, GeoInputs, GeoSnapshot
-from liftd.simulate import Schedule, SimPlc
 
 InputFn = Callable[[float, GeoSnapshot | None], GeoInputs]
 

@@ -15,9 +15,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import NamedTuple
 
-from liftd import units
 from liftd.ads.constants import IndexGroup
 from liftd.ads.service import STATIC_HANDLE_BIT, Symbol
+from liftd.cnc import units
 from liftd.cnc.params import ChannelParams
 from liftd.cnc.snapshot import GeoSnapshot, LoopStats, PlcSignal
 from liftd.objects.types import BOOLEAN, REAL64, SGN32, UNS16, UNS32, UNS64, CncType

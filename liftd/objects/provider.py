@@ -13,10 +13,10 @@ from __future__ import annotations
 import struct
 from collections.abc import Callable, Sequence
 
-from liftd import units
 from liftd.ads.constants import AdsErr, AdsState, IndexGroup
 from liftd.ads.errors import AdsError
 from liftd.ads.service import ENCODING, STATIC_HANDLE_BIT, Symbol
+from liftd.cnc import units
 from liftd.cnc.snapshot import PlcSignal, PlcWrite
 from liftd.objects.catalog import (
     ADDRESS,

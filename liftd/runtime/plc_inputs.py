@@ -10,8 +10,8 @@ from __future__ import annotations
 
 from collections import deque
 
+from liftd.cnc.plc import Schedule, SimPlc
 from liftd.cnc.snapshot import ChannelState, Command, GeoInputs, GeoSnapshot, PlcSignal, PlcWrite
-from liftd.simulate import Schedule, SimPlc
 
 _COMMANDS = {PlcSignal.START: Command.START, PlcSignal.STOP: Command.STOP,
              PlcSignal.RESET: Command.RESET}  # fmt: skip

@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from liftd import units
+from liftd.cnc import units
 from liftd.cnc.params import AxisParams, LiftMethod, MSync, SlopeType
 from liftd.settings.isg_list import Problem, Severity, read_list
 from liftd.settings.isg_schema import (

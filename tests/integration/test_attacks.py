@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from liftd.daemon import rss_mb
+from liftd.service.daemon import rss_mb
 from tests.attacks import ATTACK_ADS, CASES, Case, probe_ms
 from tests.daemon_helper import Daemon, write_config
 

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from liftd import plot
+from liftd.sim import plot
 from tests.integration.test_simulate_cli import CONTRACT_COLUMNS, DEMO, LIFT_KEYS, simulate
 
 pytestmark = pytest.mark.integration

@@ -10,7 +10,8 @@ from pathlib import Path
 
 import pytest
 
-from liftd import cli, plot
+from liftd import cli
+from liftd.sim import plot
 from tests.conftest import REPO
 
 pytestmark = pytest.mark.integration

@@ -7,7 +7,7 @@ import io
 import json
 from typing import Any
 
-from liftd.plc import Printer, poll
+from liftd.clients.plc import Printer, poll
 
 
 class FakeClock:

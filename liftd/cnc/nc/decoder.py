@@ -7,7 +7,7 @@ can report every problem of a program.
 
 from __future__ import annotations
 
-from liftd import units
+from liftd.cnc import units
 from liftd.cnc.nc import lift_rules
 from liftd.cnc.nc.arcs import build_arc
 from liftd.cnc.nc.blocks import (

@@ -6,7 +6,7 @@ lift_words.py; the decoder keeps the state and calls these."""
 
 from __future__ import annotations
 
-from liftd import units
+from liftd.cnc import units
 from liftd.cnc.nc.blocks import ErrorId, LiftStart, NcError, NcFault, Severity
 from liftd.cnc.nc.context import DecoderContext
 from liftd.cnc.nc.lift_words import LiftKeyword, LiftWords

@@ -8,8 +8,8 @@ import itertools
 
 from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.params import LiftMethod
+from liftd.cnc.plc import Schedule, SimPlc
 from liftd.cnc.snapshot import ChannelState, Command, GeoInputs, GeoSnapshot
-from liftd.simulate import Schedule, SimPlc
 from tests.conftest import REPO, make_channel
 
 DEMO = (REPO / "config" / "programs" / "demo.nc").read_text()

@@ -9,9 +9,9 @@ import pytest
 
 from liftd.ads.errors import AdsError
 from liftd.cnc.snapshot import PlcSignal, PlcWrite
-from liftd.daemon import Daemon
 from liftd.runtime.records import unpack_input
 from liftd.runtime.shared import INPUT_CAPACITY
+from liftd.service.daemon import Daemon
 from liftd.settings import load_settings
 from tests.conftest import REPO
 

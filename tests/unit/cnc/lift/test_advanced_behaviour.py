@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from liftd.cnc.params import LiftMethod
+from liftd.cnc.plc import Schedule, parse_feedhold_spec, parse_override_spec
 from liftd.cnc.snapshot import ChannelState, GeoInputs, GeoSnapshot, LiftPhase
-from liftd.simulate import Schedule, parse_feedhold_spec, parse_override_spec
 from tests.conftest import make_channel
 from tests.helpers import events, fd_ratios, run_task
 
@@ -271,7 +271,7 @@ def test_flush_in_the_range_reaches_the_target_in_the_flush_block() -> None:
 
 
 def test_lift_statuses_appear_in_snapshot_and_summary() -> None:
-    from liftd.simulate import simulate  # noqa: PLC0415
+    from liftd.sim.simulate import simulate  # noqa: PLC0415
 
     ch = make_channel(lift_min_dist=0.005)
     text = START + (

@@ -21,8 +21,8 @@ from liftd.cnc.lift.profile import state_at
 from liftd.cnc.nc import DecoderContext, decode
 from liftd.cnc.nc.blocks import ErrorId, Severity
 from liftd.cnc.params import ChannelParams, LiftMethod, SlopeType
+from liftd.cnc.plc import Schedule, parse_feedhold_spec, parse_override_spec
 from liftd.cnc.snapshot import ChannelState, GeoInputs, GeoSnapshot, LiftPhase
-from liftd.simulate import Schedule, parse_feedhold_spec, parse_override_spec
 from tests.conftest import make_channel
 from tests.helpers import events, run_task
 

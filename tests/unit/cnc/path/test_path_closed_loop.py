@@ -12,8 +12,8 @@ from liftd.cnc.nc import DecoderContext, decode
 from liftd.cnc.params import MSync, SlopeType
 from liftd.cnc.path.interpolator import Interpolator
 from liftd.cnc.path.program import prepare
+from liftd.cnc.plc import Schedule, parse_feedhold_spec, parse_override_spec
 from liftd.cnc.snapshot import ChannelState, Command, GeoInputs
-from liftd.simulate import Schedule, parse_feedhold_spec, parse_override_spec
 from tests.conftest import make_channel
 from tests.helpers import events, fd_ratios, positions, run
 

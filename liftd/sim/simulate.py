@@ -19,96 +19,11 @@ import numpy as np
 from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.lift.controller import LiftRecord
 from liftd.cnc.params import ChannelParams, LiftMethod
-from liftd.cnc.snapshot import ChannelState, Command, GeoInputs, GeoSnapshot
-from liftd.trace import LimitMonitor, TraceWriter
+from liftd.cnc.plc import Schedule, SimPlc
+from liftd.cnc.snapshot import ChannelState, GeoSnapshot
+from liftd.sim.trace import LimitMonitor, TraceWriter
 
 MM = 1e3
-
-
-class SpecError(ValueError):
-    """A schedule on the command line cannot be read."""
-
-
-def parse_override_spec(spec: str) -> list[tuple[float, float]]:
-    """ "T:PERCENT,T:PERCENT" → [(t_s, fraction)], steps in time order (DESIGN.md §3.1)."""
-    steps = []
-    for item in filter(None, (p.strip() for p in spec.split(","))):
-        try:
-            t_text, pct_text = item.split(":")
-            t, pct = float(t_text), float(pct_text)
-        except ValueError:
-            raise SpecError(f"override step {item!r}: expected T:PERCENT, e.g. 0.4:150") from None
-        if not (math.isfinite(t) and t >= 0.0 and math.isfinite(pct) and 0.0 <= pct <= 200.0):
-            raise SpecError(f"override step {item!r}: T >= 0 s and 0 <= PERCENT <= 200")
-        steps.append((t, pct / 100.0))
-    return sorted(steps)
-
-
-def parse_feedhold_spec(spec: str) -> list[tuple[float, float]]:
-    """ "T:DURATION,..." → [(t_from, t_to)]."""
-    windows = []
-    for item in filter(None, (p.strip() for p in spec.split(","))):
-        try:
-            t_text, d_text = item.split(":")
-            t, d = float(t_text), float(d_text)
-        except ValueError:
-            raise SpecError(f"feed hold {item!r}: expected T:DURATION, e.g. 0.3:0.2") from None
-        if not (math.isfinite(t) and t >= 0.0 and math.isfinite(d) and d > 0.0):
-            raise SpecError(f"feed hold {item!r}: T >= 0 s and DURATION > 0 s")
-        windows.append((t, t + d))
-    return sorted(windows)
-
-
-@dataclass(frozen=True, slots=True)
-class Schedule:
-    override: tuple[tuple[float, float], ...] = ()
-    feed_hold: tuple[tuple[float, float], ...] = ()
-
-    def override_at(self, t: float) -> float:
-        value = 1.0
-        for t_step, fraction in self.override:
-            if t >= t_step - 1e-12:
-                value = fraction
-        return value
-
-    def hold_at(self, t: float) -> bool:
-        return any(t0 - 1e-12 <= t < t1 - 1e-12 for t0, t1 in self.feed_hold)
-
-
-class SimPlc:
-    """A PLC that acknowledges every M function and continues after M00 after a delay."""
-
-    def __init__(self, delay: float) -> None:
-        self.delay = delay
-        self.since: float | None = None
-        self._idle = GeoInputs()
-
-    def inputs(self, last: GeoSnapshot | None, t: float, schedule: Schedule) -> GeoInputs:
-        if (
-            not schedule.override
-            and not schedule.feed_hold
-            and self.since is None
-            and (last is None or (last.m_pending < 0 and last.state is not ChannelState.HOLD))
-        ):
-            return self._idle  # nothing to say: the common case, no allocation
-        ack = False
-        command = Command.NONE
-        waiting = last is not None and (
-            last.m_pending >= 0 or (last.state is ChannelState.HOLD and not last.feed_hold)
-        )
-        if waiting:
-            assert last is not None
-            if self.since is None:
-                self.since = t
-            if t - self.since >= self.delay - 1e-12:
-                self.since = None
-                if last.m_pending >= 0:
-                    ack = True
-                else:
-                    command = Command.START
-        else:
-            self.since = None
-        return GeoInputs(schedule.override_at(t), schedule.hold_at(t), command, ack)
 
 
 class SeriesBuffer:

@@ -10,7 +10,7 @@ from typing import Any, TextIO
 
 from liftd.runtime.records import SnapshotCodec
 from liftd.runtime.shm import Ring
-from liftd.trace import TraceWriter
+from liftd.sim.trace import TraceWriter
 
 DRAIN_PERIOD_S = 0.02
 

@@ -23,12 +23,10 @@ from typing import Any, TextIO
 
 import structlog
 
-from liftd import systemd
 from liftd.ads.constants import AdsErr, AdsState
 from liftd.ads.errors import AdsError
 from liftd.ads.server import AdsServer
 from liftd.ads.service import AdsService, DeviceInfo
-from liftd.adsconfig import server_config, service_limits
 from liftd.cnc.nc import DecoderContext, Severity, decode
 from liftd.cnc.snapshot import PlcWrite
 from liftd.objects.catalog import AdsStats, Catalog, GeoView
@@ -38,7 +36,9 @@ from liftd.runtime.cycle import percentile_us
 from liftd.runtime.records import EventReader, pack_input
 from liftd.runtime.rt import RtRequest
 from liftd.runtime.shared import Shared
-from liftd.runtime.trace_recorder import TraceRecorder
+from liftd.service import systemd
+from liftd.service.adsconfig import server_config, service_limits
+from liftd.service.trace_recorder import TraceRecorder
 from liftd.settings import ConfigError, Settings, load_settings
 
 EXIT_OK, EXIT_CONFIG, EXIT_RUNTIME = 0, 2, 3
@@ -340,7 +340,7 @@ class Daemon:
         m = self.settings.config.metrics
         if not m.prometheus_port:
             return
-        from liftd.metrics import serve  # noqa: PLC0415
+        from liftd.service.metrics import serve  # noqa: PLC0415
 
         try:
             self._metrics = await serve(m.prometheus_host, m.prometheus_port, self)

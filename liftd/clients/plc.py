@@ -20,7 +20,7 @@ from typing import Any, TextIO
 
 import pyads
 
-from liftd.simulate import Schedule
+from liftd.cnc.plc import Schedule
 
 EXIT_OK = 0
 EXIT_UNREACHABLE = 3

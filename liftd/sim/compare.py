@@ -17,8 +17,9 @@ from typing import Any, TextIO
 import numpy as np
 
 from liftd.cnc.params import ChannelParams
+from liftd.cnc.plc import Schedule
 from liftd.cnc.snapshot import GeoSnapshot
-from liftd.simulate import Schedule, SimResult, channel_for, simulate
+from liftd.sim.simulate import SimResult, channel_for, simulate
 
 METHODS = ("advanced", "lifting")
 MAX_PLOTTED = 12

@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from liftd.cnc.lift.controller import LiftRecord
-from liftd.compare import MAX_PLOTTED, Comparison, as_arrays, occurrence_keys
+from liftd.sim.compare import MAX_PLOTTED, Comparison, as_arrays, occurrence_keys
 
 MM = 1e3
 HINT = "plotting needs matplotlib: pip install 'liftd[plot]' (or: .venv/bin/pip install matplotlib)"

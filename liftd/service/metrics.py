@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING
 from liftd.runtime.cycle import EDGES
 
 if TYPE_CHECKING:
-    from liftd.daemon import Daemon
+    from liftd.service.daemon import Daemon
 
 
 def exposition(d: Daemon) -> str:
