@@ -18,13 +18,14 @@ import dataclasses
 from dataclasses import dataclass
 
 from liftd.cnc.lift.path_based import RangePlan, plan_range
-from liftd.cnc.lift.profile import LiftProfileError, LiftProfiles
+from liftd.cnc.lift.profile import LiftProfiles, ProfileError
 from liftd.cnc.lift.ranges import LiftRange, find_ranges
 from liftd.cnc.nc import DecoderContext, NcError, decode
 from liftd.cnc.nc.blocks import Severity
 from liftd.cnc.params import PLANNING_MARGIN, ChannelParams, LiftMethod
 from liftd.cnc.path.geometry import Vec
 from liftd.cnc.path.program import Action, ActionKind, PathProgram, prepare
+from liftd.cnc.path.table import PathTable, build_table
 
 
 @dataclass(frozen=True, slots=True)
@@ -37,6 +38,9 @@ class GeoProgram:
     stops: tuple[tuple[int, ...], ...]  # per range: waiting points strictly inside it
     z_index: int
     plans: tuple[RangePlan | None, ...]  # per range: z(s) of path-based Lifting, else None
+    table: PathTable  # what the path tracker reads (with the lift ranges' limits)
+    nominal: PathTable  # the same path without any lift's limits (for path_delay_s)
+    conditional: dict[int, tuple[int, ...]]  # M number → boundaries where MVS_SNS waits for it
 
     def range_at(self, action: Action) -> LiftRange:
         for rng in self.ranges:
@@ -47,14 +51,9 @@ class GeoProgram:
     def stops_in(self, rng: LiftRange) -> tuple[int, ...]:
         return self.stops[rng.index]
 
-    def conditional_for(self, number: int) -> list[int]:
+    def conditional_for(self, number: int) -> tuple[int, ...]:
         """Boundaries where an MVS_SNS M<number> waits for its acknowledge."""
-        return [
-            b.index
-            for b in self.path.boundaries
-            if b.conditional_stop
-            and any(a.kind is ActionKind.M_WAIT and a.m_number == number for a in b.actions)
-        ]
+        return self.conditional.get(number, ())
 
     def boundary_position(self, k: int) -> Vec:
         segs = self.path.segments
@@ -81,7 +80,7 @@ def _cap_for_lifts(
             continue
         try:
             t_z = prof.to_rest(rng.start.z_start, 0.0, 0.0, rng.start.target).duration
-        except LiftProfileError:
+        except ProfileError:
             continue
         if t_z <= 0.0:
             continue
@@ -111,7 +110,7 @@ def _couple_lifts(
             continue
         try:
             plan, caps = plan_range(path, rng, prof)
-        except LiftProfileError:
+        except ProfileError:
             continue
         plans[rng.index] = plan
         for cap in caps:
@@ -133,9 +132,20 @@ def _stops_inside(path: PathProgram, rng: LiftRange) -> tuple[int, ...]:
     return tuple(k for k in range(rng.k_start + 1, rng.k_end) if path.boundaries[k].stop)
 
 
+def _conditional(path: PathProgram) -> dict[int, tuple[int, ...]]:
+    out: dict[int, list[int]] = {}
+    for b in path.boundaries:
+        if b.conditional_stop:
+            for a in b.actions:
+                if a.kind is ActionKind.M_WAIT:
+                    out.setdefault(a.m_number, []).append(b.index)
+    return {m: tuple(ks) for m, ks in out.items()}
+
+
 def load_program(text: str, ch: ChannelParams, start: Vec) -> GeoProgram:
     result = decode(text, DecoderContext.from_channel(ch, start))
     path = prepare(result.blocks, ch, start)
+    nominal = build_table(path)
     ranges = find_ranges(path, ch)
     plans: tuple[RangePlan | None, ...] = (None,) * len(ranges)
     if ch.lift_method is LiftMethod.ADVANCED:
@@ -153,6 +163,9 @@ def load_program(text: str, ch: ChannelParams, start: Vec) -> GeoProgram:
         stops=tuple(_stops_inside(path, r) for r in ranges),
         z_index=ch.lift_axis_index,
         plans=plans,
+        table=build_table(path),
+        nominal=nominal,
+        conditional=_conditional(path),
     )
 
 

@@ -22,11 +22,12 @@ from liftd.cnc.lift.ranges import LiftRange
 from liftd.cnc.params import ChannelParams, LiftMethod, MSync
 from liftd.cnc.path.interpolator import Crossing, Interpolator
 from liftd.cnc.path.program import Action, ActionKind
+from liftd.cnc.plc import MAX_OVERRIDE
 from liftd.cnc.snapshot import ChannelState, Command, Event, GeoInputs, GeoSnapshot, LiftPhase
 
 INF = float("inf")
-MAX_OVERRIDE = 2.0
 MIN_LIFT_OVERRIDE = 0.01  # below this, the path waits for Z at the lift's horizon instead
+OVERRIDE_TRIALS = 6  # lower-bound evaluations to find the highest override Z still allows
 ACK_SYNCS = (MSync.MVS_SVS, MSync.MVS_SNS, MSync.MNS_SNS, MSync.MNE_SNS)
 
 
@@ -68,6 +69,7 @@ class GeoTask:
         self.lift: LiftController
         self.z_monitor = AccelMonitor(channel.axis(channel.lift_axis), channel.cycle_time)
         self.programs = PreparedPrograms(program_text, channel)
+        self.lead = lead_cycles(channel)
         self._load(self.home)
 
     # -- program control ---------------------------------------------------------------------------
@@ -78,7 +80,10 @@ class GeoTask:
 
     def _load(self, start: tuple[float, ...]) -> None:
         self.prog = self.programs.from_start(start)
-        self.interp = Interpolator(self.prog.path, self.ch.look_ahead_blocks)
+        self.interp = Interpolator(
+            self.prog.path, self.prog.table, self.ch.look_ahead_blocks, self.ch.cycle_time,
+            self.lead,
+        )  # fmt: skip
         self.lift = LiftController(
             self.ch.axis(self.ch.lift_axis),
             self.prog.ranges,
@@ -96,8 +101,7 @@ class GeoTask:
                 self._load(self._positions())  # a new run from where the last one ended
             self.runs += 1
             self.state = ChannelState.ACTIVE
-            self.interp.stopped_at = 0
-            self.interp.t_state = t
+            self.interp.start(t)
             self.waiting = list(self.prog.path.boundaries[0].actions)
             self.wait_since = t
             self._emit("geo.program_start", t, self.prog.first_line)
@@ -193,7 +197,11 @@ class GeoTask:
         """Advanced Lifting's override rules (vendor §2.5, DESIGN.md §4): while Z descends the
         override is clamped to its value at descent start; while Z rises (or goes straight to
         POS) an increase, or a restart after feed hold, is accepted only as far as Z still lands
-        on time; a decrease is always accepted."""
+        on time; a decrease is always accepted.
+
+        "Lands on time" is decided against a lower bound of the path's arrival at the lift's
+        horizon at the candidate override (`Interpolator.lower_bound`, bounded work): granting
+        an override that passes it can never make Z late."""
         lift = self.lift
         self.ov_max = MAX_OVERRIDE
         if lift.current is None or holding:
@@ -205,34 +213,43 @@ class GeoTask:
             self.ov_max = lift.ov_at_descent
             return min(ov_req, self.ov_max)
         k = self._horizon()
-        # exactly the descent time: with T_rem = t_need the generator starts its descent in the
-        # next step (τ = 0); demanding a cycle more every cycle would make the path creep
-        need_abs = self.interp.t_state + lift.needed_time()
-        arrival = self.interp.arrival(k) if k >= 0 else INF
-        if arrival != INF and lift.needed_time() > 0.0:
-            span = arrival - self.interp.t_state
-            self.ov_max = min(MAX_OVERRIDE, self.ov_eff * span / (need_abs - self.interp.t_state))
+        if k < 0:
+            return ov_req
+        interp = self.interp
+        t0 = interp.t_state
+        need = lift.needed_time()
+        arrival = interp.arrival(k)
+        if arrival != INF and need > 0.0:  # the headroom, for the display (ov ∝ 1/time)
+            self.ov_max = min(MAX_OVERRIDE, self.ov_eff * (arrival - t0) / need)
         changing = ov_req > self.ov_eff or self.was_holding
-        if k < 0 or not changing or self.interp.stopped_at is not None:
+        if not changing or interp.stopped_at is not None or need <= 0.0:
             return ov_req
-        if self.interp.trial_time(k, ov_req) >= need_abs:
+        floor = 0.0 if self.was_holding else self.ov_eff
+        span = interp.lower_bound(k, ov_req) - t0
+        if span >= need:
             return ov_req
-        lo, hi = 0.0, ov_req
-        for _ in range(12):
-            mid = 0.5 * (lo + hi)
-            if self.interp.trial_time(k, mid) >= need_abs:
-                lo = mid
-            else:
-                hi = mid
-        if lo < MIN_LIFT_OVERRIDE:
+        # T(ov) falls about as 1/ov: aim at T = need, then step down until the bound holds
+        granted = -1.0
+        candidate = ov_req * span / need if span > 0.0 else floor
+        for _ in range(OVERRIDE_TRIALS):
+            if candidate <= floor:
+                break
+            if interp.lower_bound(k, candidate) - t0 >= need:
+                granted = candidate
+                break
+            candidate *= 0.9
+        if granted < 0.0:
+            granted = floor
+        if granted < MIN_LIFT_OVERRIDE:
             # Crawling would not do (e.g. a feed hold ended just before LIFT_END): the path
             # stops there and waits for Z, as it does for a lift without path motion.
-            self.interp.add_lift_stop(k)
-            self._emit("lift.path_waits", self.interp.t_state, self.line, float(k))
+            interp.add_lift_stop(k)
+            self._emit("lift.path_waits", t0, self.line, float(k))
             return ov_req
-        self.ov_max = lo
-        self._emit("lift.override_limited", self.interp.t_state, self.line, lo)
-        return lo
+        self.ov_max = granted
+        if granted < ov_req:
+            self._emit("lift.override_limited", t0, self.line, granted)
+        return granted
 
     # -- cycle ------------------------------------------------------------------------------------
     def step(self, inputs: GeoInputs, t: float) -> GeoSnapshot:
@@ -371,10 +388,6 @@ class GeoTask:
         if self.lift.coupled is not None:
             s = self.prog.path.boundaries[rng.k_start].s
             self.lift.couple(t_at, s, crossing.v if crossing else 0.0, 0.0)
-        rec = self.lift.record
-        if rec is not None and rng.k_end >= 0:
-            arrival = self.interp.trial_time(rng.k_end, self.ov_eff, nominal=True)
-            rec.nominal_time = max(arrival - t_at, 0.0) if arrival != -INF else 0.0
         self._emit(
             "lift.start",
             t_at,
@@ -447,3 +460,19 @@ class GeoTask:
             tuple(self.events),
             *self.prog.path.block_velocities(self.interp.segment, self.ov_eff),
         )
+
+
+def lead_cycles(ch: ChannelParams) -> int:
+    """How far ahead the path's future is committed: the lift axis's slowest descent (a
+    time-optimal move over its whole travel) plus a margin, so that a lift always decides its
+    descent against an exact remaining time."""
+    from liftd.cnc.lift.profile import LiftProfiles, ProfileError  # noqa: PLC0415
+
+    z = ch.axis(ch.lift_axis)
+    travel = z.sw_limit_pos - z.sw_limit_neg
+    try:
+        t_full = LiftProfiles(z.v_max, z.a_max, z.j_max).to_rest(0.0, 0.0, 0.0, travel).duration
+    except ProfileError:
+        t_full = 0.5
+    t_full = min(float(t_full), 2.0) if travel > 0.0 else 0.1
+    return max(10, round((t_full + 0.05) / ch.cycle_time))

@@ -23,7 +23,7 @@ import enum
 
 from ruckig import Trajectory
 
-from liftd.cnc.lift.profile import LiftProfileError, LiftProfiles, position_range, state_at
+from liftd.cnc.lift.profile import LiftProfiles, ProfileError, position_range, state_at
 
 INF = float("inf")
 POS_TOL = 1e-7  # 0.1 µm: tolerance of the position checks
@@ -136,7 +136,7 @@ class AdvancedLift:
             elif self.phase is Phase.DONE and t_rem > 2.0 * self.cycle:
                 self.phase = Phase.UP  # the path got slower after Z landed: rise again
                 self._up(dt, t_rem)
-        except LiftProfileError:
+        except ProfileError:
             self._fallback(t_new)
         self.t = t_new
         self.peak = max(self.peak, self.q)
@@ -151,7 +151,7 @@ class AdvancedLift:
             self.phase = Phase.DIRECT
             self._follow(t_new)
             return
-        except LiftProfileError:
+        except ProfileError:
             pass
         if self.plan is not None:
             self._follow(t_new)
@@ -277,7 +277,7 @@ class AdvancedLift:
                 stretched = self.prof.to_rest(self.q, self.v, self.a, self.target, t_rem)
                 if stretched.duration <= t_rem + TIME_TOL and self._descent_fits(stretched, self.q):
                     best = stretched
-            except LiftProfileError:
+            except ProfileError:
                 pass
         self.plan = best
         self.plan_t0 = self.t

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 from liftd.cnc.lift.advanced import AdvancedLift, Phase
 from liftd.cnc.lift.guard import GuardFinding, LiftGuard
 from liftd.cnc.lift.path_based import RangePlan
-from liftd.cnc.lift.profile import LiftProfileError, LiftProfiles
+from liftd.cnc.lift.profile import LiftProfiles, ProfileError
 from liftd.cnc.lift.ranges import LiftRange
 from liftd.cnc.params import AxisParams
 from liftd.cnc.snapshot import LiftPhase
@@ -86,7 +86,7 @@ class LiftController:
             return 0.0
         try:
             return float(self.gen.prof.to_rest(z0, 0.0, 0.0, target).duration)
-        except LiftProfileError:
+        except ProfileError:
             return INF
 
     # -- events -----------------------------------------------------------------------------------

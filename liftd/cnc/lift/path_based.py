@@ -108,7 +108,7 @@ def plan_part(
     """One coupled part: from z0 at s0 to target at s1 (at rest at both), as high as `limit`
     allows within the plan time max(t_feed, Z's time-optimal move); `direct`: straight to the
     target at the start of the part, then hold (suppressed lift, POS beyond POS_LIMIT).
-    Raises LiftProfileError if ruckig refuses a profile."""
+    Raises ProfileError if ruckig refuses a profile."""
     top = max(limit, z0, target)
     if abs(target - z0) <= 1e-12 and (direct or top - z0 <= 1e-12):
         return CoupledProfile(s0, s1, z0, target, 0.0, None, 0.0, None, 0.0)
@@ -221,7 +221,7 @@ def plan_range(
     height (vendor: "LIFT_END for the programmed height, then LIFT_START"); a range left open
     by a program error rises to POS_LIMIT over the path that remains. The plan assumes each part
     runs at its fastest programmed feed, so at programmed feed Z never moves faster than
-    planned. Raises LiftProfileError if ruckig refuses a profile."""
+    planned. Raises ProfileError if ruckig refuses a profile."""
     spec = rng.start
     chunks, overflow = lift_chunks(path, rng)
     top = max(spec.pos_limit, spec.z_start, spec.target)

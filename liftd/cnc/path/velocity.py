@@ -80,3 +80,63 @@ def lowest_reachable(v_start: float, length: float, a_max: float, j_max: float) 
         else:
             lo = mid
     return hi
+
+
+# -- states with acceleration (the tracker's slack checks) --------------------------------------
+def projected_velocity(v: float, a: float, j_max: float) -> float:
+    """Velocity after the acceleration is ramped to 0 at full jerk (v + a·|a|/2J)."""
+    if j_max == INF:
+        return v
+    return v + a * abs(a) / (2.0 * j_max)
+
+
+def ramp_distance(v: float, a: float, j_max: float) -> float:
+    """Distance covered while the acceleration is ramped from a to 0 at full jerk."""
+    if j_max == INF or a == 0.0:
+        return 0.0
+    t = abs(a) / j_max
+    j = -j_max if a > 0.0 else j_max
+    return v * t + 0.5 * a * t * t + j * t * t * t / 6.0
+
+
+def brake_distance(v: float, a: float, v1: float, a_max: float, j_max: float) -> float:
+    """Least distance in which the velocity comes down from (v, a) to v1 with zero acceleration
+    there (time-optimal jerk-limited brake: jerk −J, hold −A, jerk +J). Only meaningful when
+    projected_velocity(v, a) > v1; if the current deceleration already overshoots v1 (undershoot
+    by ramping it to 0), the ramp distance."""
+    if j_max == INF:
+        return max(0.0, (v * v - v1 * v1) / (2.0 * a_max)) if v > v1 else 0.0
+    drop = v - v1  # > a·|a|/2J by the precondition when braking is needed
+    peak_sq = 0.5 * a * a + j_max * drop
+    if a < 0.0 and peak_sq < a * a:  # |a_p| would be below |a|: ramping to 0 undershoots v1
+        return ramp_distance(v, a, j_max)
+    a_p = -math.sqrt(max(peak_sq, 0.0))
+    t2 = 0.0
+    if a_p < -a_max:
+        a_p = -a_max
+        t2 = (drop + (a * a - 2.0 * a_max * a_max) / (2.0 * j_max)) / a_max
+        t2 = max(t2, 0.0)
+    t1 = (a - a_p) / j_max
+    t3 = -a_p / j_max
+    d1 = v * t1 + 0.5 * a * t1 * t1 - j_max * t1 * t1 * t1 / 6.0
+    v_1 = v + (a * a - a_p * a_p) / (2.0 * j_max)
+    d2 = v_1 * t2 + 0.5 * a_p * t2 * t2
+    v_2 = v_1 + a_p * t2
+    d3 = v_2 * t3 + 0.5 * a_p * t3 * t3 + j_max * t3 * t3 * t3 / 6.0
+    return d1 + d2 + d3
+
+
+def lowest_reachable_from(v: float, a: float, length: float, a_max: float, j_max: float) -> float:
+    """Smallest velocity (≥ 0) that can be reached from (v, a) with zero acceleration within
+    `length` (bisection on brake_distance; the projected velocity if no braking fits)."""
+    v_p = projected_velocity(v, a, j_max)
+    if v_p <= 0.0 or brake_distance(v, a, 0.0, a_max, j_max) <= length:
+        return 0.0
+    lo, hi = 0.0, v_p  # brake_distance(.., hi) = ramp only ≤ … ; (.., lo) > length
+    for _ in range(50):
+        mid = 0.5 * (lo + hi)
+        if brake_distance(v, a, mid, a_max, j_max) <= length:
+            hi = mid
+        else:
+            lo = mid
+    return hi

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from liftd.cnc.lift.advanced import AdvancedLift, Phase
-from liftd.cnc.lift.profile import LiftProfileError, LiftProfiles
+from liftd.cnc.lift.profile import ProfileError, LiftProfiles
 
 DT = 1e-3
 V, A, J = 0.8, 10.0, 500.0
@@ -130,7 +130,7 @@ def test_ruckig_failure_falls_back_to_a_safe_move(monkeypatch: pytest.MonkeyPatc
     def flaky(self: LiftProfiles, *args: float, **kw: float | None) -> object:
         calls["n"] += 1
         if 40 <= calls["n"] < 43:
-            raise LiftProfileError("injected")
+            raise ProfileError("injected")
         return real(self, *args, **kw)
 
     monkeypatch.setattr(LiftProfiles, "to_rest", flaky)

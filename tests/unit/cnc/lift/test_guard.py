@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from liftd.cnc.lift.guard import LiftGuard
-from liftd.cnc.lift.profile import LiftProfileError, LiftProfiles
+from liftd.cnc.lift.profile import ProfileError, LiftProfiles
 from tests.conftest import make_channel
 from tests.helpers import events, fd_ratios, run_task
 
@@ -30,7 +30,7 @@ def test_ruckig_failure_inside_a_lift_falls_back_safely(monkeypatch: pytest.Monk
     def flaky(self: LiftProfiles, *args: float, **kw: float | None) -> object:
         calls["n"] += 1
         if 120 <= calls["n"] < 124:
-            raise LiftProfileError("injected")
+            raise ProfileError("injected")
         return real(self, *args, **kw)
 
     monkeypatch.setattr(LiftProfiles, "to_rest", flaky)

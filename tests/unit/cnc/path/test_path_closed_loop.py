@@ -12,6 +12,7 @@ from liftd.cnc.nc import DecoderContext, decode
 from liftd.cnc.params import MSync, SlopeType
 from liftd.cnc.path.interpolator import Interpolator
 from liftd.cnc.path.program import prepare
+from liftd.cnc.path.table import build_table
 from liftd.cnc.plc import Schedule, parse_feedhold_spec, parse_override_spec
 from liftd.cnc.snapshot import ChannelState, Command, GeoInputs
 from tests.conftest import make_channel
@@ -109,49 +110,61 @@ def test_path_velocity_respects_feed_and_override() -> None:
     assert max(s.v_path for s in snaps) == pytest.approx(0.15, rel=1e-6)
 
 
-def prepared(text: str, look_ahead: int = 120) -> Interpolator:
+def prepared(text: str, look_ahead: int = 120, lead: int = 300) -> Interpolator:
     ch = make_channel(look_ahead=look_ahead)
     blocks = decode(text, DecoderContext.from_channel(ch)).blocks
-    return Interpolator(prepare(blocks, ch, (0.0, 0.0, 0.0)), look_ahead)
+    program = prepare(blocks, ch, (0.0, 0.0, 0.0))
+    return Interpolator(program, build_table(program), look_ahead, 1e-3, lead)
 
 
 @pytest.mark.parametrize("seed", range(12))
 @pytest.mark.parametrize("override", [0.6, 1.0, 1.8])
-def test_remaining_time_prediction_within_one_cycle(seed: int, override: float) -> None:
+def test_remaining_time_is_exact_in_the_committed_future_and_a_lower_bound_beyond(
+    seed: int, override: float
+) -> None:
     rng = random.Random(seed)
     pts = [(10.0, 10.0)]
     for _ in range(rng.randint(4, 25)):
         x, y = pts[-1]
         pts.append((x + rng.uniform(0.3, 40.0), y + rng.uniform(-20.0, 20.0) * rng.random()))
     feed = rng.choice([3000, 12000, 30000, 60000])
+    mark = len(pts) - rng.randint(0, 2)  # an M function (MOS) after this block: reported
     text = (
         f"G01 X{pts[0][0]} Y{pts[0][1] + 20} F{feed}\n"
-        + "".join(f"X{x:.3f} Y{y + 20:.3f}\n" for x, y in pts[1:])
+        + "".join(
+            f"X{x:.3f} Y{y + 20:.3f}{' M05' if i == mark else ''}\n"
+            for i, (x, y) in enumerate(pts[1:], start=2)
+        )
         + "M30\n"
     )
-    ip = prepared(text)
+    ip = prepared(text, lead=rng.choice([20, 300]))
     ip.set_inputs(override, False)
     ip.resume(0.0)
-    k_from = 1 + rng.randint(0, 2)
-    k_to = len(ip.program.segments) - rng.randint(0, 2)
+    end = len(ip.program.segments)  # the last motion's end: a stop (M30, or a decoding error)
+    k_to = next((b.index for b in ip.program.boundaries if b.actions and 0 < b.index), end)
     dt = 1e-3
-    predicted = actual = None
+    predictions: list[tuple[float, bool]] = []
+    actual = None
     t = 0.0
     while actual is None and t < 60:
         t += dt
         for c in ip.advance(t):
-            if c.boundary == k_from:
-                predicted = ip.arrival(k_to)
             if c.boundary == k_to:
                 actual = c.t
+        if actual is None:
+            predictions.append((ip.arrival(k_to), ip.exact(k_to)))
         if ip.stopped_at is not None and actual is None:
-            break
-    assert predicted is not None and actual is not None
-    assert abs(predicted - actual) <= dt
+            if ip.stopped_at == len(ip.program.segments):
+                break
+            ip.resume(t)
+    assert actual is not None
+    assert all(p <= actual + 1e-12 for p, _ in predictions)  # never later than the truth
+    exact = [p for p, e in predictions if e]
+    assert exact and all(abs(p - actual) <= 1e-9 for p in exact)
 
 
 def test_remaining_time_beyond_the_look_ahead_is_a_lower_bound() -> None:
-    ip = prepared(zigzag(40), look_ahead=8)
+    ip = prepared(zigzag(40), look_ahead=8, lead=5)
     ip.set_inputs(1.0, False)
     ip.resume(0.0)
     far = len(ip.program.segments)

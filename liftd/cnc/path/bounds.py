@@ -1,0 +1,89 @@
+"""A lower bound of the time the path needs to reach a boundary: the relaxation of
+reference/path-planning.md fact 5.
+
+Drop the jerk limit, drop every constraint beyond the target (the look-ahead window's end
+included) and solve the rest exactly: acceleration-limited (each run's limit), with the
+ceilings at the given override and the caps of the constraint boundaries on the way (stops
+count as caps of 0; the waits there as 0). The true motion is one feasible solution of that
+relaxed problem, so it takes at least as long; appending blocks to the window only relaxes it.
+At most MAX_POINTS constraints are solved exactly; beyond them the remaining segments are
+bounded by their length over their ceiling (prefix sums of the table), so the cost is bounded
+whatever the program.
+"""
+
+from __future__ import annotations
+
+import math
+
+from liftd.cnc.path.table import PathTable
+
+INF = float("inf")
+MAX_POINTS = 12
+
+
+def _interval_time(d: float, u0: float, u1: float, ceiling: float, acc: float) -> float:
+    """Least time over distance d from u0 to u1 (u1 reachable) with |acceleration| ≤ acc and
+    velocity ≤ max(ceiling, u0, u1)."""
+    if d <= 0.0:
+        return 0.0
+    top = max(ceiling, u0, u1)
+    peak = math.sqrt(max(0.5 * (2.0 * acc * d + u0 * u0 + u1 * u1), 0.0))
+    if peak < max(u0, u1):  # not reachable in the relaxation either: faster than it can be
+        return d / top if top > 0.0 else INF
+    peak = min(peak, top)
+    if peak <= 0.0:
+        return INF
+    t_ramp = (peak - u0) / acc + (peak - u1) / acc
+    cruise = d - (2.0 * peak * peak - u0 * u0 - u1 * u1) / (2.0 * acc)
+    return t_ramp + max(cruise, 0.0) / peak
+
+
+def lower_bound_time(tb: PathTable, s: float, v: float, seg: int, target: int, ov: float) -> float:
+    """Seconds the path needs at least from (s, v) in segment `seg` to boundary `target` at
+    override `ov` (held constant); 0 if the target is behind, inf if the path cannot move."""
+    n = tb.n
+    target = min(target, n)
+    if target <= seg or s >= tb.s[target]:
+        return 0.0
+    if ov <= 0.0:
+        return INF
+    # the constraint points between here and the target (exclusive), then the target
+    pos = [s]
+    caps = [v]
+    ceil = [0.0]  # ceiling of the interval ending at point i
+    acc = [0.0]
+    b = tb.next_constraint[seg + 1] if seg + 1 <= n else n
+    cut = -1
+    while b < target:
+        if len(pos) > MAX_POINTS:
+            cut = b
+            break
+        pos.append(tb.s[b])
+        caps.append(tb.point_cap[b] if tb.stop[b] else tb.entry_cap(b, ov))
+        ceil.append(tb.ceiling(b - 1, ov))
+        acc.append(tb.run_a[tb.run[b - 1]])
+        b = tb.next_constraint[b + 1] if b + 1 <= n else n
+    end = target if cut < 0 else cut
+    pos.append(tb.s[end])
+    last_ceiling = tb.ceiling(end - 1, ov)
+    caps.append(last_ceiling)  # free at the end of the solved part (its ceiling at most)
+    ceil.append(last_ceiling)
+    acc.append(tb.run_a[tb.run[end - 1]])
+    m = len(pos)
+    # backward: every cap reachable from the one before
+    e = caps[:]
+    for i in range(m - 2, 0, -1):
+        lim = math.sqrt(e[i + 1] * e[i + 1] + 2.0 * acc[i + 1] * (pos[i + 1] - pos[i]))
+        e[i] = min(e[i], lim)
+    total = 0.0
+    u = v
+    for i in range(1, m):
+        d = pos[i] - pos[i - 1]
+        nxt = min(e[i], math.sqrt(u * u + 2.0 * acc[i] * d))
+        total += _interval_time(d, u, nxt, ceil[i], acc[i])
+        u = nxt
+    if cut >= 0:  # the rest at its ceilings at the most
+        total += max(
+            (tb.sum_l_f[target] - tb.sum_l_f[cut]) / ov, tb.sum_l_c[target] - tb.sum_l_c[cut]
+        )
+    return total

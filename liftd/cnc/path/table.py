@@ -1,0 +1,143 @@
+"""What the path tracker needs to know about a prepared path, in flat lists built once in path
+preparation (never in the GEO cycle).
+
+* **Ceilings.** Segment k may run at V_k(ov) = min(F_k · ov, C_k): F_k the programmed feed
+  (soft: scaled by the override; a path-based lift range's reduced feed is part of it), C_k the
+  hard cap from the axes and an Advanced lift range (never scaled).
+* **Runs.** A boundary is *continuous* when the path is tangent there and both segments have the
+  same acceleration and jerk limits (collinear polyline blocks, pieces of one circle). A run is
+  a maximal sequence of segments joined by continuous boundaries: inside a run the path
+  acceleration is continuous; at a run boundary (a corner, a change of the limits, a stop) it is
+  zero, as the corner rule of `limits.py` assumes. Each run has one acceleration and one jerk
+  limit (the smallest of its segments).
+* **Constraints.** Boundary b is a constraint when the path may have to be slower there than in
+  the segments around it: a stop, a conditional stop (MVS_SNS), a run boundary, a transition cap
+  below the axis caps, or a ceiling drop. `next_constraint[b]` is the first constraint at or
+  after b, so the tracker skips the plain boundaries of a polyline in O(1).
+* **Sums for lower bounds.** `sum_l_f[k]`, `sum_l_c[k]`: Σ L/F and Σ L/C over the segments
+  before k: beyond a few constraints a remaining time is bounded below by max(ΣL/F / ov, ΣL/C).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from liftd.cnc.path.program import PathProgram
+
+INF = float("inf")
+TANGENT_TOL = 1e-9  # |Δ direction cosine| below which a transition counts as tangent
+LIMIT_TOL = 1e-9  # relative difference below which two limits count as equal
+
+
+def _same(x: float, y: float) -> bool:
+    if x == y:
+        return True
+    return abs(x - y) <= LIMIT_TOL * max(abs(x), abs(y))
+
+
+@dataclass(frozen=True, slots=True)
+class PathTable:
+    # per segment k (n segments)
+    s0: tuple[float, ...]
+    feed: tuple[float, ...]  # F_k (m/s), scaled by the override
+    cap: tuple[float, ...]  # C_k (m/s), never scaled
+    run: tuple[int, ...]  # run index of segment k
+    # per boundary b (n + 1 boundaries; b lies before segment b, b = n is the program end)
+    s: tuple[float, ...]
+    point_cap: tuple[float, ...]  # transition cap at b (m/s); 0 at stops
+    stop: tuple[bool, ...]  # the path always rests here
+    conditional: tuple[bool, ...]  # MVS_SNS: rests here unless acknowledged in time
+    gate: tuple[bool, ...]  # run boundary: the path acceleration is zero here
+    constraint: tuple[bool, ...]
+    replan: tuple[bool, ...]  # the tracker re-plans when it reaches b (ceiling or run changes)
+    needs_time: tuple[bool, ...]  # b has actions: its exact passing time is reported
+    next_constraint: tuple[int, ...]  # first constraint boundary ≥ b (n + 1 boundaries)
+    sum_l_f: tuple[float, ...]  # Σ_{j<b} L_j / F_j
+    sum_l_c: tuple[float, ...]  # Σ_{j<b} L_j / C_j
+    # per run
+    run_a: tuple[float, ...]
+    run_j: tuple[float, ...]
+
+    @property
+    def n(self) -> int:
+        return len(self.s0)
+
+    def ceiling(self, k: int, ov: float) -> float:
+        """Highest path velocity in segment k at override ov."""
+        f = self.feed[k] * ov
+        c = self.cap[k]
+        return f if f < c else c
+
+    def entry_cap(self, b: int, ov: float) -> float:
+        """Highest velocity at boundary b entering segment b (0 at the program end)."""
+        if b >= self.n:
+            return 0.0
+        v = self.ceiling(b, ov)
+        p = self.point_cap[b]
+        return p if p < v else v
+
+
+def build_table(path: PathProgram) -> PathTable:
+    segs = path.segments
+    bounds = path.boundaries
+    n = len(segs)
+    feed = tuple(min(seg.feed, seg.v_lift_ov) for seg in segs)
+    cap = tuple(min(seg.v_phys, seg.v_lift) for seg in segs)
+    gate = [True] * (n + 1)
+    for k in range(1, n):
+        prev, nxt = segs[k - 1], segs[k]
+        t_in = prev.geom.tangent(prev.length)
+        t_out = nxt.geom.tangent(0.0)
+        tangent = all(abs(x - y) <= TANGENT_TOL for x, y in zip(t_in, t_out, strict=True))
+        limits = _same(prev.a_max, nxt.a_max) and _same(prev.j_max, nxt.j_max)
+        gate[k] = not (tangent and limits) or bounds[k].stop or bounds[k].conditional_stop
+    run_of = [0] * n
+    run_a: list[float] = []
+    run_j: list[float] = []
+    for k, seg in enumerate(segs):
+        if k == 0 or gate[k]:
+            run_a.append(seg.a_max)
+            run_j.append(seg.j_max)
+        else:
+            run_a[-1] = min(run_a[-1], seg.a_max)
+            run_j[-1] = min(run_j[-1], seg.j_max)
+        run_of[k] = len(run_a) - 1
+    point_cap = tuple(0.0 if b.stop else b.v_cap for b in bounds)
+    constraint = [True] * (n + 1)
+    replan = [True] * (n + 1)
+    for k in range(1, n):
+        changes = not (_same(feed[k], feed[k - 1]) and _same(cap[k], cap[k - 1]))
+        drop = feed[k] < feed[k - 1] or cap[k] < cap[k - 1]
+        low_point = point_cap[k] < min(cap[k - 1], cap[k]) * (1.0 - LIMIT_TOL)
+        constraint[k] = gate[k] or bounds[k].conditional_stop or drop or low_point
+        replan[k] = constraint[k] or changes
+    next_con = [n] * (n + 1)
+    following = n
+    for b in range(n, -1, -1):
+        if constraint[b]:
+            following = b
+        next_con[b] = following
+    sum_f = [0.0] * (n + 1)
+    sum_c = [0.0] * (n + 1)
+    for k, seg in enumerate(segs):
+        sum_f[k + 1] = sum_f[k] + (seg.length / feed[k] if feed[k] > 0.0 else INF)
+        sum_c[k + 1] = sum_c[k] + (seg.length / cap[k] if cap[k] > 0.0 else INF)
+    return PathTable(
+        s0=tuple(seg.s0 for seg in segs),
+        feed=feed,
+        cap=cap,
+        run=tuple(run_of),
+        s=tuple(b.s for b in bounds),
+        point_cap=point_cap,
+        stop=tuple(b.stop for b in bounds),
+        conditional=tuple(b.conditional_stop for b in bounds),
+        gate=tuple(gate),
+        constraint=tuple(constraint),
+        replan=tuple(replan),
+        needs_time=tuple(bool(b.actions) for b in bounds),
+        next_constraint=tuple(next_con),
+        sum_l_f=tuple(sum_f),
+        sum_l_c=tuple(sum_c),
+        run_a=tuple(run_a),
+        run_j=tuple(run_j),
+    )
