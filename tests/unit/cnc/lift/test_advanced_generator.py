@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from liftd.cnc.lift.advanced import AdvancedLift, Phase
-from liftd.cnc.lift.profile import ProfileError, LiftProfiles
+from liftd.cnc.lift.profile import LiftProfiles, ProfileError
 
 DT = 1e-3
 V, A, J = 0.8, 10.0, 500.0

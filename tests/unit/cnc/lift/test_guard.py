@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from liftd.cnc.lift.guard import LiftGuard
-from liftd.cnc.lift.profile import ProfileError, LiftProfiles
+from liftd.cnc.lift.profile import LiftProfiles, ProfileError
 from tests.conftest import make_channel
 from tests.helpers import events, fd_ratios, run_task
 

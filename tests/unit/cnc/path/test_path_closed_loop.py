@@ -141,7 +141,7 @@ def test_remaining_time_is_exact_in_the_committed_future_and_a_lower_bound_beyon
     ip.set_inputs(override, False)
     ip.resume(0.0)
     end = len(ip.program.segments)  # the last motion's end: a stop (M30, or a decoding error)
-    k_to = next((b.index for b in ip.program.boundaries if b.actions and 0 < b.index), end)
+    k_to = next((b.index for b in ip.program.boundaries if b.actions and b.index > 0), end)
     dt = 1e-3
     predictions: list[tuple[float, bool]] = []
     actual = None
