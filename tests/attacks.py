@@ -20,6 +20,7 @@ from tests.daemon_helper import Daemon
 
 ATTACK_ADS = {
     "max_connections": 64,
+    "max_connections_per_ip": 64,
     "max_frame_bytes": 65536,
     "incomplete_frame_timeout_s": 0.5,
     "write_queue_frames": 64,

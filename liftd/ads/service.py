@@ -119,7 +119,8 @@ class Reply(NamedTuple):
     failure: BaseException | None = None  # an unexpected exception answered with 0x700
 
 
-def _error_payload(command: int, code: int) -> bytes:
+def error_payload(command: int, code: int) -> bytes:
+    """The payload answering `command` with the error `code` (its layout per command)."""
     if command in (Command.READ, Command.READ_WRITE):
         return wire.read_response(code)
     if command == Command.ADD_NOTIFICATION:
@@ -197,13 +198,13 @@ class AdsService:
         try:
             return Reply(self.commands[header.command](session, header, payload, may_write, now_ns))
         except AdsError as exc:
-            return Reply(_error_payload(header.command, exc.code))
+            return Reply(error_payload(header.command, exc.code))
         except Exception as exc:  # a bug: answer 0x700 (the client must not time out) and report
-            return Reply(_error_payload(header.command, AdsErr.DEVICE_ERROR), exc)
+            return Reply(error_payload(header.command, AdsErr.DEVICE_ERROR), exc)
 
     def rejected(self, command: int, code: int) -> bytes:
         """The payload answering `command` with `code` (e.g. 0x723 for an unknown source)."""
-        return _error_payload(command, code)
+        return error_payload(command, code)
 
     # -- commands ---------------------------------------------------------------------------------
     def _device_info(self, s: Session, h: AmsHeader, p: bytes, w: bool, now: int) -> bytes:
