@@ -379,6 +379,9 @@ class AdsServer:
             return False
         return any(addr in net for net in self.config.allow_ips)
 
+    def net_id_allowed(self, net_id: bytes) -> bool:
+        return not self.config.allow_net_ids or net_id in self.config.allow_net_ids
+
     def warn(self, event: str, peer: str, **kw: Any) -> None:
         ok, held = self.limiter.allow(f"{event}:{peer.rsplit(':', 1)[0]}")
         if ok:
