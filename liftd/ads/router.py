@@ -48,7 +48,7 @@ class PortTable(Generic[Owner]):
         self._next = FIRST_DYNAMIC_PORT
         # where to send a response: the connection a forwarded request came from, by its
         # (NetId, port) source, for clients that did not register a port (bounded, oldest out)
-        self._back: OrderedDict[tuple[bytes, int], Owner] = OrderedDict()
+        self.back: OrderedDict[tuple[bytes, int], Owner] = OrderedDict()
 
     def connect(self, owner: Owner, wanted: int) -> int:
         """Register a port for `owner`; returns it. Raises PortInUse."""
@@ -86,23 +86,23 @@ class PortTable(Generic[Owner]):
         """Everything `owner` held (its connection closed)."""
         for port in self.ports_of.pop(owner, set()):
             self.owner_of.pop(port, None)
-        for key in [k for k, v in self._back.items() if v == owner]:
-            del self._back[key]
+        for key in [k for k, v in self.back.items() if v == owner]:
+            del self.back[key]
 
     def remember(self, source: tuple[bytes, int], owner: Owner) -> None:
         if source[0] in self.own:
             return  # liftd's own addresses route only to registered ports
-        self._back[source] = owner
-        self._back.move_to_end(source)
-        while len(self._back) > MAX_ROUTES_BACK:
-            self._back.popitem(last=False)
+        self.back[source] = owner
+        self.back.move_to_end(source)
+        while len(self.back) > MAX_ROUTES_BACK:
+            self.back.popitem(last=False)
 
     def route(self, net_id: bytes, port: int) -> Owner | None:
         """The connection a frame for `net_id`:`port` goes to: a registered port, or the
         source of a request forwarded earlier; None: not routed (liftd answers it itself)."""
         if net_id in self.own:
             return self.owner_of.get(port) if net_id == self.net_id else None
-        return self._back.get((net_id, port))
+        return self.back.get((net_id, port))
 
 
 def router_frame(command: AmsTcpCommand, payload: bytes) -> bytes:

@@ -50,6 +50,7 @@ SERVED = frozenset(int(c) for c in Command if c not in (Command.INVALID, Command
 _RESPONSE_BIT = int(StateFlag.RESPONSE)  # plain ints on the hot path (IntFlag & costs ~3 µs)
 _NOTIFICATION = int(Command.NOTIFICATION)
 _ADD_NOTIFICATION = int(Command.ADD_NOTIFICATION)
+_AMS_CMD = int(AmsTcpCommand.AMS_CMD)
 IDLE_POLL_S = 0.1  # notification task wake-up when nothing is due (incomplete-frame checks)
 
 
@@ -213,7 +214,7 @@ class AdsConnection(asyncio.Protocol):
         srv = self.server
         cfg = srv.config
         reserved = wire.TCP_HEADER.unpack_from(raw)[0]
-        if reserved != AmsTcpCommand.AMS_CMD:
+        if reserved != _AMS_CMD:
             self.router_command(reserved, raw[wire.TCP_SIZE :])
             return
         header = wire.AmsHeader._make(wire.AMS_HEADER.unpack_from(raw, wire.TCP_SIZE))
@@ -232,8 +233,12 @@ class AdsConnection(asyncio.Protocol):
             if not no_reply:
                 self.reply(header, srv.service.rejected(header.command, AdsErr.ACCESSDENIED))
             return
-        self.identify()
-        owner = srv.ports.route(header.target_net_id, header.target_port)
+        if not self.identified:
+            self.identify()
+        ports = srv.ports
+        owner = None
+        if ports.owner_of or ports.back:  # anything routed at all (skipped on the hot path)
+            owner = ports.route(header.target_net_id, header.target_port)
         if owner is not None:  # a client's registered port, or the answer to a forwarded request
             if not no_reply:
                 srv.ports.remember((header.source_net_id, header.source_port), self)

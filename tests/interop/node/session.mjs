@@ -2,7 +2,8 @@
 //   node session.mjs <mode> <liftd TCP port> <liftd NetId> [seconds]
 // mode: default (router port connect + PLC-runtime setup, how Node-RED connects),
 //       raw (rawClient with a local NetId/port: no router, no runtime probing),
-//       bench (default mode, readValue of lift_active in a loop for [seconds]).
+//       bench (default mode, readValue of lift_active in a loop for [seconds]),
+//       upload (default mode, getSymbols() + getDataTypes(), timed).
 // Prints one JSON object; exits 1 with {"error": ...} on the first failure.
 import { readFileSync } from 'node:fs';
 import { Client } from 'ads-client';
@@ -105,11 +106,21 @@ async function bench() {
   out.reads = n;
 }
 
+async function upload() {
+  const t0 = process.hrtime.bigint();
+  const symbols = await client.getSymbols();
+  const types = await client.getDataTypes();
+  out.upload_ms = Number(process.hrtime.bigint() - t0) / 1e6;
+  out.symbol_count = Object.keys(symbols).length;
+  out.data_type_count = Object.keys(types).length;
+}
+
 try {
   const conn = await client.connect();
   out.connection = { localAmsNetId: conn.localAmsNetId, localAdsPort: conn.localAdsPort };
   if (mode === 'raw') await rawMode();
   else if (mode === 'bench') await bench();
+  else if (mode === 'upload') await upload();
   else await symbolMode();
   await client.disconnect();
   console.log(JSON.stringify(out));
