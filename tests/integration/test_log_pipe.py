@@ -60,9 +60,16 @@ def test_unread_log_pipe_blocks_no_request(tmp_path: Path) -> None:
         plc = pyads.Connection(net_id, 551, f"127.0.0.1:{port}")
         plc.open()
         try:
-            t0 = time.monotonic()
-            plc.read(0x121301, 0x30095, pyads.PLCTYPE_BOOL)
-            assert time.monotonic() - t0 < 0.1
+            end = time.monotonic() + 15  # the daemon has worked through the 3 000 connections
+            while plc.read_by_name("GEO.ads.connections", pyads.PLCTYPE_UDINT) > 1:
+                assert time.monotonic() < end
+                time.sleep(0.05)
+            took = []
+            for _ in range(5):
+                t0 = time.monotonic()
+                plc.read(0x121301, 0x30095, pyads.PLCTYPE_BOOL)
+                took.append(time.monotonic() - t0)
+            assert sorted(took)[2] < 0.1, took  # the median: one shared-CPU hiccup is no block
             dropped = plc.read_by_name("GEO.ads.log_dropped", pyads.PLCTYPE_ULINT)
         finally:
             plc.close()
