@@ -8,7 +8,11 @@
   (default mode: symbol info and data type cached by the client, one Read per value);
 - upload: a full symbol + data-type upload as ads-rs and ads-client do it (0xF00F 64 bytes,
   0xF00E, 0xF00B over one raw connection), median and p99 of --uploads repetitions, and
-  ads-client getSymbols() + getDataTypes().
+  ads-client getSymbols() + getDataTypes();
+- crowded: max_connections (64) idle sockets held open from two loopback addresses, then a
+  pyads client connects and reads (issue bound: within 1 s);
+- log_pipe: a daemon whose stdout/stderr are 4 KiB pipes nobody reads, a peer opens and closes
+  3 000 connections from 200 addresses, then pyads reads (issue bound: within 100 ms).
 
 Run: .venv/bin/python bench/bench_interop.py [--seconds 3] [--rounds 3]
 """
@@ -16,7 +20,10 @@ Run: .venv/bin/python bench/bench_interop.py [--seconds 3] [--rounds 3]
 from __future__ import annotations
 
 import argparse
+import fcntl
 import json
+import os
+import signal
 import socket
 import struct
 import subprocess
@@ -27,6 +34,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pyads
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
@@ -34,7 +42,7 @@ sys.path.insert(0, str(ROOT))
 from bench import load  # noqa: E402
 from liftd.ads.client import RawClient  # noqa: E402
 from liftd.ads.wire import net_id_bytes  # noqa: E402
-from tests.daemon_helper import Daemon, write_config  # noqa: E402
+from tests.daemon_helper import Daemon, Notify, write_config  # noqa: E402
 
 NODE_DIR = ROOT / "tests" / "interop" / "node"
 TESTSERVER = """
@@ -130,6 +138,77 @@ def upload(d: Daemon, repetitions: int) -> None:
           "ads_client_get_symbols_and_data_types_ms": r["upload_ms"]})  # fmt: skip
 
 
+def timed_pyads_read(net_id: str, address: str) -> tuple[float, float]:
+    """(seconds for open + first read, seconds for a second read)"""
+    t0 = time.perf_counter()
+    plc = pyads.Connection(net_id, 551, address)
+    plc.open()
+    try:
+        plc.read(0x121301, 0x30095, pyads.PLCTYPE_BOOL)
+        t1 = time.perf_counter()
+        plc.read(0x121301, 0x30095, pyads.PLCTYPE_BOOL)
+        return t1 - t0, time.perf_counter() - t1
+    finally:
+        plc.close()
+
+
+def crowded(d: Daemon) -> None:
+    idle = []
+    for i in range(64):
+        s = socket.socket()
+        s.bind((f"127.0.0.{1 + i % 2}", 0))
+        s.connect(("127.0.0.1", d.port))
+        idle.append(s)
+    time.sleep(0.2)
+    first, second = timed_pyads_read(d.net_id, d.address)
+    for s in idle:
+        s.close()
+    emit({"bench": "pyads_with_64_idle_sockets", "open_and_first_read_ms": round(first * 1e3, 2),
+          "next_read_ms": round(second * 1e3, 3), "bound": "< 1 s"})  # fmt: skip
+
+
+def log_pipe(tmp: Path) -> None:
+    port = free_port()
+    cfg = write_config(tmp, program={"repeat": True}, ads={"port": port},
+                       log={"format": "json", "queue_lines": 100})  # fmt: skip
+    notify = Notify(tmp)
+    pipes = [os.pipe() for _ in range(2)]
+    for _, w in pipes:
+        fcntl.fcntl(w, fcntl.F_SETPIPE_SZ, 4096)
+    proc = subprocess.Popen([sys.executable, "-m", "liftd", "run", "-c", str(cfg)],
+                            stdout=pipes[0][1], stderr=pipes[1][1], cwd=ROOT,
+                            env={**os.environ, "NOTIFY_SOCKET": notify.path})  # fmt: skip
+    for _, w in pipes:
+        os.close(w)
+    try:
+        end = time.monotonic() + 20
+        while "READY=1" not in "".join(notify.drain()) and time.monotonic() < end:
+            time.sleep(0.02)
+        t0 = time.perf_counter()
+        for i in range(3000):
+            with socket.socket() as s:
+                s.bind((f"127.0.0.{2 + i % 200}", 0))
+                s.connect(("127.0.0.1", port))
+        churn = time.perf_counter() - t0
+        net_id = next(line.split('"')[1] for line in cfg.read_text().splitlines()
+                      if line.startswith("net_id"))  # fmt: skip
+        first, second = timed_pyads_read(net_id, f"127.0.0.1:{port}")
+        plc = pyads.Connection(net_id, 551, f"127.0.0.1:{port}")
+        plc.open()
+        dropped = plc.read_by_name("GEO.ads.log_dropped", pyads.PLCTYPE_ULINT)
+        plc.close()
+        emit({"bench": "pyads_with_unread_log_pipe_after_3000_connections",
+              "connections_s": round(churn, 2), "open_and_first_read_ms": round(first * 1e3, 2),
+              "next_read_ms": round(second * 1e3, 3), "log_lines_dropped": dropped,
+              "bound": "< 100 ms"})  # fmt: skip
+    finally:
+        proc.send_signal(signal.SIGTERM)
+        proc.wait(20)
+        for r, _ in pipes:
+            os.close(r)
+        notify.close()
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--seconds", type=float, default=3.0)
@@ -144,8 +223,10 @@ def main() -> None:
             pyads_vs_testserver(d, args.seconds, args.rounds)
             ads_client_read_value(d, args.seconds)
             upload(d, args.uploads)
+            crowded(d)
         finally:
             d.stop()
+        log_pipe(Path(tmp))
 
 
 if __name__ == "__main__":
