@@ -38,71 +38,22 @@ from liftd.ads.constants import (
     IndexGroup,
     StateFlag,
 )
+from liftd.ads.device import STATIC_HANDLE_BIT, Session
 from liftd.ads.errors import AdsError, FramingError
 from liftd.ads.framing import AmsFramer
 from liftd.ads.notifications import Outgoing
+from liftd.ads.policy import Counters, IpNetwork, RateLimiter, ServerConfig
 from liftd.ads.router import PortInUse, PortTable, port_connect_reply, router_frame, wanted_port
-from liftd.ads.service import STATIC_HANDLE_BIT, AdsService, Session
+from liftd.ads.service import AdsService
 from liftd.ads.system import SystemService
 
-IpNetwork = ipaddress.IPv4Network | ipaddress.IPv6Network
 SERVED = frozenset(int(c) for c in Command if c not in (Command.INVALID, Command.NOTIFICATION))
 _RESPONSE_BIT = int(StateFlag.RESPONSE)  # plain ints on the hot path (IntFlag & costs ~3 µs)
 _NOTIFICATION = int(Command.NOTIFICATION)
 _ADD_NOTIFICATION = int(Command.ADD_NOTIFICATION)
 _AMS_CMD = int(AmsTcpCommand.AMS_CMD)
+__all__ = ["AdsConnection", "AdsServer", "Counters", "IpNetwork", "RateLimiter", "ServerConfig"]
 IDLE_POLL_S = 0.1  # notification task wake-up when nothing is due (incomplete-frame checks)
-
-
-@dataclass(frozen=True, slots=True)
-class ServerConfig:
-    host: str = "127.0.0.1"
-    port: int = 48898
-    net_ids: frozenset[bytes] = frozenset({bytes([127, 0, 0, 1, 1, 1])})
-    ams_ports: frozenset[int] = frozenset({551})
-    max_connections: int = 64
-    max_frame_bytes: int = 1 << 20
-    write_queue_frames: int = 1024
-    incomplete_frame_timeout_s: float = 10.0
-    first_frame_timeout_s: float = 10.0  # no valid frame yet after this: closed
-    max_connections_per_ip: int = 32
-    system_service: bool = True  # answer AMS port 10000 (ReadState, device info)
-    router_net_id: bytes | None = None  # NetId handed out on port connect; None: the smallest
-    allow_ips: tuple[IpNetwork, ...] = ()  # empty: every peer
-    allow_net_ids: frozenset[bytes] = frozenset()  # empty: every source NetId
-    write_net_ids: frozenset[bytes] = frozenset()  # empty: every allowed source may write
-    reject: str = "close"  # or "error": answer ADS 0x723
-
-
-class RateLimiter:
-    """At most one log line per key and interval; counts what it held back."""
-
-    def __init__(self, interval_s: float = 1.0) -> None:
-        self.interval_s = interval_s
-        self._last: dict[str, float] = {}
-        self.suppressed: dict[str, int] = {}
-
-    def allow(self, key: str) -> tuple[bool, int]:
-        now = time.monotonic()
-        if now - self._last.get(key, -1e18) < self.interval_s:
-            self.suppressed[key] = self.suppressed.get(key, 0) + 1
-            return False, 0
-        if len(self._last) > 10_000:  # keys are peers: bounded under a flood of them
-            self._last.clear()
-        self._last[key] = now
-        return True, self.suppressed.pop(key, 0)
-
-
-@dataclass
-class Counters:
-    connections: int = 0
-    rejected_connections: int = 0
-    requests: int = 0
-    notifications_sent: int = 0
-    closed_for_errors: int = 0
-    internal_errors: int = 0
-    evicted: int = 0
-    routed: int = 0
 
 
 class AdsConnection(asyncio.Protocol):

@@ -14,8 +14,8 @@ import struct
 
 from liftd.ads import wire
 from liftd.ads.constants import SYSTEM_EXTENDED_STATE, AdsErr, AdsState, Command
+from liftd.ads.device import error_payload
 from liftd.ads.errors import AdsError
-from liftd.ads.service import error_payload
 
 EXTENDED_STATE = struct.Struct("<HHHBBHBBH2s")
 VERSION = (3, 1, 4024)  # the TwinCAT 3.1 build whose ADS services liftd follows

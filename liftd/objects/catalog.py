@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 from liftd.ads.constants import IndexGroup
-from liftd.ads.service import STATIC_HANDLE_BIT, Symbol
+from liftd.ads.device import STATIC_HANDLE_BIT, Symbol
 from liftd.cnc import units
 from liftd.cnc.params import ChannelParams
 from liftd.cnc.snapshot import GeoSnapshot, LoopStats, PlcSignal

@@ -14,8 +14,8 @@ import struct
 from collections.abc import Callable, Sequence
 
 from liftd.ads.constants import AdsErr, AdsState, IndexGroup
+from liftd.ads.device import ENCODING, STATIC_HANDLE_BIT, Symbol
 from liftd.ads.errors import AdsError
-from liftd.ads.service import ENCODING, STATIC_HANDLE_BIT, Symbol
 from liftd.ads.symbols import DataType
 from liftd.cnc import units
 from liftd.cnc.snapshot import PlcSignal, PlcWrite
