@@ -53,6 +53,10 @@ _NOTIFICATION = int(Command.NOTIFICATION)
 _ADD_NOTIFICATION = int(Command.ADD_NOTIFICATION)
 _AMS_CMD = int(AmsTcpCommand.AMS_CMD)
 __all__ = ["AdsConnection", "AdsServer", "Counters", "IpNetwork", "RateLimiter", "ServerConfig"]
+# A connection flood queues in the kernel rather than having SYNs dropped: a dropped SYN costs
+# the PLC ≥ 1 s (retransmit), a queued one ≈ 0.2 ms per connection ahead of it (capped by
+# net.core.somaxconn, 4096 by default)
+LISTEN_BACKLOG = socket.SOMAXCONN
 IDLE_POLL_S = 0.1  # notification task wake-up when nothing is due (incomplete-frame checks)
 
 
@@ -305,7 +309,10 @@ class AdsServer:
             self._server = await loop.create_server(lambda: AdsConnection(self), sock=sock)
         else:
             self._server = await loop.create_server(
-                lambda: AdsConnection(self), self.config.host, self.config.port, backlog=256
+                lambda: AdsConnection(self),
+                self.config.host,
+                self.config.port,
+                backlog=LISTEN_BACKLOG,
             )
         self.port = self._server.sockets[0].getsockname()[1]
         self._task = asyncio.create_task(self._notifications(), name="ads-notifications")

@@ -15,9 +15,9 @@ from __future__ import annotations
 
 import logging
 import os
-import queue
 import sys
 import threading
+from collections import deque
 from collections.abc import Mapping
 from typing import Any, TextIO
 
@@ -32,7 +32,8 @@ DEFAULT_QUEUE_LINES = 10_000
 
 
 class LineQueue:
-    """Lines on their way to a stream: `put` never blocks; a thread writes them."""
+    """Lines on their way to a stream: `put` never blocks; a thread writes them, in batches (a
+    burst of lines costs one wake-up and one write, not one each)."""
 
     def __init__(self, stream: TextIO, capacity: int) -> None:
         self.stream = stream
@@ -40,8 +41,11 @@ class LineQueue:
             self._fd: int | None = stream.fileno()
         except (OSError, ValueError):  # no file descriptor (a test's StringIO)
             self._fd = None
-        self._queue: queue.Queue[str | None] = queue.Queue(capacity)
-        self._dropped = 0  # written by the logging threads, read by the writer (ints: atomic)
+        self.capacity = capacity
+        self._lines: deque[str] = deque()  # append/popleft are atomic: no lock on the way in
+        self._ready = threading.Event()  # set when lines wait (or at stop)
+        self._stop = False
+        self._dropped = 0  # counted by the logging threads, read by the writer (ints: atomic)
         self._reported = 0
         self._closed = False
         self._thread = threading.Thread(target=self._write, name="liftd-log", daemon=True)
@@ -49,47 +53,55 @@ class LineQueue:
 
     def put(self, line: str) -> None:
         if self._closed:  # after flush (the process is ending): write it directly
-            self._write_line(line)
+            self._write_lines([line])
             return
-        try:
-            self._queue.put_nowait(line)
-        except queue.Full:
+        if len(self._lines) >= self.capacity:
             self._dropped += 1
+            return
+        self._lines.append(line)
+        if not self._ready.is_set():
+            self._ready.set()
 
     @property
     def dropped(self) -> int:
         return self._dropped
 
     def _write(self) -> None:
-        while (line := self._queue.get()) is not None:
-            self._write_line(line)
-            if self._dropped != self._reported and self._queue.empty():
+        lines = self._lines
+        while True:
+            self._ready.wait()
+            self._ready.clear()
+            batch = [lines.popleft() for _ in range(len(lines))]
+            if batch:
+                self._write_lines(batch)
+            if self._dropped != self._reported and not lines:
                 held, self._reported = self._dropped - self._reported, self._dropped
                 structlog.get_logger("liftd").warning("log.dropped", lines=held,
                                                       total=self._dropped)  # fmt: skip
+            if self._stop and not lines:
+                return
 
-    def _write_line(self, line: str) -> None:
-        """Blocking write of one line. Through the fd, not `stream.write`: a writer blocked
-        inside the stream's buffer would keep its lock, and the interpreter aborts at exit
-        ("could not acquire lock for <stderr> at interpreter shutdown")."""
+    def _write_lines(self, batch: list[str]) -> None:
+        """Blocking write. Through the fd, not `stream.write`: a writer blocked inside the
+        stream's buffer would keep its lock, and the interpreter aborts at exit ("could not
+        acquire lock for <stderr> at interpreter shutdown")."""
+        text = "".join(line + "\n" for line in batch)
         try:
             if self._fd is None:
-                self.stream.write(line + "\n")
+                self.stream.write(text)
                 self.stream.flush()
                 return
-            data = (line + "\n").encode("utf-8", "replace")
+            data = text.encode("utf-8", "replace")
             while data:
                 data = data[os.write(self._fd, data) :]
-        except (OSError, ValueError):  # stream closed or broken: count it as dropped
-            self._dropped += 1
+        except (OSError, ValueError):  # stream closed or broken: count the lines as dropped
+            self._dropped += len(batch)
 
     def flush(self, timeout_s: float) -> None:
         """Write what is queued, waiting at most `timeout_s` (a blocked stream stays blocked:
         the rest is dropped with the process). Logging after this is written unbuffered."""
-        try:
-            self._queue.put(None, timeout=timeout_s)
-        except queue.Full:
-            return
+        self._stop = True
+        self._ready.set()
         self._thread.join(timeout_s)
         self._closed = not self._thread.is_alive()
 

@@ -58,7 +58,9 @@ def test_a_blocked_writer_drops_and_counts_without_blocking() -> None:
     lines = LineQueue(out, 100)
     for i in range(1000):  # returns at once although nothing gets written
         lines.put(f"line {i}")
-    assert 890 <= lines.dropped <= 900  # 100 queued, one or so taken by the writer
+    held = lines.dropped
+    assert 800 <= held <= 900  # 100 queued, the first batch taken by the stuck writer
     Stuck.gate.set()
     lines.flush(5.0)
-    assert out.getvalue().startswith("line 0\n") and lines.dropped >= 899
+    written = out.getvalue().splitlines()
+    assert written[0] == "line 0" and len(written) + lines.dropped == 1000
