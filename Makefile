@@ -4,7 +4,10 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: run test lint typecheck unit bench clean
+NODE_DIR := tests/interop/node
+NODE_STAMP := $(NODE_DIR)/node_modules/.installed
+
+.PHONY: run test lint typecheck unit bench clean tools
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -15,7 +18,19 @@ $(STAMP): pyproject.toml
 run: $(STAMP)
 	$(BIN)/liftd run
 
-test: $(STAMP)
+# The interop tests' independent clients: Node ads-client from the committed lockfile, and
+# Debian's tshark (Wireshark's AMS dissector) when missing and we are root. Quick when present.
+$(NODE_STAMP): $(NODE_DIR)/package-lock.json
+	@command -v npm >/dev/null || { echo "npm missing: the Node interop tests will fail"; exit 0; }; \
+	  cd $(NODE_DIR) && npm ci --no-audit --no-fund --silent && touch node_modules/.installed
+
+tools: $(NODE_STAMP)
+	@command -v tshark >/dev/null || { [ "$$(id -u)" = 0 ] && \
+	  { DEBIAN_FRONTEND=noninteractive apt-get install -y -qq tshark >/dev/null 2>&1 || \
+	    { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq tshark >/dev/null; }; }; } || \
+	  echo "tshark missing and not root: the Wireshark interop test is skipped"
+
+test: $(STAMP) tools
 	$(BIN)/ruff check liftd tests bench
 	$(BIN)/ruff format --check liftd tests bench
 	$(BIN)/mypy liftd
@@ -25,4 +40,4 @@ bench: $(STAMP)
 	for f in bench/bench_*.py; do $(BIN)/python $$f || exit 1; done
 
 clean:
-	rm -rf $(VENV) .mypy_cache .ruff_cache .pytest_cache .hypothesis build dist
+	rm -rf $(VENV) .mypy_cache .ruff_cache .pytest_cache .hypothesis build dist $(NODE_DIR)/node_modules

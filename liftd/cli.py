@@ -222,7 +222,8 @@ def cmd_run(args: argparse.Namespace) -> int:
     if args.program and not Path(args.program).is_file():
         print(f"{args.program}: error: cannot read program", file=sys.stderr)
         return EXIT_CONFIG
-    logs.configure(settings.config.log.level, settings.config.log.format)
+    log = settings.config.log
+    logs.configure(log.level, log.format, log.queue_lines)
     if args.duration is not None and args.duration <= 0:
         print(f"--duration: must be > 0 seconds, got {args.duration}", file=sys.stderr)
         return EXIT_CONFIG

@@ -33,6 +33,9 @@ class FakeTransport:
     def abort(self) -> None:
         self.aborted = True
 
+    def close(self) -> None:  # a graceful close (after a router port close)
+        self.aborted = True
+
     def pause_reading(self) -> None:
         self.reading = False
 

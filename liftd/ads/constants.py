@@ -83,11 +83,14 @@ class IndexGroup(enum.IntEnum):
     SYM_VALBYNAME = 0xF004
     SYM_VALBYHND = 0xF005
     SYM_RELEASEHND = 0xF006
+    SYM_INFOBYNAME = 0xF007
     SYM_VERSION = 0xF008
     SYM_INFOBYNAMEEX = 0xF009
     SYM_UPLOAD = 0xF00B
     SYM_UPLOADINFO = 0xF00C
+    SYM_DT_UPLOAD = 0xF00E
     SYM_UPLOADINFO2 = 0xF00F
+    SYM_DT_INFOBYNAMEEX = 0xF011
     SUMUP_READ = 0xF080
     SUMUP_WRITE = 0xF081
     SUMUP_READWRITE = 0xF082
@@ -96,6 +99,10 @@ class IndexGroup(enum.IntEnum):
     SUMUP_ADDDEVNOTE = 0xF085
     SUMUP_DELDEVNOTE = 0xF086
     DEVICE_DATA = 0xF100
+
+
+SYSTEM_SERVICE_PORT = 10000  # AMSPORT_R3_SYSSERV (Tc2_System T_AmsPort; ads-client SystemService)
+SYSTEM_EXTENDED_STATE = 0xF0  # IG 240 on port 10000: ads-client readTcSystemExtendedState
 
 
 SUM_GROUPS = frozenset(g for g in IndexGroup if 0xF080 <= g <= 0xF086)
@@ -110,6 +117,19 @@ class AmsError(enum.IntEnum):
     TARGET_MACHINE_NOT_FOUND = 0x7
     UNKNOWN_CMD_ID = 0x8
     INVALID_AMS_LENGTH = 0xE
+    PORT_ALREADY_IN_USE = 0x506  # router errors (ads.md §2)
+    NO_MORE_QUEUES = 0x508
+
+
+class AmsTcpCommand(enum.IntEnum):
+    """The reserved field of the AMS/TCP header: 0 carries an AMS frame, the others talk to the
+    router (ads-client `AMS_HEADER_FLAG`; jisotalo/ads-server; ads.md §1.2)."""
+
+    AMS_CMD = 0x0000
+    PORT_CLOSE = 0x0001
+    PORT_CONNECT = 0x1000
+    ROUTER_NOTE = 0x1001
+    GET_LOCAL_NETID = 0x1002
 
 
 class AdsErr(enum.IntEnum):

@@ -1,4 +1,4 @@
-"""The ADS/AMS TCP server: the only module of liftd.ads with sockets and asyncio.
+"""The ADS/AMS TCP server: the only TCP module of liftd.ads (udp.py is the UDP one).
 
 Per connection (reference/ads.md §4.5, §8): an incremental framer; every request answered on
 the connection it came on (addresses swapped, same invoke id); AMS errors 0x7 (foreign NetId),
@@ -7,6 +7,13 @@ the connection it came on (addresses swapped, same invoke id); AMS errors 0x7 (f
 0x704); TCP_NODELAY; one writer, and when the peer does not read, a bounded queue, then close.
 Notifications of all connections are polled by one task at their cycle; objects read once per
 poll and shared between subscribers.
+
+As a router (router.py): AMS/TCP port connect/close and "get NetId"; frames for a port a client
+registered go to that client, responses back to whoever asked. Port 10000 is the system
+service (system.py). Nobody crowds out the PLC: a connection that has sent no valid frame yet
+("unidentified") is closed after `first_frame_timeout_s`, and when the table (or the peer
+address's share of it) is full, a new connection evicts the oldest unidentified one instead of
+being refused (sshd's MaxStartups idea). Connection events are logged rate-limited per peer.
 """
 
 from __future__ import annotations
@@ -23,68 +30,34 @@ from typing import Any
 from liftd.ads import wire
 from liftd.ads.constants import (
     RESPONSE_FLAGS,
+    SYSTEM_SERVICE_PORT,
     AdsErr,
     AmsError,
+    AmsTcpCommand,
     Command,
     IndexGroup,
     StateFlag,
 )
+from liftd.ads.device import STATIC_HANDLE_BIT, Session
 from liftd.ads.errors import AdsError, FramingError
 from liftd.ads.framing import AmsFramer
 from liftd.ads.notifications import Outgoing
-from liftd.ads.service import STATIC_HANDLE_BIT, AdsService, Session
+from liftd.ads.policy import Counters, IpNetwork, RateLimiter, ServerConfig
+from liftd.ads.router import PortInUse, PortTable, port_connect_reply, router_frame, wanted_port
+from liftd.ads.service import AdsService
+from liftd.ads.system import SystemService
 
-IpNetwork = ipaddress.IPv4Network | ipaddress.IPv6Network
 SERVED = frozenset(int(c) for c in Command if c not in (Command.INVALID, Command.NOTIFICATION))
 _RESPONSE_BIT = int(StateFlag.RESPONSE)  # plain ints on the hot path (IntFlag & costs ~3 µs)
 _NOTIFICATION = int(Command.NOTIFICATION)
 _ADD_NOTIFICATION = int(Command.ADD_NOTIFICATION)
+_AMS_CMD = int(AmsTcpCommand.AMS_CMD)
+__all__ = ["AdsConnection", "AdsServer", "Counters", "IpNetwork", "RateLimiter", "ServerConfig"]
+# A connection flood queues in the kernel rather than having SYNs dropped: a dropped SYN costs
+# the PLC ≥ 1 s (retransmit), a queued one ≈ 0.2 ms per connection ahead of it (capped by
+# net.core.somaxconn, 4096 by default)
+LISTEN_BACKLOG = socket.SOMAXCONN
 IDLE_POLL_S = 0.1  # notification task wake-up when nothing is due (incomplete-frame checks)
-
-
-@dataclass(frozen=True, slots=True)
-class ServerConfig:
-    host: str = "127.0.0.1"
-    port: int = 48898
-    net_ids: frozenset[bytes] = frozenset({bytes([127, 0, 0, 1, 1, 1])})
-    ams_ports: frozenset[int] = frozenset({551})
-    max_connections: int = 64
-    max_frame_bytes: int = 1 << 20
-    write_queue_frames: int = 1024
-    incomplete_frame_timeout_s: float = 10.0
-    allow_ips: tuple[IpNetwork, ...] = ()  # empty: every peer
-    allow_net_ids: frozenset[bytes] = frozenset()  # empty: every source NetId
-    write_net_ids: frozenset[bytes] = frozenset()  # empty: every allowed source may write
-    reject: str = "close"  # or "error": answer ADS 0x723
-
-
-class RateLimiter:
-    """At most one log line per key and interval; counts what it held back."""
-
-    def __init__(self, interval_s: float = 1.0) -> None:
-        self.interval_s = interval_s
-        self._last: dict[str, float] = {}
-        self.suppressed: dict[str, int] = {}
-
-    def allow(self, key: str) -> tuple[bool, int]:
-        now = time.monotonic()
-        if now - self._last.get(key, -1e18) < self.interval_s:
-            self.suppressed[key] = self.suppressed.get(key, 0) + 1
-            return False, 0
-        if len(self._last) > 10_000:  # keys are peers: bounded under a flood of them
-            self._last.clear()
-        self._last[key] = now
-        return True, self.suppressed.pop(key, 0)
-
-
-@dataclass
-class Counters:
-    connections: int = 0
-    rejected_connections: int = 0
-    requests: int = 0
-    notifications_sent: int = 0
-    closed_for_errors: int = 0
-    internal_errors: int = 0
 
 
 class AdsConnection(asyncio.Protocol):
@@ -98,6 +71,9 @@ class AdsConnection(asyncio.Protocol):
         self.paused = False
         self.partial_since: float | None = None
         self.closed = False
+        self.identified = False  # has sent a valid frame (or registered a port)
+        self.opened_at = time.monotonic()
+        self.ip = "?"
 
     # -- asyncio.Protocol -------------------------------------------------------------------------
     def connection_made(self, base: asyncio.BaseTransport) -> None:
@@ -105,30 +81,37 @@ class AdsConnection(asyncio.Protocol):
         self.transport = transport
         peer = transport.get_extra_info("peername")
         self.peer = f"{peer[0]}:{peer[1]}" if peer else "?"
+        self.ip = str(peer[0]) if peer else "?"
         srv = self.server
-        if len(srv.connections) >= srv.config.max_connections:
-            srv.warn("ads.connection_refused", self.peer, reason="max_connections")
+        refused = srv.admit(self)
+        if refused:
+            srv.warn("ads.connection_refused", self.peer, reason=refused)
             srv.counters.rejected_connections += 1
-            transport.abort()
-            return
-        if peer and not srv.ip_allowed(peer[0]):
-            srv.warn("ads.connection_refused", self.peer, reason="peer IP not allowed")
-            srv.counters.rejected_connections += 1
+            self.closed = True
             transport.abort()
             return
         sock = transport.get_extra_info("socket")
         if sock is not None and sock.family in (socket.AF_INET, socket.AF_INET6):
             sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         srv.connections.add(self)
+        srv.unidentified[self] = None
+        srv.per_ip[self.ip] = srv.per_ip.get(self.ip, 0) + 1
         srv.counters.connections += 1
-        srv.log.info("ads.connection_opened", peer=self.peer, connections=len(srv.connections))
+        srv.note("ads.connection_opened", self.peer, connections=len(srv.connections))
 
     def connection_lost(self, exc: Exception | None) -> None:
         self.closed = True
-        if self in self.server.connections:
-            self.server.connections.discard(self)
-            self.server.log.info("ads.connection_closed", peer=self.peer,
-                                 connections=len(self.server.connections))  # fmt: skip
+        srv = self.server
+        if self in srv.connections:
+            srv.connections.discard(self)
+            srv.unidentified.pop(self, None)
+            left = srv.per_ip.get(self.ip, 1) - 1
+            if left > 0:
+                srv.per_ip[self.ip] = left
+            else:
+                srv.per_ip.pop(self.ip, None)
+            srv.ports.drop(self)
+            srv.note("ads.connection_closed", self.peer, connections=len(srv.connections))
         self.session.notifications.clear()
         self.session.handles.clear()
         self.queue.clear()
@@ -170,26 +153,31 @@ class AdsConnection(asyncio.Protocol):
         if len(self.queue) > self.server.config.write_queue_frames:
             self.close_for("ads.write_queue_full", f"{len(self.queue)} frames not read")
 
-    def close_for(self, event: str, detail: str) -> None:
+    def close_for(self, event: str, detail: str, error: bool = True) -> None:
         self.server.warn(event, self.peer, detail=detail)
-        self.server.counters.closed_for_errors += 1
+        self.server.counters.closed_for_errors += error
         self.closed = True
         if self.transport is not None:
             self.transport.abort()
+
+    def identify(self) -> None:
+        if not self.identified:
+            self.identified = True
+            self.server.unidentified.pop(self, None)
 
     def handle(self, raw: bytes) -> None:
         srv = self.server
         cfg = srv.config
         reserved = wire.TCP_HEADER.unpack_from(raw)[0]
-        if reserved != 0:  # AMS router commands (port connect, …): liftd is a target
-            self.close_for("ads.router_command", f"AMS/TCP command 0x{reserved:X}")
+        if reserved != _AMS_CMD:
+            self.router_command(reserved, raw[wire.TCP_SIZE :])
             return
         header = wire.AmsHeader._make(wire.AMS_HEADER.unpack_from(raw, wire.TCP_SIZE))
-        if header.flags & _RESPONSE_BIT or header.command == _NOTIFICATION:
-            return  # a stray response or a notification: nothing to answer
-        srv.counters.requests += 1
+        no_reply = header.flags & _RESPONSE_BIT or header.command == _NOTIFICATION
         if header.length != len(raw) - wire.HEADER_SIZE:
-            self.reply(header, b"", AmsError.INVALID_AMS_LENGTH)
+            if not no_reply:
+                srv.counters.requests += 1
+                self.reply(header, b"", AmsError.INVALID_AMS_LENGTH)
             return
         if cfg.allow_net_ids and header.source_net_id not in cfg.allow_net_ids:
             source = wire.net_id_text(header.source_net_id)
@@ -197,10 +185,29 @@ class AdsConnection(asyncio.Protocol):
                 self.close_for("ads.source_refused", f"source NetId {source} not allowed")
                 return
             srv.warn("ads.source_refused", self.peer, detail=f"source NetId {source}")
-            self.reply(header, srv.service.rejected(header.command, AdsErr.ACCESSDENIED))
+            if not no_reply:
+                self.reply(header, srv.service.rejected(header.command, AdsErr.ACCESSDENIED))
             return
+        if not self.identified:
+            self.identify()
+        ports = srv.ports
+        owner = None
+        if ports.owner_of or ports.back:  # anything routed at all (skipped on the hot path)
+            owner = ports.route(header.target_net_id, header.target_port)
+        if owner is not None:  # a client's registered port, or the answer to a forwarded request
+            if not no_reply:
+                srv.ports.remember((header.source_net_id, header.source_port), self)
+            srv.counters.routed += 1
+            owner.send(raw)
+            return
+        if no_reply:
+            return  # a stray response or a notification: nothing to answer
+        srv.counters.requests += 1
         if header.target_net_id not in cfg.net_ids:
             self.reply(header, b"", AmsError.TARGET_MACHINE_NOT_FOUND)
+        elif header.target_port == SYSTEM_SERVICE_PORT and cfg.system_service:
+            payload = raw[wire.HEADER_SIZE :]
+            self.reply(header, srv.system.handle(header.command, payload))
         elif header.target_port not in cfg.ams_ports:
             self.reply(header, b"", AmsError.TARGET_PORT_NOT_FOUND)
         elif header.command not in SERVED:
@@ -216,6 +223,28 @@ class AdsConnection(asyncio.Protocol):
             self.reply(header, answer.payload)
             if header.command == _ADD_NOTIFICATION:
                 srv.wake.set()
+
+    def router_command(self, command: int, payload: bytes) -> None:
+        """AMS/TCP commands to the router (router.py); a malformed or unknown one closes."""
+        srv = self.server
+        try:
+            if command == AmsTcpCommand.PORT_CONNECT:
+                port = srv.ports.connect(self, wanted_port(payload))
+                self.identify()
+                self.send(port_connect_reply(srv.ports.net_id, port))
+                srv.note("ads.port_connected", self.peer, ams_port=port)
+            elif command == AmsTcpCommand.PORT_CLOSE:
+                srv.ports.close(self, wanted_port(payload))
+                if not srv.ports.ports_of.get(self):  # TwinCAT closes; ads-client waits for it
+                    self.closed = True
+                    if self.transport is not None:
+                        self.transport.close()  # after what is queued
+            elif command == AmsTcpCommand.GET_LOCAL_NETID:
+                self.send(router_frame(AmsTcpCommand.GET_LOCAL_NETID, srv.ports.net_id))
+            else:
+                self.close_for("ads.router_command", f"AMS/TCP command 0x{command:X}")
+        except (ValueError, PortInUse) as exc:
+            self.close_for("ads.router_command", f"AMS/TCP command 0x{command:X}: {exc}")
 
     def reply(self, request: wire.AmsHeader, payload: bytes, ams_error: int = 0) -> None:
         header = wire.reply_header(request, RESPONSE_FLAGS, ams_error)
@@ -235,12 +264,43 @@ class AdsServer:
     service: AdsService
     log: Any  # a structlog logger (bound); the server is the IO shell that logs
     connections: set[AdsConnection] = field(default_factory=set)
+    unidentified: dict[AdsConnection, None] = field(default_factory=dict)  # oldest first
+    per_ip: dict[str, int] = field(default_factory=dict)
     counters: Counters = field(default_factory=Counters)
     limiter: RateLimiter = field(default_factory=RateLimiter)
     wake: asyncio.Event = field(default_factory=asyncio.Event)
     port: int = 0
+    system: SystemService = field(default_factory=SystemService)
+    ports: PortTable[AdsConnection] = field(init=False)
     _server: asyncio.Server | None = None
     _task: asyncio.Task[None] | None = None
+
+    def __post_init__(self) -> None:
+        cfg = self.config
+        net_id = cfg.router_net_id or min(cfg.net_ids)
+        reserved = cfg.ams_ports | {SYSTEM_SERVICE_PORT}
+        self.ports = PortTable(net_id, cfg.net_ids, frozenset(reserved), 8 * cfg.max_connections)
+
+    def admit(self, conn: AdsConnection) -> str:
+        """Make room for `conn` or say why not ("" = admitted). When the table or the peer
+        address's share is full, the oldest connection that never sent a valid frame goes."""
+        cfg = self.config
+        if conn.ip != "?" and not self.ip_allowed(conn.ip):
+            return "peer IP not allowed"
+        if self.per_ip.get(conn.ip, 0) >= cfg.max_connections_per_ip and not self._evict(conn.ip):
+            return "max_connections_per_ip"
+        if len(self.connections) >= cfg.max_connections and not self._evict(None):
+            return "max_connections"
+        return ""
+
+    def _evict(self, ip: str | None) -> bool:
+        victim = next((c for c in self.unidentified if ip is None or c.ip == ip), None)
+        if victim is None:
+            return False
+        self.counters.evicted += 1
+        victim.close_for("ads.connection_evicted", "room for a new connection", error=False)
+        victim.connection_lost(None)  # free its slot now; asyncio's call later finds it gone
+        return True
 
     async def start(self, sock: socket.socket | None = None) -> int:
         """Listen (on `sock` if given, e.g. from systemd); returns the TCP port bound."""
@@ -249,7 +309,10 @@ class AdsServer:
             self._server = await loop.create_server(lambda: AdsConnection(self), sock=sock)
         else:
             self._server = await loop.create_server(
-                lambda: AdsConnection(self), self.config.host, self.config.port, backlog=256
+                lambda: AdsConnection(self),
+                self.config.host,
+                self.config.port,
+                backlog=LISTEN_BACKLOG,
             )
         self.port = self._server.sockets[0].getsockname()[1]
         self._task = asyncio.create_task(self._notifications(), name="ads-notifications")
@@ -279,10 +342,20 @@ class AdsServer:
             return False
         return any(addr in net for net in self.config.allow_ips)
 
+    def net_id_allowed(self, net_id: bytes) -> bool:
+        return not self.config.allow_net_ids or net_id in self.config.allow_net_ids
+
     def warn(self, event: str, peer: str, **kw: Any) -> None:
         ok, held = self.limiter.allow(f"{event}:{peer.rsplit(':', 1)[0]}")
         if ok:
             self.log.warning(event, peer=peer, suppressed=held, **kw)
+
+    def note(self, event: str, peer: str, **kw: Any) -> None:
+        """An info event about a peer's connection, at most one per event, peer address and
+        second (a peer opening thousands of connections must not flood the log)."""
+        ok, held = self.limiter.allow(f"{event}:{peer.rsplit(':', 1)[0]}")
+        if ok:
+            self.log.info(event, peer=peer, suppressed=held, **kw)
 
     def error(self, event: str, peer: str, exc: BaseException, command: int) -> None:
         ok, held = self.limiter.allow(f"{event}:{type(exc).__name__}")
@@ -308,6 +381,12 @@ class AdsServer:
     def poll_notifications(self, now_ns: int, unix_ns: int) -> None:
         memo: dict[tuple[int, int, int], bytes | AdsError] = {}
         timeout = self.config.incomplete_frame_timeout_s
+        first_frame_by = time.monotonic() - self.config.first_frame_timeout_s
+        for conn in list(self.unidentified):  # oldest first
+            if conn.opened_at > first_frame_by:
+                break
+            conn.close_for("ads.first_frame_timeout", "no valid AMS frame", error=False)
+            conn.connection_lost(None)
         for conn in list(self.connections):
             if conn.partial_since is not None and time.monotonic() - conn.partial_since > timeout:
                 conn.close_for("ads.incomplete_frame_timeout", f"{conn.framer.pending} bytes")

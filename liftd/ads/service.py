@@ -6,116 +6,48 @@ request gets an answer (reference/ads.md §0.4, style-anchors rule 3).
 
 from __future__ import annotations
 
-import struct
-from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
-from typing import NamedTuple, Protocol
+from collections.abc import Callable, Mapping
+from functools import partial
+from typing import NamedTuple
 
-from liftd.ads import wire
-from liftd.ads.constants import SUM_GROUPS, AdsErr, Adst, Command, IndexGroup, SymbolFlag
+from liftd.ads import sums, symbols, wire
+from liftd.ads.constants import SUM_GROUPS, AdsErr, Command, IndexGroup
+from liftd.ads.device import (
+    ENCODING,
+    STATIC_HANDLE_BIT,
+    DeviceInfo,
+    ObjectProvider,
+    ServiceLimits,
+    Session,
+    Symbol,
+    error_payload,
+)
 from liftd.ads.errors import AdsError
 from liftd.ads.notifications import AmsAddr, NotificationTable
-from liftd.ads.wire import AmsHeader, ReadWriteRequest
+from liftd.ads.symbols import DataType
+from liftd.ads.wire import AddNotificationRequest, AmsHeader, ReadWriteRequest
 
-STATIC_HANDLE_BIT = 0x8000_0000  # 0xF005 offsets with this bit: a symbol's fixed address
-ENCODING = "cp1252"  # CNC strings (TF5200 "ADS access to CNC", isg-cnc.md §1.1)
-SUM_HEAD = struct.Struct("<III")
-SUM_RW_HEAD = struct.Struct("<IIII")
-
-
-@dataclass(frozen=True, slots=True)
-class Symbol:
-    """A name a client can resolve (0xF003, 0xF009) and the address its value lives at."""
-
-    name: str
-    index_group: int
-    index_offset: int
-    size: int
-    data_type: Adst
-    type_name: str  # PLC type string, e.g. BOOL, UDINT, LREAL (pyads maps it to a ctype)
-    comment: str = ""
-    writable: bool = False
-
-    def entry(self) -> bytes:
-        flags = 0 if self.writable else int(SymbolFlag.READONLY)
-        return wire.encode_symbol_entry(
-            wire.SymbolEntry(
-                self.index_group,
-                self.index_offset,
-                self.size,
-                int(self.data_type),
-                flags,
-                self.name.encode(ENCODING, "replace"),
-                self.type_name.encode(ENCODING, "replace"),
-                self.comment.encode(ENCODING, "replace"),
-            )
-        )
+__all__ = [  # the seam's declarations live in device.py; importable from here as before
+    "ENCODING", "STATIC_HANDLE_BIT", "AdsService", "DeviceInfo", "ObjectProvider", "Reply",
+    "ServiceLimits", "Session", "Symbol", "error_payload",
+]  # fmt: skip
 
 
-class ObjectProvider(Protocol):
-    """What the device behind the port offers. Every method raises AdsError with its code."""
+class Context(NamedTuple):
+    """What a ReadWrite handler may need beyond the request: the request's header (addresses
+    for notifications), write access, and the time."""
 
-    symbol_version: int  # changes when the symbol table changes (0xF008)
-
-    def read(self, index_group: int, index_offset: int, length: int) -> bytes: ...
-
-    def write(self, index_group: int, index_offset: int, data: bytes) -> None: ...
-
-    def read_write(
-        self, index_group: int, index_offset: int, read_length: int, data: bytes
-    ) -> bytes: ...
-
-    def find_symbol(self, name: str) -> Symbol: ...
-
-    def symbols(self) -> Sequence[Symbol]: ...
-
-    def ads_state(self) -> tuple[int, int]: ...
-
-    def write_control(self, ads_state: int, device_state: int, data: bytes) -> None: ...
+    header: AmsHeader
+    may_write: bool
+    now_ns: int
 
 
-@dataclass(frozen=True, slots=True)
-class ServiceLimits:
-    max_sum_subcommands: int = 1000
-    max_handles: int = 1024
-    max_notifications: int = 512
-    min_notification_cycle_ns: int = 1_000_000
-    max_notification_length: int = 65536
-    max_notification_payload: int = 256 * 1024
-
-
-@dataclass(frozen=True, slots=True)
-class DeviceInfo:
-    name: str = "liftd GEO"
-    major: int = 0
-    minor: int = 1
-    build: int = 0
-
-
-@dataclass(slots=True)
-class Session:
-    """What one connection owns; freed with it."""
-
-    notifications: NotificationTable
-    handles: dict[int, Symbol] = field(default_factory=dict)
-    next_handle: int = 1
+RwHandler = Callable[["Session", ReadWriteRequest, Context], bytes]
 
 
 class Reply(NamedTuple):
     payload: bytes
     failure: BaseException | None = None  # an unexpected exception answered with 0x700
-
-
-def _error_payload(command: int, code: int) -> bytes:
-    if command in (Command.READ, Command.READ_WRITE):
-        return wire.read_response(code)
-    if command == Command.ADD_NOTIFICATION:
-        return wire.add_notification_response(code, 0)
-    if command == Command.READ_STATE:
-        return wire.state_response(code, 0, 0)
-    if command == Command.READ_DEVICE_INFO:
-        return wire.device_info_response(code, 0, 0, 0, b"")
-    return wire.result_only(code)
 
 
 class AdsService:
@@ -125,7 +57,7 @@ class AdsService:
         self.provider = provider
         self.limits = limits
         self.device = device or DeviceInfo()
-        self._upload: tuple[int, bytes] | None = None
+        self._upload: tuple[int, bytes, bytes, dict[str, DataType]] | None = None
         self.commands: Mapping[int, Callable[[Session, AmsHeader, bytes, bool, int], bytes]] = {
             Command.READ_DEVICE_INFO: self._device_info,
             Command.READ: self._cmd_read,
@@ -142,18 +74,26 @@ class AdsService:
             IndexGroup.SYM_UPLOAD: self._sym_upload,
             IndexGroup.SYM_UPLOADINFO: self._sym_upload_info,
             IndexGroup.SYM_UPLOADINFO2: self._sym_upload_info2,
+            IndexGroup.SYM_DT_UPLOAD: self._dt_upload,
+            IndexGroup.DEVICE_DATA: self._device_data,
         }
         self.write_groups: Mapping[int, Callable[[Session, int, bytes], None]] = {
             IndexGroup.SYM_VALBYHND: self._write_by_handle,
             IndexGroup.SYM_RELEASEHND: self._release_handle,
         }
-        self.read_write_groups: Mapping[int, Callable[[Session, ReadWriteRequest, bool], bytes]] = {
+        self.read_write_groups: Mapping[int, RwHandler] = {
             IndexGroup.SYM_HNDBYNAME: self._handle_by_name,
             IndexGroup.SYM_VALBYNAME: self._value_by_name,
             IndexGroup.SYM_INFOBYNAMEEX: self._info_by_name,
+            IndexGroup.SYM_INFOBYNAME: self._location_by_name,
+            IndexGroup.SYM_DT_INFOBYNAMEEX: self._data_type_by_name,
             IndexGroup.SUMUP_READ: self._sum_read,
             IndexGroup.SUMUP_WRITE: self._sum_write,
             IndexGroup.SUMUP_READWRITE: self._sum_read_write,
+            IndexGroup.SUMUP_READEX: self._sum_read_ex,
+            IndexGroup.SUMUP_READEX2: self._sum_read_ex2,
+            IndexGroup.SUMUP_ADDDEVNOTE: self._sum_add_notifications,
+            IndexGroup.SUMUP_DELDEVNOTE: self._sum_delete_notifications,
         }
 
     def new_session(self) -> Session:
@@ -176,13 +116,13 @@ class AdsService:
         try:
             return Reply(self.commands[header.command](session, header, payload, may_write, now_ns))
         except AdsError as exc:
-            return Reply(_error_payload(header.command, exc.code))
+            return Reply(error_payload(header.command, exc.code))
         except Exception as exc:  # a bug: answer 0x700 (the client must not time out) and report
-            return Reply(_error_payload(header.command, AdsErr.DEVICE_ERROR), exc)
+            return Reply(error_payload(header.command, AdsErr.DEVICE_ERROR), exc)
 
     def rejected(self, command: int, code: int) -> bytes:
         """The payload answering `command` with `code` (e.g. 0x723 for an unknown source)."""
-        return _error_payload(command, code)
+        return error_payload(command, code)
 
     # -- commands ---------------------------------------------------------------------------------
     def _device_info(self, s: Session, h: AmsHeader, p: bytes, w: bool, now: int) -> bytes:
@@ -209,7 +149,7 @@ class AdsService:
         self, s: Session, h: AmsHeader, p: bytes, may_write: bool, now: int
     ) -> bytes:
         req = wire.decode_read_write(p)
-        data = self.read_write(s, req, may_write)
+        data = self.read_write(s, req, Context(h, may_write, now))
         if len(data) > req.read_length:
             raise AdsError(AdsErr.INVALIDSIZE, f"{len(data)} bytes do not fit {req.read_length}")
         return wire.read_response(0, data)
@@ -224,7 +164,12 @@ class AdsService:
         return wire.result_only(0)
 
     def _cmd_add_notification(self, s: Session, h: AmsHeader, p: bytes, w: bool, now: int) -> bytes:
-        req = wire.decode_add_notification(p)
+        handle = self._add_notification(s, h, wire.decode_add_notification(p), now)
+        return wire.add_notification_response(0, handle)
+
+    def _add_notification(
+        self, s: Session, h: AmsHeader, req: AddNotificationRequest, now: int
+    ) -> int:
         if req.index_group in SUM_GROUPS:
             raise AdsError(AdsErr.SRVNOTSUPP, "notification on a sum command")
         try:  # the object must exist; a device not ready yet is fine
@@ -234,8 +179,7 @@ class AdsService:
                 raise
         client = AmsAddr(h.source_net_id, h.source_port)
         server = AmsAddr(h.target_net_id, h.target_port)
-        handle = s.notifications.add(req, client, server, now)
-        return wire.add_notification_response(0, handle)
+        return s.notifications.add(req, client, server, now)
 
     def _cmd_del_notification(self, s: Session, h: AmsHeader, p: bytes, w: bool, now: int) -> bytes:
         s.notifications.delete(wire.decode_del_notification(p))
@@ -264,10 +208,10 @@ class AdsService:
             raise AdsError(AdsErr.SRVNOTSUPP, f"index group 0x{ig:X} is not written with Write")
         self.provider.write(ig, io, data)
 
-    def read_write(self, s: Session, req: ReadWriteRequest, may_write: bool) -> bytes:
+    def read_write(self, s: Session, req: ReadWriteRequest, ctx: Context) -> bytes:
         handler = self.read_write_groups.get(req.index_group)
         if handler is not None:
-            return handler(s, req, may_write)
+            return handler(s, req, ctx)
         return self.provider.read_write(
             req.index_group, req.index_offset, req.read_length, req.data
         )
@@ -307,7 +251,7 @@ class AdsService:
     def _find(self, raw: bytes) -> Symbol:
         return self.provider.find_symbol(raw.split(b"\0", 1)[0].decode(ENCODING, "replace"))
 
-    def _handle_by_name(self, s: Session, req: ReadWriteRequest, may_write: bool) -> bytes:
+    def _handle_by_name(self, s: Session, req: ReadWriteRequest, ctx: Context) -> bytes:
         if req.read_length < 4:
             raise AdsError(AdsErr.INVALIDSIZE, "a handle needs 4 bytes")
         sym = self._find(req.data)
@@ -318,113 +262,105 @@ class AdsService:
             handle = (handle + 1) % STATIC_HANDLE_BIT
         s.next_handle = (handle + 1) % STATIC_HANDLE_BIT
         s.handles[handle] = sym
-        return handle.to_bytes(4, "little")
+        # TwinCAT 3 answers a read length that can hold it with handle, size and type
+        # (ads-client createVariableHandle asks 0xFFFFFFFF); pyads asks 4, gets 4
+        extended = symbols.extended_handle(handle, sym.size, sym.type_name.encode(ENCODING))
+        return extended if req.read_length >= len(extended) else handle.to_bytes(4, "little")
 
-    def _value_by_name(self, s: Session, req: ReadWriteRequest, may_write: bool) -> bytes:
+    def _value_by_name(self, s: Session, req: ReadWriteRequest, ctx: Context) -> bytes:
         sym = self._find(req.data)
         return self.read(s, sym.index_group, sym.index_offset, req.read_length)
 
-    def _info_by_name(self, s: Session, req: ReadWriteRequest, may_write: bool) -> bytes:
-        entry = self._find(req.data).entry()
-        if req.read_length < len(entry):
-            raise AdsError(AdsErr.INVALIDSIZE, f"symbol entry needs {len(entry)} bytes")
-        return entry
+    def _info_by_name(self, s: Session, req: ReadWriteRequest, ctx: Context) -> bytes:
+        return self._whole(self._find(req.data).entry(), req.read_length, "symbol entry")
 
-    def _upload_data(self) -> bytes:
+    def _tables(self) -> tuple[int, bytes, bytes, dict[str, DataType]]:
+        """(version, symbol upload, data-type upload, types by lower-case name), rebuilt when
+        the provider's symbol version changes."""
         version = self.provider.symbol_version
         if self._upload is None or self._upload[0] != version:
             entries = b"".join(sym.entry() for sym in self.provider.symbols())
-            self._upload = (version, entries)
-        return self._upload[1]
+            types = {t.name.lower(): t for t in (*symbols.BASE_TYPES, *self.provider.data_types())}
+            type_entries = b"".join(t.entry(ENCODING) for t in types.values())
+            self._upload = (version, entries, type_entries, types)
+        return self._upload
 
-    def _sym_upload(self, s: Session, io: int, length: int) -> bytes:
-        data = self._upload_data()
+    @staticmethod
+    def _whole(data: bytes, length: int, what: str) -> bytes:
         if length < len(data):
-            raise AdsError(AdsErr.INVALIDSIZE, f"the symbol upload needs {len(data)} bytes")
+            raise AdsError(AdsErr.INVALIDSIZE, f"the {what} needs {len(data)} bytes")
         return data
 
+    def _sym_upload(self, s: Session, io: int, length: int) -> bytes:
+        return self._whole(self._tables()[1], length, "symbol upload")
+
+    def _dt_upload(self, s: Session, io: int, length: int) -> bytes:
+        return self._whole(self._tables()[2], length, "data-type upload")
+
     def _sym_upload_info(self, s: Session, io: int, length: int) -> bytes:
-        return struct.pack("<II", len(self.provider.symbols()), len(self._upload_data()))[:length]
+        return self._sym_upload_info2(s, io, min(length, 8))
 
     def _sym_upload_info2(self, s: Session, io: int, length: int) -> bytes:
-        info = struct.pack("<IIIIII", len(self.provider.symbols()), len(self._upload_data()),
-                           0, 0, 0, 0)  # fmt: skip
+        _, entries, type_entries, types = self._tables()
+        info = symbols.upload_info(len(self.provider.symbols()), len(entries), len(types),
+                                   len(type_entries))  # fmt: skip
         return info[:length]
+
+    def _data_type_by_name(self, s: Session, req: ReadWriteRequest, ctx: Context) -> bytes:
+        name = req.data.split(b"\0", 1)[0].decode(ENCODING, "replace").strip().lower()
+        dt = self._tables()[3].get(name)
+        if dt is None:  # ads-client falls back to its own base types on exactly 0x710
+            raise AdsError(AdsErr.SYMBOLNOTFOUND, f"data type {name!r}")
+        return self._whole(dt.entry(ENCODING), req.read_length, "data-type entry")
+
+    def _location_by_name(self, s: Session, req: ReadWriteRequest, ctx: Context) -> bytes:
+        """0xF007: IG, IO and size of a symbol, 12 bytes (birkenfeld/ads-rs `src/symbol.rs`
+        get_location / get_size read exactly these, the name sent without a NUL)."""
+        sym = self._find(req.data)
+        return self._whole(wire.U32X3.pack(sym.index_group, sym.index_offset, sym.size),
+                           req.read_length, "symbol location")  # fmt: skip
+
+    def _device_data(self, s: Session, io: int, length: int) -> bytes:
+        """0xF100: IO 0 → ADS state u16 + device state u16, IO 2 → device state (ads.md §3;
+        ads-client subscribes to (0xF100, 0, 4) to follow the runtime state)."""
+        state = wire.U16X2.pack(*self.provider.ads_state())
+        if io not in (0, 2):
+            raise AdsError(AdsErr.INVALIDOFFSET, f"device data offset {io}")
+        return self._whole(state[io:], length, "device state")[:length]
 
     def _sym_version(self, s: Session, io: int, length: int) -> bytes:
         return bytes([self.provider.symbol_version & 0xFF])[:length]
 
-    # -- sum commands (ads.md §3: sub-results exactly as pyads and ads-client expect) -------------
-    def _sum_count(self, req: ReadWriteRequest, head: int) -> int:
-        n = req.index_offset
-        if n == 0 or n > self.limits.max_sum_subcommands:
-            raise AdsError(
-                AdsErr.INVALIDSIZE,
-                f"{n} sub-commands (1..{self.limits.max_sum_subcommands} accepted)",
-            )
-        if len(req.data) < head * n:
-            raise AdsError(AdsErr.INVALIDSIZE, "sum command headers truncated")
-        return n
+    # -- sum commands (liftd/ads/sums.py has the layouts) -------------------------------------
+    def _sum_read(self, s: Session, req: ReadWriteRequest, ctx: Context) -> bytes:
+        return sums.sum_read(req, self.limits.max_sum_subcommands, partial(self.read, s))
 
-    def _sum_read(self, s: Session, req: ReadWriteRequest, may_write: bool) -> bytes:
-        n = self._sum_count(req, 12)
-        subs = [SUM_HEAD.unpack_from(req.data, 12 * i) for i in range(n)]
-        if len(req.data) != 12 * n:
-            raise AdsError(AdsErr.INVALIDSIZE, "sum read: 12 bytes per sub-command")
-        if req.read_length < 4 * n + sum(sub[2] for sub in subs):
-            raise AdsError(AdsErr.INVALIDSIZE, "sum read: read length below results + data")
-        results, blocks = [], []
-        for ig, io, length in subs:
-            code, data = 0, b""
-            try:
-                if ig in SUM_GROUPS:
-                    raise AdsError(AdsErr.SRVNOTSUPP, "nested sum command")
-                data = self.read(s, ig, io, length)
-            except AdsError as exc:
-                code = exc.code
-            results.append(code)
-            # every block exactly the requested length, even on error (pyads steps by it)
-            blocks.append(data[:length].ljust(length, b"\0"))
-        return struct.pack(f"<{n}I", *results) + b"".join(blocks)
+    def _sum_read_ex(self, s: Session, req: ReadWriteRequest, ctx: Context) -> bytes:
+        limit = self.limits.max_sum_subcommands
+        return sums.sum_read_ex(req, limit, partial(self.read, s), padded=True)
 
-    def _sum_write(self, s: Session, req: ReadWriteRequest, may_write: bool) -> bytes:
-        n = self._sum_count(req, 12)
-        subs = [SUM_HEAD.unpack_from(req.data, 12 * i) for i in range(n)]
-        if len(req.data) != 12 * n + sum(sub[2] for sub in subs):
-            raise AdsError(AdsErr.INVALIDSIZE, "sum write: headers + data")
-        results = []
-        pos = 12 * n
-        for ig, io, length in subs:
-            data = req.data[pos : pos + length]
-            pos += length
-            code = 0
-            try:
-                if ig in SUM_GROUPS:
-                    raise AdsError(AdsErr.SRVNOTSUPP, "nested sum command")
-                self.write(s, ig, io, data, may_write)
-            except AdsError as exc:
-                code = exc.code
-            results.append(code)
-        return struct.pack(f"<{n}I", *results)
+    def _sum_read_ex2(self, s: Session, req: ReadWriteRequest, ctx: Context) -> bytes:
+        limit = self.limits.max_sum_subcommands
+        return sums.sum_read_ex(req, limit, partial(self.read, s), padded=False)
 
-    def _sum_read_write(self, s: Session, req: ReadWriteRequest, may_write: bool) -> bytes:
-        n = self._sum_count(req, 16)
-        subs = [SUM_RW_HEAD.unpack_from(req.data, 16 * i) for i in range(n)]
-        if len(req.data) != 16 * n + sum(sub[3] for sub in subs):
-            raise AdsError(AdsErr.INVALIDSIZE, "sum read/write: headers + write data")
-        heads, blocks = [], []
-        pos = 16 * n
-        for ig, io, rlen, wlen in subs:
-            data = req.data[pos : pos + wlen]
-            pos += wlen
-            code, out = 0, b""
-            try:
-                if ig in SUM_GROUPS:
-                    raise AdsError(AdsErr.SRVNOTSUPP, "nested sum command")
-                out = self.read_write(s, ReadWriteRequest(ig, io, rlen, data), may_write)
-            except AdsError as exc:
-                code = exc.code
-            out = out[:rlen]
-            heads.append(struct.pack("<II", code, len(out)))
-            blocks.append(out)
-        return b"".join(heads) + b"".join(blocks)
+    def _sum_write(self, s: Session, req: ReadWriteRequest, ctx: Context) -> bytes:
+        def write(ig: int, io: int, data: bytes) -> None:
+            self.write(s, ig, io, data, ctx.may_write)
+
+        return sums.sum_write(req, self.limits.max_sum_subcommands, write)
+
+    def _sum_read_write(self, s: Session, req: ReadWriteRequest, ctx: Context) -> bytes:
+        def read_write(sub: ReadWriteRequest) -> bytes:
+            return self.read_write(s, sub, ctx)
+
+        return sums.sum_read_write(req, self.limits.max_sum_subcommands, read_write)
+
+    def _sum_add_notifications(self, s: Session, req: ReadWriteRequest, ctx: Context) -> bytes:
+        def add(sub: AddNotificationRequest) -> int:
+            return self._add_notification(s, ctx.header, sub, ctx.now_ns)
+
+        return sums.sum_add_notifications(req, self.limits.max_sum_subcommands, add)
+
+    def _sum_delete_notifications(self, s: Session, req: ReadWriteRequest, ctx: Context) -> bytes:
+        limit = self.limits.max_sum_subcommands
+        return sums.sum_delete_notifications(req, limit, s.notifications.delete)

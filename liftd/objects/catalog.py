@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 from liftd.ads.constants import IndexGroup
-from liftd.ads.service import STATIC_HANDLE_BIT, Symbol
+from liftd.ads.device import STATIC_HANDLE_BIT, Symbol
 from liftd.cnc import units
 from liftd.cnc.params import ChannelParams
 from liftd.cnc.snapshot import GeoSnapshot, LoopStats, PlcSignal
@@ -37,6 +37,7 @@ class AdsStats(NamedTuple):
     requests: int = 0
     errors: int = 0  # connections closed for protocol errors + requests answered 0x700
     notifications: int = 0
+    log_dropped: int = 0  # log lines dropped because stderr was not read (service/logs.py)
 
 
 class GeoView(NamedTuple):
@@ -177,6 +178,9 @@ def _objects(ch: ChannelParams) -> list[CncObject]:
                   "connections closed for protocol errors and requests answered 0x700"),
         CncObject("notifications", "GEO.ads.notifications", UNS64, "-",
                   lambda v: v.ads.notifications, "device notification frames sent"),
+        CncObject("log_dropped", "GEO.ads.log_dropped", UNS64, "-",
+                  lambda v: v.ads.log_dropped,
+                  "daemon log lines dropped because nobody read the log output"),
     ]  # fmt: skip
     plc = f"PLC.ch{cid}"
     out += [

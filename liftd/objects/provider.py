@@ -14,8 +14,9 @@ import struct
 from collections.abc import Callable, Sequence
 
 from liftd.ads.constants import AdsErr, AdsState, IndexGroup
+from liftd.ads.device import ENCODING, STATIC_HANDLE_BIT, Symbol
 from liftd.ads.errors import AdsError
-from liftd.ads.service import ENCODING, STATIC_HANDLE_BIT, Symbol
+from liftd.ads.symbols import DataType
 from liftd.cnc import units
 from liftd.cnc.snapshot import PlcSignal, PlcWrite
 from liftd.objects.catalog import (
@@ -32,6 +33,7 @@ from liftd.objects.catalog import (
     GeoView,
     normalise,
 )
+from liftd.objects.types import CNC_TYPES
 
 Source = Callable[[], GeoView | None]  # None: the GEO task is not running
 Sink = Callable[[PlcWrite], None]  # raises AdsError(BUSY) when the input queue is full
@@ -148,6 +150,9 @@ class CncProvider:
 
     def symbols(self) -> Sequence[Symbol]:
         return self.catalog.symbols
+
+    def data_types(self) -> Sequence[DataType]:
+        return CNC_TYPES
 
     def ads_state(self) -> tuple[int, int]:
         return (int(AdsState.RUN) if self.source() is not None else int(self.down_state)), 0

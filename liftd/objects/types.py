@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 from liftd.ads.constants import AdsErr, Adst
 from liftd.ads.errors import AdsError
+from liftd.ads.symbols import DataType
 
 
 @dataclass(frozen=True, slots=True)
@@ -25,6 +26,10 @@ class CncType:
             return self.fmt.pack(float(value))
         return self.fmt.pack(int(value))
 
+    def data_type(self) -> DataType:
+        """The ISG type name as an alias of its IEC type, for the data-type upload (0xF00E)."""
+        return DataType(self.isg, self.size, self.adst, self.plc, "ISG CNC object type")
+
     def unpack(self, data: bytes) -> float | int:
         """A written value; the length must be exact (0x705)."""
         if len(data) != self.fmt.size:
@@ -39,3 +44,7 @@ UNS32 = CncType("UNS32", "UDINT", Adst.UINT32, struct.Struct("<I"))
 SGN32 = CncType("SGN32", "DINT", Adst.INT32, struct.Struct("<i"))
 UNS64 = CncType("UNS64", "ULINT", Adst.UINT64, struct.Struct("<Q"))
 REAL64 = CncType("REAL64", "LREAL", Adst.REAL64, struct.Struct("<d"))
+
+CNC_TYPES: tuple[DataType, ...] = tuple(
+    t.data_type() for t in (BOOLEAN, UNS16, UNS32, SGN32, UNS64, REAL64)
+)

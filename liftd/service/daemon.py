@@ -27,6 +27,7 @@ from liftd.ads.constants import AdsErr, AdsState
 from liftd.ads.errors import AdsError
 from liftd.ads.server import AdsServer
 from liftd.ads.service import AdsService, DeviceInfo
+from liftd.ads.udp import UdpDiscovery
 from liftd.cnc.nc import DecoderContext, Severity, decode
 from liftd.cnc.snapshot import PlcWrite
 from liftd.objects.catalog import AdsStats, Catalog, GeoView
@@ -36,7 +37,7 @@ from liftd.runtime.cycle import percentile_us
 from liftd.runtime.records import EventReader, pack_input
 from liftd.runtime.rt import RtRequest
 from liftd.runtime.shared import Shared
-from liftd.service import systemd
+from liftd.service import logs, systemd
 from liftd.service.adsconfig import server_config, service_limits
 from liftd.service.trace_recorder import TraceRecorder
 from liftd.settings import ConfigError, Settings, load_settings
@@ -103,6 +104,7 @@ class Daemon:
         self._event_times: dict[str, float] = {}
         self._trace: TraceRecorder | None = None
         self._metrics: asyncio.Server | None = None
+        self.udp: UdpDiscovery | None = None
         self._rss_mb: tuple[float | None, float | None] = (None, None)
 
     # -- what the ADS provider sees -------------------------------------------------------------
@@ -115,7 +117,8 @@ class Daemon:
         snap, stats = self.shared.codec.unpack(self.shared.snapshot.read())
         c = self.server.counters
         ads = AdsStats(len(self.server.connections), c.requests,
-                       c.closed_for_errors + c.internal_errors, c.notifications_sent)  # fmt: skip
+                       c.closed_for_errors + c.internal_errors, c.notifications_sent,
+                       logs.dropped())  # fmt: skip
         view = GeoView(snap, stats, ads)
         self._cache = (seq, view)
         return view
@@ -211,11 +214,22 @@ class Daemon:
             await asyncio.sleep(0.005)
 
     async def _listen(self) -> None:
+        ads = self.settings.config.ads
         try:
             await self.server.start()
         except OSError as exc:
-            ads = self.settings.config.ads
             raise StartError(f"cannot listen on {ads.host}:{ads.port}: {exc.strerror}") from None
+        if not ads.udp_discovery:
+            return
+        srv = self.server
+        self.udp = UdpDiscovery(srv.ports.net_id, srv.ip_allowed, srv.net_id_allowed, srv.warn,
+                                srv.note)  # fmt: skip
+        try:
+            port = await self.udp.start(ads.host, ads.udp_port)
+        except OSError as exc:
+            raise StartError(f"cannot listen on UDP {ads.host}:{ads.udp_port}: {exc.strerror}"
+                             ) from None  # fmt: skip
+        self.log.info("ads.udp_listening", host=ads.host, port=port)
 
     # -- supervision ------------------------------------------------------------------------------
     def _on_events(self) -> None:
@@ -355,6 +369,8 @@ class Daemon:
         systemd.notify("STOPPING=1")
         self.stopping.set()
         await self.server.close()
+        if self.udp is not None:
+            self.udp.close()
         if self._metrics is not None:
             self._metrics.close()
         self._rss_mb = (rss_mb(os.getpid()), rss_mb(self.proc.pid) if self.proc else None)
@@ -419,3 +435,5 @@ def run(settings: Settings, config_arg: str | None, program_arg: str | None,
         structlog.get_logger("liftd").error("daemon.start_failed", reason=str(exc))
         daemon.shared.close()
         return EXIT_RUNTIME
+    finally:
+        logs.flush(2.0)  # what the writer thread still holds, unless stderr stays blocked

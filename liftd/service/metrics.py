@@ -8,6 +8,7 @@ import asyncio
 from typing import TYPE_CHECKING
 
 from liftd.runtime.cycle import EDGES
+from liftd.service import logs
 
 if TYPE_CHECKING:
     from liftd.service.daemon import Daemon
@@ -33,6 +34,8 @@ def exposition(d: Daemon) -> str:
         f"liftd_ads_errors_total {c.closed_for_errors + c.internal_errors}",
         "# TYPE liftd_ads_notifications_total counter",
         f"liftd_ads_notifications_total {c.notifications_sent}",
+        "# TYPE liftd_log_dropped_total counter",
+        f"liftd_log_dropped_total {logs.dropped()}",
     ]
     for name, hist in (("lateness", sh.lateness_hist), ("compute", sh.compute_hist)):
         metric = f"liftd_geo_{name}_seconds"

@@ -53,6 +53,14 @@ class AdsSection(_Section):
     min_notification_cycle_us: int = Field(1000, ge=100, le=10_000_000)
     write_queue_frames: int = Field(1024, ge=16, le=1_000_000)
     incomplete_frame_timeout_s: float = Field(10.0, gt=0.0, le=3600.0)
+    # a connection that sent no valid AMS frame (nor a router port connect) is closed after this
+    first_frame_timeout_s: float = Field(10.0, gt=0.0, le=3600.0)
+    max_connections_per_ip: int = Field(32, ge=1, le=10000)
+    system_service: StrictBool = True  # answer AMS port 10000 (state, device info) as TwinCAT
+    # UDP discovery and add-route (TwinCAT broadcast search, pyads.add_route_to_plc) on
+    # host:udp_port, subject to allow_ips / allow_net_ids; off unless asked for
+    udp_discovery: StrictBool = False
+    udp_port: int = Field(48899, ge=0, le=65535)  # 0 = any free port (tests)
     allow_ips: tuple[str, ...] = ("127.0.0.0/8", "::1/128")  # peer IP ranges; empty = all
     allow_net_ids: tuple[str, ...] = ()  # source NetIds; empty = all
     write_net_ids: tuple[str, ...] = ()  # NetIds allowed to write; empty = all allowed peers
@@ -108,6 +116,9 @@ class RtSection(_Section):
 class LogSection(_Section):
     level: Literal["debug", "info", "warning", "error"] = "info"
     format: Literal["auto", "json", "console"] = "auto"  # auto: JSON when not a TTY
+    # log lines waiting for the writer thread; when it cannot keep up (a pipe nobody reads),
+    # further lines are dropped and counted, never waited for
+    queue_lines: int = Field(10_000, ge=100, le=1_000_000)
 
 
 class MetricsSection(_Section):

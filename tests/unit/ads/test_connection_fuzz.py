@@ -1,7 +1,9 @@
 """A hypothesis state machine drives one real AdsConnection (framer + codec + access checks +
 service dispatch + notifications) through a fake transport with what a hostile or broken peer
-can send: valid and random requests to every command, foreign addresses, random index groups,
-handles and notification handles, garbage, frames cut anywhere, a peer that stops reading.
+can send: valid and random requests to every command, foreign addresses, random index groups
+(the symbol server's and every sum command included), handles and notification handles, router
+commands (port connect/close, get NetId, unknown ones), frames for the system port and for a
+registered client port, garbage, frames cut anywhere, a peer that stops reading.
 
 Invariants after every step: the server never hit an internal error (a bug is answered 0x700
 and counted); every request of an intact stream got exactly one reply, in order, with its
@@ -102,7 +104,14 @@ class ConnectionMachine(RuleBasedStateMachine):
         frames = self.reader.feed(bytes(self.transport.out))
         self.transport.out.clear()
         for raw in frames:
+            if raw[:2] != b"\0\0":  # a router answer (AMS/TCP command, no AMS header)
+                assert struct.unpack_from("<H", raw)[0] in (0x1000, 0x1002)
+                continue
             f = wire.decode_frame(raw)
+            if not f.header.flags & 1 and self.server.ports.route(
+                f.header.target_net_id, f.header.target_port
+            ):  # a frame for this connection's own registered port, routed back to it
+                continue
             if f.header.command == 8:  # a device notification
                 assert f.header.target_net_id == SOURCE
                 wire.decode_notification(f.payload)
@@ -117,19 +126,30 @@ class ConnectionMachine(RuleBasedStateMachine):
     def request(self, command: int, payload: bytes, cut: int) -> None:
         self.send(self.frame(command, payload), command, cut)
 
-    def send(self, data: bytes, command: int, cut: int) -> None:
+    def send(self, data: bytes, command: int, cut: int, routed: bool = False) -> None:
         if not self.transport.reading:
             return  # reading paused: the bytes wait in the kernel, nothing is delivered
-        if not self.broken and command != 8:  # a notification sent to the server: no reply
+        if not self.broken and command != 8 and not routed:  # no reply for these
             self.expected.append((self.invoke, command))
         self.feed(data, cut)
         if self.transport.reading:
             self.collect()
 
     @rule(dest=st.sampled_from([net_id_bytes("1.2.3.4.5.6"), NET]),
-          port=st.sampled_from([550, 551, 851, 0]), command=st.integers(0, 12))  # fmt: skip
+          port=st.sampled_from([550, 551, 851, 0, 10000, 32768]),
+          command=st.integers(0, 12))  # fmt: skip
     def addressed(self, dest: bytes, port: int, command: int) -> None:
-        self.send(self.frame(command, b"", dest, port), command, 1000)
+        routed = self.server.ports.route(dest, port) is not None
+        self.send(self.frame(command, b"", dest, port), command, 1000, routed)
+
+    @rule(command=st.sampled_from([0x1000, 0x0001, 0x1002, 0x1001, 0x4321]),
+          payload=st.one_of(st.sampled_from([b"\0\0", b"\x00\x80", b"\x27\x02"]),
+                            st.binary(max_size=5)))  # fmt: skip
+    def router(self, command: int, payload: bytes) -> None:
+        if self.transport.reading:
+            self.feed(struct.pack("<HI", command, len(payload)) + payload, 1000)
+            if self.transport.reading:
+                self.collect()
 
     @rule(n=st.integers(1, 60))
     def burst(self, n: int) -> None:
@@ -182,6 +202,7 @@ class ConnectionMachine(RuleBasedStateMachine):
             self.conn.connection_lost(None)
             assert not s.handles and not len(s.notifications) and not self.conn.queue
             assert self.conn not in self.server.connections
+            assert self.conn not in self.server.ports.ports_of
             self.new_connection()
 
 

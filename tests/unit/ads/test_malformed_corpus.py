@@ -30,13 +30,16 @@ def outcome(raw: bytes, chunk: int) -> str:
         if not conn.closed:
             conn.data_received(raw[i : i + chunk])
     assert server.counters.internal_errors == 0
-    replies = [wire.decode_frame(f) for f in AmsFramer(1 << 20).feed(bytes(transport.out))]
+    raw_replies = AmsFramer(1 << 20).feed(bytes(transport.out))
     if conn.closed or transport.aborted:
-        assert not replies
+        assert not raw_replies
         return "close"
-    if not replies:
+    if not raw_replies:
         return "pending" if conn.framer.pending else "none"
-    (reply,) = replies
+    (raw,) = raw_replies
+    if raw[:2] != b"\0\0":  # a router answer: AMS/TCP command, no AMS header
+        return f"router 0x{struct.unpack_from('<H', raw)[0]:X}"
+    reply = wire.decode_frame(raw)
     assert reply.header.invoke_id == 7 and reply.header.flags & 1
     if reply.header.error:
         return f"AMS 0x{reply.header.error:X}"

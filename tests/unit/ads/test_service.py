@@ -12,6 +12,7 @@ from liftd.ads import wire
 from liftd.ads.constants import AdsErr, AdsState, Adst, Command, IndexGroup
 from liftd.ads.errors import AdsError
 from liftd.ads.service import AdsService, ServiceLimits, Session, Symbol
+from liftd.ads.symbols import DataType
 
 NET = bytes([127, 0, 0, 1, 1, 1])
 CLIENT = bytes([10, 0, 0, 7, 1, 1])
@@ -62,6 +63,9 @@ class Device:
 
     def symbols(self) -> Sequence[Symbol]:
         return self.syms
+
+    def data_types(self) -> Sequence[DataType]:
+        return (DataType("T_Count", 4, Adst.UINT32, "UDINT", "an alias"),)
 
     def ads_state(self) -> tuple[int, int]:
         return int(AdsState.RUN), 0
@@ -245,3 +249,102 @@ def test_notifications_through_the_service(svc: AdsService) -> None:
     delete = handle.to_bytes(4, "little")
     assert wire.decode_result(call(svc, s, Command.DEL_NOTIFICATION, delete)) == 0
     assert wire.decode_result(call(svc, s, Command.DEL_NOTIFICATION, delete)) == 0x714
+
+
+def data_type_entry(raw: bytes) -> tuple[tuple[int, ...], list[bytes]]:
+    """AdsDatatypeEntry as ads-client and ads-rs parse it: the head, then the three strings."""
+    head = struct.unpack_from("<IIIIIIIIHHHHH", raw)
+    pos, strings = 42, []
+    for n in head[8:11]:
+        strings.append(raw[pos : pos + n])
+        assert raw[pos + n] == 0
+        pos += n + 1
+    assert head[0] == pos == len(raw)  # entryLength counts the whole entry
+    return head, strings
+
+
+def test_upload_info_is_64_bytes_with_the_data_types(svc: AdsService) -> None:
+    s = svc.new_session()
+    code, info = read(svc, s, IndexGroup.SYM_UPLOADINFO2, 0, 64)
+    assert code == 0 and len(info) == 64  # ads-rs read_exact(64), ads-client version 3
+    n_sym, sym_bytes, n_types, type_bytes, _, _, _, code_page, flags = struct.unpack_from(
+        "<9I", info
+    )
+    assert (n_sym, code_page, flags) == (2, 1252, 2)  # base types included
+    assert read(svc, s, IndexGroup.SYM_UPLOADINFO, 0, 8) == (0, info[:8])
+    code, types = read(svc, s, IndexGroup.SYM_DT_UPLOAD, 0, type_bytes)
+    assert code == 0 and len(types) == type_bytes
+    names, pos = [], 0
+    while pos < len(types):
+        size = struct.unpack_from("<I", types, pos)[0]
+        head, (name, base, _) = data_type_entry(types[pos : pos + size])
+        assert head[1] == 1 and head[5] == 0  # version 1, offset 0 (ads-rs asserts both)
+        names.append((name, base))
+        pos += size
+    assert len(names) == n_types and (b"BOOL", b"") in names and (b"T_Count", b"UDINT") in names
+    assert read(svc, s, IndexGroup.SYM_DT_UPLOAD, 0, type_bytes - 1)[0] == 0x705
+
+
+def test_data_type_and_location_by_name(svc: AdsService) -> None:
+    s = svc.new_session()
+    code, raw = rw(svc, s, IndexGroup.SYM_DT_INFOBYNAMEEX, 0, 0xFFFFFFFF, b"lreal\0")
+    head, strings = data_type_entry(raw)
+    assert code == 0 and head[4:8] == (8, 0, Adst.REAL64, 1) and strings[0] == b"LREAL"
+    assert rw(svc, s, IndexGroup.SYM_DT_INFOBYNAMEEX, 0, 0xFFFF, b"ST_Nope\0") == (0x710, b"")
+    assert rw(svc, s, IndexGroup.SYM_DT_INFOBYNAMEEX, 0, 10, b"BOOL\0")[0] == 0x705
+    # 0xF007 as ads-rs get_location / get_size send it: no NUL, 12 bytes back
+    assert rw(svc, s, IndexGroup.SYM_INFOBYNAME, 0, 12, b"Dev.setpoint") == (
+        0, struct.pack("<III", 0x10, 4, 2))  # fmt: skip
+    assert rw(svc, s, IndexGroup.SYM_INFOBYNAME, 0, 11, b"Dev.setpoint")[0] == 0x705
+    assert rw(svc, s, IndexGroup.SYM_INFOBYNAME, 0, 12, b"nope")[0] == 0x710
+
+
+def test_extended_handle_reply(svc: AdsService) -> None:
+    s = svc.new_session()
+    code, raw = rw(svc, s, IndexGroup.SYM_HNDBYNAME, 0, 0xFFFFFFFF, b"Dev.setpoint\0")
+    handle, size, decoration, n = struct.unpack_from("<IIIH", raw)
+    assert (code, size, decoration, raw[14 : 14 + n + 1]) == (0, 2, 0, b"UINT\0")
+    assert len(raw) == 14 + n + 1
+    assert read(svc, s, IndexGroup.SYM_VALBYHND, handle, 2) == (0, struct.pack("<H", 100))
+
+
+def test_sum_read_ex_padded_and_compact(svc: AdsService) -> None:
+    s = svc.new_session()
+    subs = [(0x10, 0, 8), (0x10, 9, 4), (0x10, 4, 2)]
+    data = b"".join(struct.pack("<III", *x) for x in subs)
+    rlen = 8 * 3 + 14
+    code, out = rw(svc, s, IndexGroup.SUMUP_READEX, 3, rlen, data)
+    assert code == 0 and len(out) == rlen
+    assert struct.unpack_from("<6I", out) == (0, 4, 0x703, 0, 0, 2)
+    assert out[24:32] == struct.pack("<I", 7) + bytes(4) and out[36:38] == b"\x64\x00"
+    code, out = rw(svc, s, IndexGroup.SUMUP_READEX2, 3, rlen, data)
+    assert code == 0 and out[24:] == struct.pack("<I", 7) + b"\x64\x00"
+    assert rw(svc, s, IndexGroup.SUMUP_READEX, 3, rlen - 1, data)[0] == 0x705
+    assert rw(svc, s, IndexGroup.SUMUP_READEX, 4, 100, data)[0] == 0x705
+
+
+@pytest.mark.parametrize("entry_bytes", [40, 24])
+def test_sum_add_and_delete_notifications(svc: AdsService, entry_bytes: int) -> None:
+    s = svc.new_session()
+    subs = [(0x10, 0, 4, 4), (0x10, 9, 4, 4), (0x10, 4, 2, 99)]
+    data = b"".join(
+        struct.pack("<IIIIII", ig, io, n, mode, 0, 10_000) + bytes(entry_bytes - 24)
+        for ig, io, n, mode in subs
+    )
+    code, out = rw(svc, s, IndexGroup.SUMUP_ADDDEVNOTE, 3, 24, data)
+    results = struct.unpack("<6I", out)
+    assert code == 0 and results[0] == 0 and results[1] > 0  # (result, handle) each
+    assert results[2:] == (0x703, 0, 0x713, 0)
+    assert len(s.notifications) == 1
+    handles = struct.pack("<II", results[1], 999)
+    code, out = rw(svc, s, IndexGroup.SUMUP_DELDEVNOTE, 2, 8, handles)
+    assert (code, struct.unpack("<II", out)) == (0, (0, 0x714))
+    assert len(s.notifications) == 0
+    assert rw(svc, s, IndexGroup.SUMUP_ADDDEVNOTE, 3, 24, data[:-1])[0] == 0x705
+
+
+def test_device_data_follows_the_state(svc: AdsService) -> None:
+    s = svc.new_session()
+    assert read(svc, s, IndexGroup.DEVICE_DATA, 0, 4) == (0, struct.pack("<HH", 5, 0))
+    assert read(svc, s, IndexGroup.DEVICE_DATA, 2, 2) == (0, bytes(2))
+    assert read(svc, s, IndexGroup.DEVICE_DATA, 1, 4)[0] == 0x703

@@ -49,6 +49,9 @@ def test_contract_keys_are_accepted_and_everything_else_defaults() -> None:
         ('[ads]\nport = "x"\n', 2, "ads.port", "x", "valid integer"),
         ("[adss]\nport = 1\n", 1, "adss", None, "unknown key"),
         ('[ads]\nallow_ips = ["10.0.0.0/33"]\n', 2, "ads.allow_ips", None, "10.0.0.0/33"),
+        ('[ads]\nudp_discovery = "yes"\n', 2, "ads.udp_discovery", "yes", "valid boolean"),
+        ("[ads]\nfirst_frame_timeout_s = 0\n", 2, "ads.first_frame_timeout_s", "0", "greater than"),
+        ("[log]\nqueue_lines = 5\n", 2, "log.queue_lines", "5", "greater than or equal"),
     ],
 )
 def test_bad_values_name_file_line_key_value(
@@ -61,6 +64,14 @@ def test_bad_values_name_file_line_key_value(
     if value is not None:
         assert p.value == value
     assert fragment in p.message
+
+
+def test_udp_discovery_is_off_by_default_and_on_only_in_the_loopback_config() -> None:
+    assert LiftdConfig().ads.udp_discovery is False
+    shipped = parse_config_text((REPO / "config" / "liftd.toml").read_text(), "liftd.toml")
+    assert shipped.ads.udp_discovery is True and shipped.ads.host == "127.0.0.1"
+    docker = parse_config_text((REPO / "docker" / "liftd.toml").read_text(), "liftd.toml")
+    assert docker.ads.udp_discovery is False  # listens on every address of the container
 
 
 def test_toml_syntax_error_has_a_line() -> None:

@@ -1,0 +1,66 @@
+"""The daemon's log path: never blocks the caller, drops and counts when the writer is stuck,
+syslog priority prefixes under journald, no colours for NO_COLOR or a non-TTY. Each case runs
+`logs.configure` in a fresh interpreter (structlog's configuration is process-wide)."""
+
+from __future__ import annotations
+
+import io
+import os
+import subprocess
+import sys
+import threading
+
+from liftd.service.logs import LineQueue
+from tests.conftest import REPO
+
+SCRIPT = """
+import sys, structlog
+from liftd.service import logs
+fmt = sys.argv[1]
+logs.configure("info", fmt)
+log = structlog.get_logger("t")
+log.info("t.info", n=1)
+log.warning("t.warning", n=2)
+log.error("t.error", n=3)
+logs.flush(5.0)
+"""
+
+
+def run(fmt: str, **env: str) -> list[str]:
+    clean = {k: v for k, v in os.environ.items() if k not in ("JOURNAL_STREAM", "NO_COLOR")}
+    r = subprocess.run([sys.executable, "-c", SCRIPT, fmt], capture_output=True, text=True,
+                       env={**clean, **env}, cwd=REPO, timeout=60, check=True)  # fmt: skip
+    return r.stderr.splitlines()
+
+
+def test_journald_gets_syslog_priority_prefixes() -> None:
+    lines = run("json", JOURNAL_STREAM="8:1234")
+    assert [line[:3] for line in lines] == ["<6>", "<4>", "<3>"]
+    assert '"event": "t.warning"' in lines[1]
+    assert not any(line.startswith("<") for line in run("json"))  # not under journald
+
+
+def test_no_colour_for_no_color_and_for_a_pipe() -> None:
+    for lines in (run("console", NO_COLOR="1"), run("console")):  # stderr is a pipe here
+        assert len(lines) == 3 and not any("\x1b[" in line for line in lines)
+        assert "t.warning" in lines[1]
+
+
+def test_a_blocked_writer_drops_and_counts_without_blocking() -> None:
+    class Stuck(io.StringIO):
+        gate = threading.Event()
+
+        def write(self, s: str) -> int:
+            self.gate.wait(10)  # the reader of the pipe is away
+            return super().write(s)
+
+    out = Stuck()
+    lines = LineQueue(out, 100)
+    for i in range(1000):  # returns at once although nothing gets written
+        lines.put(f"line {i}")
+    held = lines.dropped
+    assert 800 <= held <= 900  # 100 queued, the first batch taken by the stuck writer
+    Stuck.gate.set()
+    lines.flush(5.0)
+    written = out.getvalue().splitlines()
+    assert written[0] == "line 0" and len(written) + lines.dropped == 1000
