@@ -79,6 +79,92 @@ def scenario(seed: int, method: LiftMethod = LiftMethod.ADVANCED) -> Scenario:
     return Scenario(seed, ch, "\n".join(lines) + "\n", Schedule(steps, holds))
 
 
+def wide_scenario(seed: int, method: LiftMethod = LiftMethod.ADVANCED) -> Scenario:
+    """The whole input space of issue 14: 1–4 ranges of few blocks, of long polylines (up to
+    400 short blocks, longer than every look-ahead), of slightly bent polylines and without path
+    motion; ranges back to back; waits (G04, synchronised M) before and inside ranges; every
+    look-ahead size; override steps (0–200 %) at random moments and feed holds."""
+    rng = random.Random(seed)
+    zv, za = rng.uniform(0.3, 1.5), rng.uniform(3.0, 20.0)
+    zj = rng.uniform(100.0, 2000.0)
+    z_neg, z_pos = -0.05, 0.2
+    ch = ChannelParams(
+        channel_id=1,
+        axes=(
+            AxisParams("X", 1, 1.5, 10.0, 500.0, -0.001, 3.01),
+            AxisParams("Y", 2, 1.5, 8.0, 400.0, -0.001, 1.51),
+            AxisParams("Z", 3, zv, za, zj, z_neg, z_pos),
+        ),
+        lift_axis="Z",
+        lift_method=method,
+        cycle_time=rng.choice([1e-3, 1e-3, 1e-3, 5e-4, 2e-3]),
+        lift_min_dist=rng.choice([0.0, 0.0, 0.003]),
+        slope=SlopeType.TRAPEZ,
+        look_ahead_blocks=rng.choice([1, 3, 8, 30, 30, 120, 120, 190, 200]),
+        m_synch=((4, MSync.MVS_SVS), (5, MSync.MOS), (8, MSync.MNS_SNS)),
+    )
+    z = rng.uniform(0.0, 0.03)
+    x, y = 10.0, 10.0 + rng.uniform(0.0, 400.0)
+    lines = [f"G01 X{x} Y{y:.3f} Z{z * 1e3:.3f} F6000"]
+    joined = False  # the last range ended on the boundary where the next one starts
+    for _ in range(rng.randint(1, 4)):
+        if not joined and rng.random() < 0.2:
+            lines.append(rng.choice(["G04 0.05", "M04", "M08"]))  # a wait before the range
+        down = method is LiftMethod.ADVANCED and rng.random() < 0.15
+        pos = min(max(z + rng.uniform(-0.02, 0.03), 0.0), 0.12)
+        if down:
+            limit = max(min(z, pos) - rng.uniform(0.0, 0.04), z_neg + 0.001)
+        else:
+            limit = min(max(z, pos) + rng.uniform(-0.005, 0.09), z_pos - 0.001)
+        word = "LIFT_START DOWN" if down else "LIFT_START"
+        lines.append(f"Z[{word} POS={pos * 1e3:.3f} POS_LIMIT={limit * 1e3:.3f}]")
+        kind = rng.choice(["few", "few", "polyline", "polyline", "bent", "none"])
+        feed = rng.choice([3000, 12000, 24000, 30000, 60000])
+        if kind == "few":
+            for _ in range(rng.randint(1, 5)):
+                x = min(x + rng.choice([0.5, 2.0, 20.0, 80.0, 250.0]) * rng.random(), 2900.0)
+                y = min(max(y + rng.uniform(-40.0, 40.0), 1.0), 1400.0)
+                lines.append(f"G01 X{x:.3f} Y{y:.3f} F{rng.choice([3000, 12000, 24000, 60000])}")
+                if rng.random() < 0.1:
+                    lines.append(rng.choice(["G04 0.03", "M04", "M08"]))
+        elif kind in ("polyline", "bent"):
+            step = rng.choice([0.2, 0.5, 1.0, 2.0])
+            n = rng.randint(20, 400)
+            angle = rng.uniform(-0.3, 0.3)
+            bend = rng.uniform(0.003, 0.03) if kind == "bent" else 0.0
+            lines.append(f"F{feed}")
+            a = angle
+            for i in range(n):
+                if kind == "bent":  # wiggles of ≤ 1.7° per block, never turning back
+                    a = min(max(a + bend * rng.choice([1.0, 1.0, -1.0]), -1.2), 1.2)
+                x = min(x + step * math.cos(a), 2900.0)
+                y = min(max(y + step * math.sin(a), 1.0), 1400.0)
+                lines.append(f"G01 X{x:.4f} Y{y:.4f}")
+                if i == n // 2 and rng.random() < 0.1:
+                    lines.append(rng.choice(["G04 0.03", "M04"]))
+        lines.append("Z[LIFT_END]")
+        z = pos
+        joined = rng.random() < 0.25
+        if not joined:
+            x = min(x + 5.0, 2900.0)
+            lines.append(f"G01 X{x:.3f} F6000")
+    lines.append(f"G01 X{min(x + 5.0, 2900.0):.3f} F6000")
+    lines.append("M30")
+    steps = tuple(
+        sorted(
+            (rng.uniform(0.0, 3.0), rng.choice([0.0, 0.1, 0.5, 0.8, 1.0, 1.2, 1.5, 2.0]))
+            for _ in range(rng.randint(0, 6))
+        )
+    )
+    holds = tuple(
+        sorted(
+            (t, t + rng.uniform(0.01, 0.3))
+            for t in (rng.uniform(0.05, 3.0) for _ in range(rng.randint(0, 3)))
+        )
+    )
+    return Scenario(seed, ch, "\n".join(lines) + "\n", Schedule(steps, holds))
+
+
 def violations(sc: Scenario, snaps: list, records: list) -> list[str]:  # type: ignore[type-arg]
     """Every broken promise of a run, as text (empty: all good)."""
     ch = sc.channel
@@ -145,4 +231,4 @@ def replace_method(sc: Scenario, method: LiftMethod) -> Scenario:
     return dataclasses.replace(sc, channel=dataclasses.replace(sc.channel, lift_method=method))
 
 
-__all__ = ["Scenario", "describe", "math", "replace_method", "scenario", "violations"]
+__all__ = ["Scenario", "describe", "replace_method", "scenario", "violations", "wide_scenario"]

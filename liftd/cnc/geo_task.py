@@ -16,7 +16,7 @@ same inputs give bit-identical snapshots. Order within a cycle:
 from __future__ import annotations
 
 from liftd.cnc.geo_program import GeoProgram, PreparedPrograms
-from liftd.cnc.lift.controller import LiftController
+from liftd.cnc.lift.controller import LiftController, LiftRecord
 from liftd.cnc.lift.monitor import AccelMonitor
 from liftd.cnc.lift.ranges import LiftRange
 from liftd.cnc.params import ChannelParams, LiftMethod, MSync
@@ -28,6 +28,8 @@ from liftd.cnc.snapshot import ChannelState, Command, Event, GeoInputs, GeoSnaps
 INF = float("inf")
 MIN_LIFT_OVERRIDE = 0.01  # below this, the path waits for Z at the lift's horizon instead
 OVERRIDE_TRIALS = 6  # lower-bound evaluations to find the highest override Z still allows
+LANDING_TOL = 1e-6  # m: Z counts as at POS when the path passes LIFT_END (1 µm)
+LIFT_LATE_ID = 990030  # liftd's own: the path passed LIFT_END with Z not at POS (never expected)
 ACK_SYNCS = (MSync.MVS_SVS, MSync.MVS_SNS, MSync.MNS_SNS, MSync.MNE_SNS)
 
 
@@ -271,6 +273,7 @@ class GeoTask:
         self.ov_eff = self._limit_override(self.ov_req, holding)
         self.was_holding = holding
         self.interp.set_inputs(self.ov_eff, holding)
+        self.interp.nominal_step(t, self.ov_req, holding)
         if self.state is ChannelState.ACTIVE:
             self._run_path(t)
         if self.lift.current is not None:
@@ -313,10 +316,16 @@ class GeoTask:
                 if not self._work_waiting(t):
                     return
                 k = self.interp.stopped_at
+                rested = self.interp.t_state
                 self.interp.resume(self.wait_since)
                 rng = self.lift.current
+                rec = self.lift.record
                 if rng is not None and rng.k_start < k and (rng.k_end < 0 or k < rng.k_end):
                     self.lift.resume_in_range(self.wait_since)
+                    if rec is not None and k not in self.interp.lift_stops:
+                        rec.waits += self.wait_since - rested
+                elif rng is not None and rec is not None and k == rng.k_start:
+                    self._departure(rec, self.wait_since, None)
             for crossing in self.interp.advance(t):
                 self._cross(crossing)
             if self.interp.stopped_at is None or self.state is not ChannelState.ACTIVE:
@@ -388,6 +397,9 @@ class GeoTask:
         if self.lift.coupled is not None:
             s = self.prog.path.boundaries[rng.k_start].s
             self.lift.couple(t_at, s, crossing.v if crossing else 0.0, 0.0)
+        rec = self.lift.record
+        if rec is not None and crossing is not None:  # passing: the path leaves at once
+            self._departure(rec, t_at, crossing)
         self._emit(
             "lift.start",
             t_at,
@@ -395,6 +407,15 @@ class GeoTask:
             rng.start.target,
             "suppressed" if rng.suppressed else "",
         )
+
+    def _departure(self, rec: LiftRecord, t: float, crossing: Crossing | None) -> None:
+        """The path leaves the start of the lift range: the nominal run starts with it."""
+        rng = rec.range
+        rec.departure = t
+        if rng.k_end > rng.k_start:
+            b = self.prog.path.boundaries[rng.k_start]
+            v, a = (crossing.v, crossing.a) if crossing is not None else (0.0, 0.0)
+            self.interp.nominal_start(self.prog.nominal, rng.k_end, t, b.s, v, a, rng.k_start)
 
     def _lift_end(self, action: Action, t_at: float, crossing: Crossing | None, now: float) -> bool:
         lift = self.lift
@@ -407,13 +428,18 @@ class GeoTask:
             lift.step(t_at, t_at - lift.t, self.ov_eff)  # Z to the time the path got here
         if crossing is None and not lift.z_done:
             lift.step(now, 0.0, self.ov_eff)  # the path waits here for Z
-            if not self._z_landed():
+            if not self._z_landed():  # (a call: mypy keeps the narrowing of lift.z_done)
                 return False
             t_at = self.wait_since = max(t_at, lift.landed)
-        if not lift.z_done:
-            # Should not happen (the path is limited so Z makes it); Z finishes its move while
-            # the path goes on, and the event says by how much it was late.
-            self._emit("lift.late", t_at, action.line, lift.needed_time())
+        rec = lift.record
+        error = abs(lift.z - lift.current.start.target)
+        if not lift.z_done or error > LANDING_TOL:
+            # Never expected (the path is limited and waits so that Z makes it): the path passes
+            # LIFT_END with Z not at POS. Reported as it is: the error is |Z − POS| now.
+            if rec is not None:
+                rec.arrival_error, rec.late = error, True
+            self._emit("lift.late", t_at, action.line, error,
+                       f"Z {error * 1e3:.6f} mm from POS when the path passed LIFT_END")  # fmt: skip
             lift.ending = True
             return True
         self._close_lift(t_at, action.line)
@@ -423,11 +449,19 @@ class GeoTask:
         return self.lift.z_done
 
     def _close_lift(self, t: float, line: int) -> None:
-        if self.lift.current is not None:
-            self.interp.drop_lift_stop(self.lift.current.k_end)
+        rng = self.lift.current
+        if rng is not None:
+            self.interp.drop_lift_stop(rng.k_end)
         rec = self.lift.finish(t)
         if rec is not None:
-            rec.path_delay = max(0.0, rec.t_end - rec.t_start - rec.nominal_time)
+            nominal = self.interp.nominal_arrival
+            start = rec.departure if rec.departure is not None else rec.t_start
+            if rng is not None and rng.k_end > rng.k_start and nominal is not None:
+                rec.nominal_time = nominal - start
+                rec.path_delay = max(0.0, rec.t_end - start - rec.waits - rec.nominal_time)
+            else:  # no path motion: all the time is the path waiting for Z
+                rec.path_delay = max(0.0, rec.t_end - rec.t_start - rec.waits)
+            self.interp.nominal_stop()
             self._emit("lift.end", rec.t_end, line, rec.peak)
 
     def _snapshot(self, t: float, inputs: GeoInputs, positions: tuple[float, ...]) -> GeoSnapshot:

@@ -10,13 +10,14 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Any, TextIO
 
 import numpy as np
 
-from liftd.cnc.geo_task import GeoTask
+from liftd.cnc.geo_task import LIFT_LATE_ID, GeoTask
 from liftd.cnc.lift.controller import LiftRecord
 from liftd.cnc.params import ChannelParams, LiftMethod
 from liftd.cnc.plc import Schedule, SimPlc
@@ -73,16 +74,66 @@ def channel_for(ch: ChannelParams, method: str) -> ChannelParams:
     return dataclasses.replace(ch, lift_method=LiftMethod(method))
 
 
+class StepTimer:
+    """CPU time of `GeoTask.step` (thread CPU clock, as the GEO process sees it): a histogram
+    of 1 µs buckets up to 10 ms and the exact maximum, constant memory."""
+
+    BUCKETS = 10_000
+
+    def __init__(self) -> None:
+        self.counts = [0] * (self.BUCKETS + 1)
+        self.n = 0
+        self.max_ns = 0
+
+    def add(self, ns: int) -> None:
+        self.n += 1
+        self.max_ns = max(self.max_ns, ns)
+        us = ns // 1000
+        self.counts[us if us < self.BUCKETS else self.BUCKETS] += 1
+
+    def percentile(self, q: float) -> float:
+        """The q-quantile in µs (upper edge of its 1 µs bucket)."""
+        if self.n == 0:
+            return 0.0
+        rank = q * self.n
+        seen = 0
+        for us, c in enumerate(self.counts):
+            seen += c
+            if seen >= rank:
+                return float(min(us + 1, self.max_ns / 1e3))
+        return self.max_ns / 1e3
+
+    def summary(self) -> dict[str, float]:
+        return {
+            "p50": self.percentile(0.5),
+            "p99": self.percentile(0.99),
+            "p999": self.percentile(0.999),
+            "max": round(self.max_ns / 1e3, 1),
+        }
+
+
 def run_cycles(
-    task: GeoTask, plc: SimPlc, schedule: Schedule, dt: float, max_time: float
+    task: GeoTask,
+    plc: SimPlc,
+    schedule: Schedule,
+    dt: float,
+    max_time: float,
+    timer: StepTimer | None = None,
 ) -> Iterator[GeoSnapshot]:
     last: GeoSnapshot | None = None
     k = 0
     limit = round(max_time / dt)
+    clock = time.thread_time_ns
     while k < limit:
         k += 1
         t = k * dt
-        snap = task.step(plc.inputs(last, t, schedule), t)
+        inputs = plc.inputs(last, t, schedule)
+        if timer is not None:
+            c0 = clock()
+            snap = task.step(inputs, t)
+            timer.add(clock() - c0)
+        else:
+            snap = task.step(inputs, t)
         yield snap
         last = snap
         if snap.state in (ChannelState.READY, ChannelState.ERROR) and task.runs:
@@ -107,7 +158,8 @@ def simulate(
     errors: list[dict[str, Any]] = []
     snap: GeoSnapshot | None = None
     cycles = 0
-    for snap in run_cycles(task, plc, schedule, dt, max_time):
+    timer = StepTimer()
+    for snap in run_cycles(task, plc, schedule, dt, max_time, timer):
         cycles += 1
         if writer is not None:
             writer.write(snap)
@@ -129,11 +181,15 @@ def simulate(
         for ev in snap.events:
             if ev.name == "geo.error":
                 errors.append({"id": int(ev.value), "line": ev.line, "message": ev.text})
+            elif ev.name == "lift.late":
+                errors.append({"id": LIFT_LATE_ID, "line": ev.line, "message": ev.text})
     if writer is not None:
         writer.flush()
     finished = snap is not None and snap.state in (ChannelState.READY, ChannelState.ERROR)
     summary = build_summary(ch, task, monitor, cycles, snap.t if snap else 0.0, errors)
-    return SimResult(summary, series, list(task.lift.records), bool(errors), finished)
+    summary["step_cpu_us"] = timer.summary()
+    program_error = any(e["id"] != LIFT_LATE_ID for e in errors)
+    return SimResult(summary, series, list(task.lift.records), program_error, finished)
 
 
 def lift_summary(rec: LiftRecord, method: LiftMethod) -> dict[str, Any]:

@@ -94,6 +94,7 @@ def test_summary_schema(demo_run: tuple[dict, list[list[str]], Path]) -> None:
         "limits",
         "z_overload",
         "errors",
+        "step_cpu_us",
     }
     assert summary["method"] == "advanced" and summary["errors"] == []
     assert len(summary["lifts"]) == 5

@@ -47,6 +47,9 @@ class LiftRecord:
     arrival_error: float = 0.0
     path_delay: float = 0.0
     nominal_time: float = 0.0  # path time without the lift's limits (for path_delay_s)
+    departure: float | None = None  # the path leaves the range's start (after a wait there)
+    waits: float = 0.0  # time the path waited inside the range for other reasons than Z
+    late: bool = False  # the path passed LIFT_END with Z not at POS (arrival_error > 0)
     z_a_max_ratio: float = 0.0  # largest sampled |Z acceleration| / a_max during the lift
     premature: bool = False  # path-based: look-ahead overflow, lifted early
 
@@ -135,7 +138,8 @@ class LiftController:
         rec = self.record
         if rec is not None:
             rec.t_end = t
-            rec.arrival_error = abs(self.z - rec.range.start.target)
+            if not rec.late:  # else measured when the path passed LIFT_END
+                rec.arrival_error = abs(self.z - rec.range.start.target)
             self.records.append(rec)
         self.current = None
         self.record = None

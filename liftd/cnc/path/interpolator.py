@@ -79,6 +79,13 @@ class Interpolator:
         self.parked = False
         self.override = 1.0
         self.hold = False
+        # the nominal run of a lift range: the same path without any lift's limits, under the
+        # override the PLC requests (path_delay_s); waits at stops count as zero
+        self.nominal_table = table
+        self._shadow: Tracker | None = None
+        self._shadow_target = -1
+        self.nominal_arrival: float | None = None
+        self.nominal_override = 1.0
 
     # -- errors of the producer (never expected; counted for the summary and events) ----------
     @property
@@ -193,6 +200,40 @@ class Interpolator:
         budget = self.fill_per_cycle if quota is None else quota
         while budget > 0 and len(self.queue) < self.lead and self._produce():
             budget -= 1
+
+    # -- the nominal run of a lift range (path_delay_s) ------------------------------------------
+    def nominal_start(
+        self, table: PathTable, target: int, t: float, s: float, v: float, a: float, seg: int
+    ) -> None:
+        """Start the nominal run toward boundary `target` from the given state (the path
+        leaving the range's start)."""
+        sh = self._shadow
+        if sh is None or sh.tb is not table:
+            sh = self._shadow = Tracker(table, self.prod.look_ahead, set(), self.acked_conditional)
+        sh.set_inputs(self.nominal_override, self.hold)
+        sh.set_state(t, s, v, a, seg, None)
+        self._shadow_target = target
+        self.nominal_arrival = t if seg >= target else None
+
+    def nominal_step(self, t: float, override: float, hold: bool) -> None:
+        """Advance the nominal run to t with the requested override and feed hold."""
+        sh = self._shadow
+        self.nominal_override = override
+        if sh is None or self.nominal_arrival is not None or self._shadow_target < 0:
+            return
+        sh.set_inputs(override, hold)
+        for _ in range(1000):  # bounded: every pass ends at t or at a stop it passes at once
+            for c in sh.advance(t, self.dt):
+                if c.boundary >= self._shadow_target:
+                    self.nominal_arrival = c.t
+                    return
+            if sh.stopped_at is None or sh.stopped_at >= sh.tb.n:
+                return
+            sh.resume(sh.t)  # waits do not count in the nominal run
+
+    def nominal_stop(self) -> None:
+        self._shadow_target = -1
+        self.nominal_arrival = None
 
     # -- queries ---------------------------------------------------------------------------------
     def arrival(self, k: int) -> float:

@@ -201,10 +201,16 @@ class _Builder:
 def _is_stop(actions: list[Action]) -> bool:
     if any(a.kind in _STOPPING for a in actions):
         return True
-    # a lift range without path motion (start and end on one boundary): the path waits for Z
-    return any(a.kind is ActionKind.LIFT_START for a in actions) and any(
-        a.kind is ActionKind.LIFT_END for a in actions
-    )
+    # a lift range without path motion (its start and its end on one boundary): the path waits
+    # for Z. One range ending where the next starts (LIFT_END, then LIFT_START) is no reason to
+    # stop: the path goes on and each range lands at its own POS (vendor §3, single-block LIFT).
+    started = False
+    for a in actions:
+        if a.kind is ActionKind.LIFT_START:
+            started = True
+        elif a.kind is ActionKind.LIFT_END and started:
+            return True
+    return False
 
 
 def prepare(blocks: tuple[Block, ...], ch: ChannelParams, start: Vec) -> PathProgram:
