@@ -28,7 +28,7 @@ sys.path.insert(0, str(ROOT))
 from bench import load  # noqa: E402
 from bench.bench_ads import RT_OFF, RT_ON  # noqa: E402
 from liftd.service.daemon import rss_mb  # noqa: E402
-from tests.daemon_helper import Daemon, Notify, write_config  # noqa: E402
+from tests.support.daemon import Daemon, Notify, write_config  # noqa: E402
 
 
 def geo_pid(daemon_pid: int) -> int | None:

@@ -17,7 +17,7 @@ import pyads
 import pytest
 
 from bench.gen import nesting_program
-from tests.daemon_helper import Daemon, Notify, write_config
+from tests.support.daemon import Daemon, Notify, write_config
 
 pytestmark = pytest.mark.integration
 

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.daemon_helper import Daemon, write_config
+from tests.support.daemon import Daemon, write_config
 
 pytestmark = pytest.mark.integration
 
