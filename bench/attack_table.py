@@ -13,7 +13,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from liftd.service.daemon import rss_mb  # noqa: E402
+from liftd.runtime.geo_process import rss_mb  # noqa: E402
 from tests.support.attacks import ATTACK_ADS, CASES, probe_ms  # noqa: E402
 from tests.support.daemon import Daemon, write_config  # noqa: E402
 

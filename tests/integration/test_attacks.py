@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from liftd.service.daemon import rss_mb
+from liftd.runtime.geo_process import rss_mb
 from tests.support.attacks import ATTACK_ADS, CASES, Case, probe_ms
 from tests.support.daemon import Daemon, write_config
 
