@@ -71,10 +71,14 @@ class Notify:
 
 
 class Daemon:
-    def __init__(self, config: Path, *args: str, env: dict[str, str] | None = None) -> None:
+    def __init__(
+        self, config: Path, *args: str, env: dict[str, str] | None = None,
+        wrapper: list[str] | None = None,
+    ) -> None:  # fmt: skip
+        """`wrapper`: a command that execs the rest (e.g. to set a process attribute first)."""
         full_env = {**os.environ, "PYTHONUNBUFFERED": "1", **(env or {})}
         self.proc = subprocess.Popen(
-            [sys.executable, "-m", "liftd", "run", "-c", str(config), *args],
+            [*(wrapper or []), sys.executable, "-m", "liftd", "run", "-c", str(config), *args],
             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=full_env,
         )  # fmt: skip
         self.logs: list[dict[str, Any]] = []
