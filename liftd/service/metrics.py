@@ -64,27 +64,25 @@ class LiftdCollector(Collector):
 
     def collect(self) -> Iterator[Metric]:
         s = self.sample()
-        t = s.totals
-        yield CounterMetricFamily("liftd_geo_cycles", "GEO cycles computed", t.cycles)
-        yield CounterMetricFamily(
-            "liftd_geo_exceeded",
-            "GEO cycles that finished after the start of the next one (TwinCAT exceed counter)",
-            t.exceeded,
-        )
-        yield CounterMetricFamily(
-            "liftd_geo_compute_over_25pct",
-            "GEO cycles whose compute took more than 25 % of the cycle time",
-            t.compute_over,
-        )
-        yield CounterMetricFamily(
-            "liftd_geo_regridded", "wall-clock GEO ticks skipped after a stall", t.regridded
-        )
-        yield CounterMetricFamily(
-            "liftd_geo_events_dropped", "GEO events dropped (event pipe full)", t.events_dropped
-        )
+        t, a = s.totals, s.ads
+        for name, text, value in (
+            ("geo_cycles", "GEO cycles computed", t.cycles),
+            ("geo_exceeded", "GEO cycles that finished after the start of the next one "
+             "(TwinCAT exceed counter)", t.exceeded),
+            ("geo_compute_over_25pct", "GEO cycles whose compute took more than 25 % of the "
+             "cycle time", t.compute_over),
+            ("geo_regridded", "wall-clock GEO ticks skipped after a stall", t.regridded),
+            ("geo_events_dropped", "GEO events dropped (event pipe full)", t.events_dropped),
+            ("ads_requests", "ADS requests answered", a.requests),
+            ("ads_errors", "ADS connections closed for protocol errors and requests answered "
+             "0x700", a.errors),
+            ("ads_notifications", "ADS device notification frames sent", a.notifications),
+        ):  # fmt: skip
+            yield CounterMetricFamily(f"liftd_{name}", text, value)
         yield GaugeMetricFamily(
             "liftd_geo_running", "1 while the GEO loop cycles and ADS serves", int(s.geo_running)
         )
+        yield GaugeMetricFamily("liftd_ads_connections", "open ADS connections", a.connections)
         for name, hist, total_ns, what in (
             ("lateness", s.lateness_hist, t.lateness_sum_ns, "wake-up lateness"),
             ("compute", s.compute_hist, t.compute_sum_ns, "compute time"),
@@ -93,17 +91,6 @@ class LiftdCollector(Collector):
                 f"liftd_geo_{name}_seconds", f"GEO cycle {what}", buckets=buckets(hist),
                 sum_value=total_ns / 1e9,
             )  # fmt: skip
-        a = s.ads
-        yield GaugeMetricFamily("liftd_ads_connections", "open ADS connections", a.connections)
-        yield CounterMetricFamily("liftd_ads_requests", "ADS requests answered", a.requests)
-        yield CounterMetricFamily(
-            "liftd_ads_errors",
-            "ADS connections closed for protocol errors and requests answered 0x700",
-            a.errors,
-        )
-        yield CounterMetricFamily(
-            "liftd_ads_notifications", "ADS device notification frames sent", a.notifications
-        )
 
 
 def registry(sample: Callable[[], Sample], geo_pid: Callable[[], int | None]) -> CollectorRegistry:

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.support.daemon import Daemon, Notify, write_config
+from tests.support.daemon import Daemon, Notify, free_port, write_config
 from tests.support.paths import REPO
 
 pytestmark = pytest.mark.integration
@@ -248,9 +248,7 @@ def test_geo_timing_reports_compute_max_and_the_cycles_over_a_quarter(tmp_path: 
 def test_prometheus_exposition_has_help_fixed_buckets_sums_and_process_metrics(
     tmp_path: Path,
 ) -> None:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port = s.getsockname()[1]
+    port = free_port()
     d = Daemon(write_config(tmp_path, metrics={"prometheus_port": port}))
     try:
         d.ready()

@@ -4,6 +4,7 @@ driver of `liftd simulate` (`run_cycles`), and measure what it did."""
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
@@ -16,16 +17,9 @@ from liftd.sim.simulate import run_cycles
 InputFn = Callable[[float, GeoSnapshot | None], GeoInputs]
 
 
-def run(
-    ch: ChannelParams,
-    text: str,
-    schedule: Schedule | None = None,
-    ack_delay: float = 0.02,
-    max_time: float = 120.0,
-    inputs: InputFn | None = None,
-) -> list[GeoSnapshot]:
-    """Run a program to its end; the simulated PLC acknowledges M functions after ack_delay."""
-    return run_task(ch, text, schedule, ack_delay, max_time, inputs)[1]
+def run(ch: ChannelParams, text: str, *args: Any, **kw: Any) -> list[GeoSnapshot]:
+    """Run a program to its end (run_task's arguments); the snapshots only."""
+    return run_task(ch, text, *args, **kw)[1]
 
 
 def run_task(

@@ -48,6 +48,13 @@ def write_config(tmp: Path, *, program_file: str | None = None, **sections: dict
     return path
 
 
+def free_port() -> int:
+    """A TCP port on loopback that nobody listens on right now."""
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
 class Notify:
     """A datagram socket in tmp standing in for systemd's notification socket."""
 
