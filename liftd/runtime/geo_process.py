@@ -4,7 +4,8 @@ events on, notice when it dies or stalls, hand over a reload, stop it and summar
 
 This is the daemon's only seam to the real-time side. It runs in the daemon's event loop but
 logs nothing itself: events go to `on_event`, failures are returned by `supervise()`, the
-summary is a value. The shared block's name is removed as soon as the child holds its
+summary is a value. What it publishes each cycle the daemon reads from
+the shared block itself. The block's name is removed as soon as the child holds its
 descriptor, so nothing is left in /dev/shm whichever process ends first, or how.
 """
 
@@ -18,7 +19,7 @@ import time
 from collections.abc import Callable
 from typing import NamedTuple
 
-from liftd.cnc.snapshot import Event, GeoSnapshot, LoopStats
+from liftd.cnc.snapshot import Event, LoopStats
 from liftd.runtime.cycle import percentile_us
 from liftd.runtime.geo_loop import LoopConfig
 from liftd.runtime.records import EventReader, pack_message
@@ -106,7 +107,6 @@ class GeoProcess:
         self._control_fd = -1
         self._events_fd = -1
         self._reader = EventReader()
-        self._latest: tuple[int, tuple[GeoSnapshot, LoopStats]] | None = None
         self._watched = (-1, -1)
         self._rss_mb: float | None = None
 
@@ -162,16 +162,6 @@ class GeoProcess:
             self.on_event(ev)
 
     # -- what the daemon serves -------------------------------------------------------------------
-    def latest(self) -> tuple[int, tuple[GeoSnapshot, LoopStats]] | None:
-        """(sequence, the last published cycle and the loop's timing), None while not serving.
-        The same tuple object is returned until the loop publishes again."""
-        if not self.alive:
-            return None
-        seq = self.shared.snapshot.sequence
-        if self._latest is None or self._latest[0] != seq:
-            self._latest = (seq, self.shared.codec.unpack(self.shared.snapshot.read()))
-        return self._latest
-
     def advancing(self) -> bool:
         """Has the loop cycled since the last call (or is it preparing a program)? The
         condition for systemd's WATCHDOG=1 and the container heartbeat."""

@@ -11,9 +11,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import NamedTuple
 
-from liftd.cnc.snapshot import PlcWrite
 from liftd.runtime.cycle import BUCKETS
-from liftd.runtime.records import INPUT, SnapshotCodec, pack_input
+from liftd.runtime.records import INPUT, SnapshotCodec
 from liftd.runtime.shm import Block, Ring, Seqlock
 
 # word indices; daemon → loop:
@@ -98,10 +97,6 @@ class Shared:
         return cls(spec.n_axes, spec.trace_capacity, fd=fd)
 
     # -- the daemon's side ------------------------------------------------------------------------
-    def submit(self, w: PlcWrite) -> bool:
-        """Queue one PLC write for the loop; False when the queue is full."""
-        return self.inputs.put(pack_input(w))
-
     def request_stop(self) -> None:
         self.words[STOP] = 1
 

@@ -37,6 +37,7 @@ from liftd.objects.catalog import AdsStats, Catalog, GeoView
 from liftd.objects.provider import CncProvider
 from liftd.runtime.geo_loop import LoopConfig
 from liftd.runtime.geo_process import GeoFailure, GeoGone, GeoProcess, GeoStartError, rss_mb
+from liftd.runtime.records import pack_input
 from liftd.runtime.rt import RtRequest
 from liftd.runtime.shared import Shared
 from liftd.service import control, systemd
@@ -103,7 +104,7 @@ class Daemon:
         except BaseException:
             self.shared.close()
             raise
-        self._view_cache: tuple[object, GeoView | None] = (None, None)
+        self._view_cache: tuple[int, GeoView | None] = (-1, None)
         self._reload_lock = asyncio.Lock()
         self._trace: TraceRecorder | None = None
         self._servers: list[asyncio.Server] = []
@@ -111,12 +112,14 @@ class Daemon:
 
     # -- what the ADS provider sees -------------------------------------------------------------
     def _view(self) -> GeoView | None:
-        latest = self.geo.latest()
-        if latest is None:
+        """The provider's source: the last published cycle (unpacked once per cycle) with the
+        ADS server's counters; None while the GEO process does not serve."""
+        if not self.geo.alive:
             return None
-        if latest is not self._view_cache[0]:  # a new cycle: rebuild the view once
-            snap, stats = latest[1]
-            self._view_cache = (latest, GeoView(snap, stats, self._ads_stats()))
+        seq = self.shared.snapshot.sequence
+        if seq != self._view_cache[0]:
+            snap, stats = self.shared.codec.unpack(self.shared.snapshot.read())
+            self._view_cache = (seq, GeoView(snap, stats, self._ads_stats()))
         return self._view_cache[1]
 
     def _ads_stats(self) -> AdsStats:
@@ -125,7 +128,7 @@ class Daemon:
                         c.closed_for_errors + c.internal_errors, c.notifications_sent)  # fmt: skip
 
     def _submit(self, w: PlcWrite) -> None:
-        if not self.shared.submit(w):
+        if not self.shared.inputs.put(pack_input(w)):
             raise AdsError(AdsErr.BUSY, "the GEO input queue is full")
 
     # -- run --------------------------------------------------------------------------------------
