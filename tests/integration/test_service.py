@@ -129,7 +129,7 @@ def test_reload_fails_for_a_rejected_configuration_and_succeeds_when_applied(
     d = Daemon(cfg, env=env)
     try:
         d.ready()
-        notify.drain()
+        started = len(notify.drain())  # READY=1 of the start
         good = cfg.read_text()
         cfg.write_text(good.replace("[cnc]", "[cnc]\nbogus_key = 1"))
         t_before_us = time.clock_gettime_ns(time.CLOCK_MONOTONIC) // 1000
@@ -142,10 +142,10 @@ def test_reload_fails_for_a_rejected_configuration_and_succeeds_when_applied(
         d.signal(signal.SIGHUP)  # the signal still reloads, with the same notifications
         assert d.event("config.reload_accepted", 10) is not None
         deadline = time.monotonic() + 10
-        while len([m for m in notify.drain() if m.startswith("READY=1")]) < 3:
+        while len([m for m in notify.drain()[started:] if m.startswith("READY=1")]) < 3:
             assert time.monotonic() < deadline, notify.messages
             time.sleep(0.02)
-        msgs = [m for m in notify.messages if m.startswith(("RELOADING=1", "READY=1"))]
+        msgs = [m for m in notify.messages[started:] if m.startswith(("RELOADING=1", "READY=1"))]
         assert [m.split("\n")[0] for m in msgs] == ["RELOADING=1", "READY=1"] * 3
         stamp = int(re.search(r"MONOTONIC_USEC=(\d+)", msgs[0]).group(1))  # type: ignore[union-attr]
         assert t_before_us <= stamp <= t_before_us + 60_000_000  # CLOCK_MONOTONIC, µs
@@ -262,8 +262,9 @@ def test_prometheus_exposition_has_help_fixed_buckets_sums_and_process_metrics(
     names = set(re.findall(r"^# TYPE (\S+) ", body, re.M))
     helps = set(re.findall(r"^# HELP (\S+) ", body, re.M))
     assert names <= helps  # every metric explains itself
-    for name in ("liftd_geo_cycles", "liftd_geo_exceeded", "liftd_geo_compute_over_25pct",
-                 "liftd_ads_requests", "liftd_geo_compute_seconds", "liftd_geo_lateness_seconds",
+    for name in ("liftd_geo_cycles_total", "liftd_geo_exceeded_total",
+                 "liftd_geo_compute_over_25pct_total", "liftd_ads_requests_total",
+                 "liftd_geo_compute_seconds", "liftd_geo_lateness_seconds",
                  "process_resident_memory_bytes", "liftd_geo_process_resident_memory_bytes"):  # fmt: skip
         assert name in names, name
     buckets = [re.findall(r'liftd_geo_compute_seconds_bucket\{le="([^"]+)"\}', b) for b in scrapes]
