@@ -197,7 +197,10 @@ def main(control_fd: int, events_fd: int, shm_fd: int) -> bool:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is for the daemon; it stops the loop
     rt.die_with_parent()
     events = _Events(events_fd)
-    spec, cfg = read_message(control_fd)
+    try:
+        spec, cfg = read_message(control_fd)
+    except EOFError:  # the daemon died before it sent the configuration
+        return False
     assert isinstance(spec, SharedSpec) and isinstance(cfg, LoopConfig)
     shared = Shared.attach(spec, shm_fd)
     ok = True

@@ -89,6 +89,21 @@ def test_the_daemon_starts_with_each_optional_section_left_out(
     assert not shm_names(d.proc.pid)
 
 
+def test_an_unreadable_program_is_a_configuration_error_naming_file_line_key_value(
+    tmp_path: Path,
+) -> None:
+    cfg = write_config(tmp_path, program_file="programs/none.nc")
+    r = liftd("run", "-c", str(cfg))
+    line = next(i for i, text in enumerate(cfg.read_text().splitlines(), 1) if "none.nc" in text)
+    assert r.returncode == 2
+    assert f"{cfg}:{line}: program.file = 'programs/none.nc' error: cannot read the program" in (
+        r.stderr
+    )
+    assert "Traceback" not in r.stderr
+    missing = liftd("run", "-c", str(cfg), "--program", str(tmp_path / "gone.nc"))
+    assert missing.returncode == 2 and "gone.nc: error: cannot read program" in missing.stderr
+
+
 def test_without_a_program_the_daemon_idles_and_liftd_reload_brings_one(tmp_path: Path) -> None:
     """What a PLC integrator expects: the objects are served at once (READY), a program comes
     with the configuration, `systemctl reload` (liftd reload) applies it and says so."""
