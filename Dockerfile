@@ -5,35 +5,53 @@
 #     --read-only --tmpfs /tmp -v "$PWD/myconfig:/etc/liftd:ro" liftd
 # The host kernel decides real-time latency; the flags above only let the GEO loop ask for
 # SCHED_FIFO and mlockall as the non-root user (reference/rt-python.md §7).
+#
+# Reproducible: every Python package (and the build backend) is pinned in
+# docker/constraints.txt; pip is the base image's own, not upgraded. Pin the base image by
+# digest for bit-identical builds: --build-arg PYTHON_IMAGE=python:3.11-slim-bookworm@sha256:…
+ARG PYTHON_IMAGE=python:3.11-slim-bookworm
 
-FROM python:3.11-slim-bookworm AS build
-ENV PIP_NO_CACHE_DIR=1 PIP_DISABLE_PIP_VERSION_CHECK=1
+FROM ${PYTHON_IMAGE} AS build
+ENV PIP_NO_CACHE_DIR=1 PIP_DISABLE_PIP_VERSION_CHECK=1 \
+    PIP_CONSTRAINT=/src/docker/constraints.txt
 WORKDIR /src
 COPY pyproject.toml README.md ./
+COPY docker/constraints.txt ./docker/constraints.txt
 COPY liftd ./liftd
 COPY config ./config
 RUN python -m venv /opt/liftd \
- && /opt/liftd/bin/pip install --upgrade pip \
- && /opt/liftd/bin/pip install .
+ && /opt/liftd/bin/pip install --no-compile .
 
-FROM python:3.11-slim-bookworm
+FROM ${PYTHON_IMAGE}
+ARG VERSION=0.1.0
+LABEL org.opencontainers.image.title="liftd" \
+      org.opencontainers.image.description="Emulated TwinCAT 3 CNC GEO task (collision avoidance by lifting), served over ADS" \
+      org.opencontainers.image.version="${VERSION}" \
+      org.opencontainers.image.licenses="Apache-2.0" \
+      org.opencontainers.image.documentation="/usr/share/doc/liftd/README.md"
 ENV PATH=/opt/liftd/bin:$PATH \
     PYTHONUNBUFFERED=1 \
     OPENBLAS_NUM_THREADS=1 \
-    LIFTD_CONFIG=/etc/liftd/liftd.toml
+    LIFTD_CONFIG=/etc/liftd/liftd.toml \
+    LIFTD_HEARTBEAT=/tmp/liftd.heartbeat
 COPY --from=build /opt/liftd /opt/liftd
+COPY README.md /usr/share/doc/liftd/README.md
+COPY docs/architecture.md /usr/share/doc/liftd/architecture.md
 # The shipped lists and demo, with a configuration that listens on the container's addresses
-# and accepts private peer ranges (docker/liftd.toml).
+# and accepts private peer ranges (docker/liftd.toml). No VOLUME: mount your own /etc/liftd
+# (read-only) to replace it; an anonymous volume would hide the shipped one on every run.
 COPY config /etc/liftd
 COPY docker/liftd.toml /etc/liftd/liftd.toml
 RUN useradd --system --uid 10001 --no-create-home --shell /usr/sbin/nologin liftd \
  && mkdir -p /var/lib/liftd && chown liftd:liftd /var/lib/liftd
 USER 10001
-VOLUME ["/etc/liftd"]
 WORKDIR /var/lib/liftd
 EXPOSE 48898
 STOPSIGNAL SIGTERM
-HEALTHCHECK --interval=10s --timeout=5s --start-period=5s --retries=3 \
-  CMD ["liftd", "healthcheck"]
+# The daemon renews $LIFTD_HEARTBEAT every second while its GEO loop cycles (the condition of
+# systemd's WATCHDOG=1); healthy = renewed within 5 s. No Python start-up every 10 s;
+# `liftd healthcheck` probes over ADS from anywhere else.
+HEALTHCHECK --interval=10s --timeout=3s --start-period=10s --retries=3 \
+  CMD ["/bin/sh", "-c", "t=$(stat -c %Y \"$LIFTD_HEARTBEAT\") && test $(( $(date +%s) - t )) -le 5"]
 ENTRYPOINT ["liftd"]
 CMD ["run"]

@@ -1,4 +1,4 @@
-"""The attack cases of tests/attacks.py against a running daemon, one JSON line per case with
+"""The attack cases of tests/support/attacks.py against a running daemon, one JSON line per case with
 its outcome, the p99 latency of a normal client right after it, the GEO exceed count it caused
 and the daemon's RSS growth (the README table). Run: .venv/bin/python bench/attack_table.py
 """
@@ -13,9 +13,9 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from liftd.service.daemon import rss_mb  # noqa: E402
-from tests.attacks import ATTACK_ADS, CASES, probe_ms  # noqa: E402
-from tests.daemon_helper import Daemon, write_config  # noqa: E402
+from liftd.runtime.geo_process import rss_mb  # noqa: E402
+from tests.support.attacks import ATTACK_ADS, CASES, probe_ms  # noqa: E402
+from tests.support.daemon import Daemon, write_config  # noqa: E402
 
 
 def main() -> None:

@@ -30,7 +30,7 @@ sys.path.insert(0, str(ROOT))
 from bench import load  # noqa: E402
 from liftd.ads.client import RawClient  # noqa: E402
 from liftd.ads.wire import net_id_bytes  # noqa: E402
-from tests.daemon_helper import Daemon, write_config  # noqa: E402
+from tests.support.daemon import Daemon, write_config  # noqa: E402
 
 LIFT = (0x121301, 0x30095)
 # the IG/IO objects of channel 1 (lift status of X, Y, Z; path velocity objects)

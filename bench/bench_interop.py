@@ -42,7 +42,7 @@ sys.path.insert(0, str(ROOT))
 from bench import load  # noqa: E402
 from liftd.ads.client import RawClient  # noqa: E402
 from liftd.ads.wire import net_id_bytes  # noqa: E402
-from tests.daemon_helper import Daemon, Notify, write_config  # noqa: E402
+from tests.support.daemon import Daemon, Notify, write_config  # noqa: E402
 
 NODE_DIR = ROOT / "tests" / "interop" / "node"
 TESTSERVER = """

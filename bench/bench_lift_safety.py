@@ -22,7 +22,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from bench.stress_cases import describe, scenario, violations
 from liftd.cnc.params import LiftMethod
-from tests.helpers import run_task
+from tests.support.closed_loop import run_task
 
 
 def main() -> None:

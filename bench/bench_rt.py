@@ -27,15 +27,14 @@ sys.path.insert(0, str(ROOT))
 
 from bench import load  # noqa: E402
 from bench.bench_ads import RT_OFF, RT_ON  # noqa: E402
-from liftd.service.daemon import rss_mb  # noqa: E402
-from tests.daemon_helper import Daemon, Notify, write_config  # noqa: E402
+from liftd.runtime.geo_process import rss_mb  # noqa: E402
+from tests.support.daemon import Daemon, Notify, write_config  # noqa: E402
 
 
 def geo_pid(daemon_pid: int) -> int | None:
-    out = subprocess.run(["pgrep", "-P", str(daemon_pid), "-f", "spawn_main"],
+    out = subprocess.run(["pgrep", "-P", str(daemon_pid), "-f", "liftd.runtime"],
                          capture_output=True, text=True, check=False).stdout.split()  # fmt: skip
-    pids = [int(p) for p in out]
-    return max(pids, key=lambda p: rss_mb(p) or 0.0) if pids else None  # the loop, not the tracker
+    return int(out[0]) if out else None
 
 
 def one_run(minutes: float, rt: bool, pollers: int = 4, notifiers: int = 1,

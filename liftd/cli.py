@@ -1,5 +1,6 @@
-"""Command line (DESIGN.md §3.1). The only place that maps errors to exit codes:
-0 ok, 1 NC program error, 2 configuration error, 3 runtime failure."""
+"""Command line (DESIGN.md §3.1). The only place that maps outcomes to exit codes:
+0 ok, 1 NC program error, 2 configuration error, 3 runtime failure (`healthcheck`: 1 unhealthy).
+A configuration or schedule error raised by any command is printed once, in `main`."""
 
 from __future__ import annotations
 
@@ -23,11 +24,7 @@ EXIT_OK = 0
 EXIT_PROGRAM = 1
 EXIT_CONFIG = 2
 EXIT_RUNTIME = 3
-
-
-def _print_config_error(err: ConfigError) -> None:
-    for problem in err.problems:
-        print(problem, file=sys.stderr)
+EXIT_UNHEALTHY = 1  # healthcheck: the Docker HEALTHCHECK convention
 
 
 def _load(args: argparse.Namespace, program: str | None = None) -> Settings:
@@ -35,6 +32,16 @@ def _load(args: argparse.Namespace, program: str | None = None) -> Settings:
     for warning in settings.warnings:
         print(warning, file=sys.stderr)
     return settings
+
+
+def _schedule(args: argparse.Namespace) -> Schedule:
+    """--override / --feedhold as a schedule; raises SpecError (exit 2)."""
+    from liftd.cnc.plc import Schedule, parse_feedhold_spec, parse_override_spec  # noqa: PLC0415
+
+    return Schedule(
+        tuple(parse_override_spec(args.override or "")),
+        tuple(parse_feedhold_spec(args.feedhold or "")),
+    )
 
 
 def check_program(settings: Settings, path: Path) -> int:
@@ -58,11 +65,7 @@ def check_program(settings: Settings, path: Path) -> int:
 
 
 def cmd_check(args: argparse.Namespace) -> int:
-    try:
-        settings = _load(args)
-    except ConfigError as err:
-        _print_config_error(err)
-        return EXIT_CONFIG
+    settings = _load(args)
     ch = settings.channel
     axes = " ".join(ax.name for ax in ch.axes)
     print(
@@ -78,33 +81,16 @@ def cmd_check(args: argparse.Namespace) -> int:
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
-    from liftd.cnc.plc import (  # noqa: PLC0415
-        Schedule,
-        SpecError,
-        parse_feedhold_spec,
-        parse_override_spec,
-    )
     from liftd.sim import plot  # noqa: PLC0415
 
-    try:
-        schedule = Schedule(
-            tuple(parse_override_spec(args.override or "")),
-            tuple(parse_feedhold_spec(args.feedhold or "")),
-        )
-    except SpecError as exc:
-        print(f"liftd simulate: {exc}", file=sys.stderr)
-        return EXIT_CONFIG
+    schedule = _schedule(args)
     if args.compare and args.method != "config":
         print("liftd simulate: --compare runs both methods; drop --method", file=sys.stderr)
         return EXIT_CONFIG
     if args.plot and not plot.available():
         print(f"liftd simulate: --plot: {plot.HINT}", file=sys.stderr)
         return EXIT_RUNTIME
-    try:
-        settings = _load(args)
-    except ConfigError as err:
-        _print_config_error(err)
-        return EXIT_CONFIG
+    settings = _load(args)
     program = Path(args.program)
     try:
         text = program.read_text(encoding="utf-8", errors="replace")
@@ -211,34 +197,45 @@ def _compare(
 
 
 def cmd_run(args: argparse.Namespace) -> int:
-    """The real-time daemon: GEO loop process + ADS server (liftd/daemon.py)."""
+    """The real-time daemon: GEO loop process + ADS server (liftd/service/daemon.py)."""
     from liftd.service import daemon, logs  # noqa: PLC0415
+    from liftd.settings.load import program_problem  # noqa: PLC0415
 
-    try:
-        settings = _load(args, args.program)
-    except ConfigError as err:
-        _print_config_error(err)
-        return EXIT_CONFIG
-    if args.program and not Path(args.program).is_file():
-        print(f"{args.program}: error: cannot read program", file=sys.stderr)
-        return EXIT_CONFIG
+    settings = _load(args, args.program)
+    problem = program_problem(settings, args.program)
+    if problem is not None:
+        raise ConfigError([problem])
     log = settings.config.log
     logs.configure(log.level, log.format, log.queue_lines)
     if args.duration is not None and args.duration <= 0:
         print(f"--duration: must be > 0 seconds, got {args.duration}", file=sys.stderr)
         return EXIT_CONFIG
-    return daemon.run(settings, args.config, args.program, args.trace, args.duration)
+    ok = daemon.run(settings, args.config, args.program, args.trace, args.duration)
+    return EXIT_OK if ok else EXIT_RUNTIME
+
+
+def cmd_reload(args: argparse.Namespace) -> int:
+    """Ask the running daemon to reload and wait for its verdict (systemd's ExecReload)."""
+    from liftd.service import control  # noqa: PLC0415
+
+    path = control.socket_path(explicit=args.socket) or Path(
+        control.DEFAULT_RUNTIME_DIRECTORY, control.SOCKET_NAME
+    )
+    try:
+        verdict = control.request_reload(path, args.timeout)
+    except OSError as exc:
+        print(f"liftd reload: no answer on {path}: {exc}", file=sys.stderr)
+        return EXIT_RUNTIME
+    print(f"liftd reload: {'applied' if verdict.applied else 'rejected'}: {verdict.detail}",
+          file=sys.stdout if verdict.applied else sys.stderr)  # fmt: skip
+    return EXIT_OK if verdict.applied else EXIT_CONFIG
 
 
 def cmd_objects(args: argparse.Namespace) -> int:
     """Print the CNC object catalogue of the GEO port (what a PLC can read and write)."""
     from liftd.objects.catalog import Catalog  # noqa: PLC0415
 
-    try:
-        settings = _load(args)
-    except ConfigError as err:
-        _print_config_error(err)
-        return EXIT_CONFIG
+    settings = _load(args)
     ads = settings.config.ads
     catalog = Catalog(settings.channel)
     if args.json:
@@ -264,26 +261,13 @@ def cmd_objects(args: argparse.Namespace) -> int:
 def cmd_plc(args: argparse.Namespace) -> int:
     """A simulated PLC polling the lift status over ADS (liftd/plc.py)."""
     from liftd.clients import plc  # noqa: PLC0415
-    from liftd.cnc.plc import (  # noqa: PLC0415
-        Schedule,
-        SpecError,
-        parse_feedhold_spec,
-        parse_override_spec,
-    )
 
-    try:
-        settings = _load(args)
-    except ConfigError as err:
-        _print_config_error(err)
-        return EXIT_CONFIG
+    settings = _load(args)
     ads = settings.config.ads
+    schedule = _schedule(args)
     try:
-        schedule = Schedule(
-            tuple(parse_override_spec(args.override or "")),
-            tuple(parse_feedhold_spec(args.feedhold or "")),
-        )
         host, tcp_port = plc.parse_host(args.host or ads.host, ads.port)
-    except (SpecError, ValueError) as exc:
+    except ValueError as exc:
         print(f"liftd plc: {exc}", file=sys.stderr)
         return EXIT_CONFIG
     if not 0.5 <= args.cycle_ms <= 10_000 or (args.duration is not None and args.duration <= 0):
@@ -295,8 +279,13 @@ def cmd_plc(args: argparse.Namespace) -> int:
         host=host, tcp_port=tcp_port, net_id=args.net_id or ads.net_id, ams_port=args.port,
         channel=settings.channel.channel_id, axis=args.axis or settings.channel.lift_axis,
     )  # fmt: skip
-    return plc.run(target, schedule, args.cycle_ms, args.duration, args.json, args.timeout_ms,
-                   args.start)  # fmt: skip
+    try:
+        plc.run(target, schedule, args.cycle_ms, args.duration, args.json, args.timeout_ms,
+                args.start)  # fmt: skip
+    except plc.PlcError as exc:  # unreachable, or a read/write failed: never stale data
+        print(f"liftd plc: {exc}", file=sys.stderr)
+        return EXIT_RUNTIME
+    return EXIT_OK
 
 
 def cmd_healthcheck(args: argparse.Namespace) -> int:
@@ -304,16 +293,12 @@ def cmd_healthcheck(args: argparse.Namespace) -> int:
     1 otherwise (the Docker HEALTHCHECK convention)."""
     from liftd.clients import healthcheck  # noqa: PLC0415
 
-    try:
-        settings = _load(args)
-    except ConfigError as err:
-        _print_config_error(err)
-        return 1
+    settings = _load(args)
     ads = settings.config.ads
     host = args.host or ("127.0.0.1" if ads.host in ("0.0.0.0", "::") else ads.host)
     healthy, message = healthcheck.probe(host, args.port or ads.port, ads.net_id, args.timeout)
     print(message, file=sys.stdout if healthy else sys.stderr)
-    return EXIT_OK if healthy else 1
+    return EXIT_OK if healthy else EXIT_UNHEALTHY
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -376,7 +361,20 @@ def build_parser() -> argparse.ArgumentParser:
     health.add_argument("--host", help="daemon address (default: [ads] host, loopback if any)")
     health.add_argument("--port", type=int, help="TCP port (default: [ads] port)")
     health.add_argument("--timeout", type=float, default=2.0, help="seconds (default 2)")
-    health.set_defaults(func=cmd_healthcheck)
+    health.set_defaults(func=cmd_healthcheck, config_error_exit=EXIT_UNHEALTHY)
+
+    reload = sub.add_parser(
+        "reload",
+        help="ask the running daemon to reload liftd.toml; exit 0 only when it was applied "
+        "(systemd's ExecReload)",
+    )
+    reload.add_argument(
+        "--socket",
+        help="control socket (default: $RUNTIME_DIRECTORY/control.sock, else "
+        "/run/liftd/control.sock)",
+    )
+    reload.add_argument("--timeout", type=float, default=90.0, help="seconds (default 90)")
+    reload.set_defaults(func=cmd_reload)
 
     sim = sub.add_parser("simulate", help="run a program on a virtual clock, as fast as possible")
     sim.add_argument("program", help="NC program")
@@ -415,8 +413,17 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    from liftd.cnc.plc import SpecError  # noqa: PLC0415
+
     try:
         code: int = args.func(args)
+    except ConfigError as err:
+        for problem in err.problems:
+            print(problem, file=sys.stderr)
+        return int(getattr(args, "config_error_exit", EXIT_CONFIG))
+    except SpecError as exc:
+        print(f"liftd {args.command}: {exc}", file=sys.stderr)
+        return EXIT_CONFIG
     except KeyboardInterrupt:
         return 130
     return code

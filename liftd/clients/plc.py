@@ -3,12 +3,15 @@ over TCP, through pyads and Beckhoff's AdsLib), reads `lift_active`/`lift_suppre
 channel state once per PLC cycle with one sum read, prints every transition with a timestamp,
 and can write override and feed-hold schedules (the `simulate` SPEC syntax).
 
-Exit codes: 0 after --duration (or Ctrl-C), 3 when the daemon cannot be reached or a read or
-write fails — a PLC that silently shows stale data is worse than one that stops.
+`run` raises PlcError when the daemon cannot be reached or a read or write fails — a PLC that
+silently shows stale data is worse than one that stops (the CLI maps it to its exit code).
+AdsLib's own log lines ("Info: connection closed by remote", "Warning: Socket(): connect
+failed") are switched off: the terminal shows liftd's messages only.
 """
 
 from __future__ import annotations
 
+import ctypes
 import dataclasses
 import datetime as dt
 import json
@@ -21,9 +24,6 @@ from typing import Any, TextIO
 import pyads
 
 from liftd.cnc.plc import Schedule
-
-EXIT_OK = 0
-EXIT_UNREACHABLE = 3
 
 STATE_NAMES = {0: "-", 1: "INIT", 2: "IDLE", 3: "READY", 4: "ACTIVE", 5: "HOLD", 6: "ERROR"}
 ADS_RUN = 5
@@ -57,6 +57,24 @@ class Target:
             "feed_hold": f"{ch}.feed_hold",
             "error_id": f"{ch}.error_id",
         }
+
+
+# AdsLib's log threshold (`size_t Logger::logLevel`: 0 verbose, 1 info, 2 warning, 3 error; it
+# prints to stderr from C++); pyads offers no call for it
+ADSLIB_LOG_LEVEL = "_ZN6Logger8logLevelE"
+ADSLIB_SILENT = 4
+
+
+def quiet_adslib() -> bool:
+    """Switch AdsLib's own logging off; False where this AdsLib build has no such knob."""
+    lib: ctypes.CDLL | None = getattr(pyads.pyads_ex, "_adsDLL", None)
+    if lib is None:
+        return False
+    try:
+        ctypes.c_size_t.in_dll(lib, ADSLIB_LOG_LEVEL).value = ADSLIB_SILENT
+    except ValueError:  # no such symbol in this build
+        return False
+    return True
 
 
 # the values whose changes are printed; line/override are context
@@ -226,7 +244,9 @@ def poll(
 
 def run(target: Target, schedule: Schedule, cycle_ms: float, duration_s: float | None,
         as_json: bool, timeout_ms: int = 1000, start: bool = False,
-        out: TextIO = sys.stdout) -> int:  # fmt: skip
+        out: TextIO = sys.stdout) -> None:  # fmt: skip
+    """Poll until the duration ends or Ctrl-C. Raises PlcError."""
+    quiet_adslib()
     plc = Plc(target, schedule, timeout_ms, start)
     printer = Printer(out, as_json, target.axis)
     try:
@@ -239,9 +259,6 @@ def run(target: Target, schedule: Schedule, cycle_ms: float, duration_s: float |
             print(f"liftd plc: warning: ADS state {state}, not RUN (5): the GEO task is not "
                   "cycling", file=sys.stderr)  # fmt: skip
         counters = poll(plc, printer, cycle_ms * 1e-3, duration_s)
-    except PlcError as exc:
-        print(f"liftd plc: {exc}", file=sys.stderr)
-        return EXIT_UNREACHABLE
     except KeyboardInterrupt:
         counters = None
     finally:
@@ -249,7 +266,6 @@ def run(target: Target, schedule: Schedule, cycle_ms: float, duration_s: float |
     if counters is not None and not as_json:
         print(f"{counters['cycles']} PLC cycles, {counters['transitions']} transitions, "
               f"{counters['late_cycles']} late cycles", file=out)  # fmt: skip
-    return EXIT_OK
 
 
 def parse_host(text: str, default_port: int) -> tuple[str, int]:

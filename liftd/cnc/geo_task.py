@@ -438,8 +438,8 @@ class GeoTask:
             # LIFT_END with Z not at POS. Reported as it is: the error is |Z − POS| now.
             if rec is not None:
                 rec.arrival_error, rec.late = error, True
-            self._emit("lift.late", t_at, action.line, error,
-                       f"Z {error * 1e3:.6f} mm from POS when the path passed LIFT_END")  # fmt: skip
+            text = f"Z {error * 1e3:.6f} mm from POS when the path passed LIFT_END"
+            self._emit("lift.late", t_at, action.line, error, text)
             lift.ending = True
             return True
         self._close_lift(t_at, action.line)

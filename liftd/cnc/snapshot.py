@@ -89,6 +89,7 @@ class LoopStats(NamedTuple):
     compute_max_us: float = 0.0
     lateness_last_us: float = 0.0
     lateness_max_us: float = 0.0
+    compute_over: int = 0  # cycles whose compute took more than 25 % of the period (runtime)
 
 
 class PlcSignal(enum.IntEnum):

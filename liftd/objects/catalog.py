@@ -166,6 +166,8 @@ def _objects(ch: ChannelParams) -> list[CncObject]:
                   lambda v: v.stats.compute_last_us, "compute time of the last cycle"),
         CncObject("compute_max_us", "GEO.timing.compute_max_us", REAL64, "µs",
                   lambda v: v.stats.compute_max_us, "largest compute time since start"),
+        CncObject("compute_over_25pct", "GEO.timing.compute_over_25pct", UNS32, "-",
+                  lambda v: v.stats.compute_over, "cycles whose compute took > 25 % of the cycle"),
         CncObject("lateness_last_us", "GEO.timing.lateness_last_us", REAL64, "µs",
                   lambda v: v.stats.lateness_last_us, "wake-up lateness of the last cycle"),
         CncObject("lateness_max_us", "GEO.timing.lateness_max_us", REAL64, "µs",

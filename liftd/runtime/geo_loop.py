@@ -1,21 +1,22 @@
 """The GEO loop process: `GeoTask.step` once per cycle on absolute deadlines.
 
-Started by the daemon with the spawn method (a clean interpreter). Per cycle, without logging
-and without blocking: drain the PLC input ring, step the GEO task at t = k·dt, publish the
+Started by the daemon's `GeoProcess` as `python -m liftd.runtime` (a clean interpreter that
+loads the core and nothing of the daemon's: no numpy, pydantic, structlog). Per cycle, without
+logging and without blocking: drain the PLC input ring, step the GEO task at t = k·dt, publish the
 snapshot through the seqlock (and the trace ring), write its events to the event pipe
 (non-blocking; dropped and counted when full), update counters and the fixed-size compute and
 lateness histograms. The timing policy is in cycle.py. A configuration sent by the daemon
-(SIGHUP) takes effect at the next program boundary.
+(SIGHUP) takes effect at the next program boundary. Memory is locked once the programs are
+prepared and the heap trimmed (rt.lock_memory), so the lock holds what the loop uses.
 """
 
 from __future__ import annotations
 
 import gc
 import os
-import sys
+import signal
 import time
 from dataclasses import dataclass, field
-from multiprocessing.connection import Connection
 
 from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.params import ChannelParams
@@ -23,10 +24,24 @@ from liftd.cnc.snapshot import ChannelState, Command, Event, GeoSnapshot, LoopSt
 from liftd.runtime import rt
 from liftd.runtime.cycle import CycleClock, bucket
 from liftd.runtime.plc_inputs import PlcInputs
-from liftd.runtime.records import pack_event, unpack_input
-from liftd.runtime.shared import Shared, SharedSpec
+from liftd.runtime.records import pack_event, read_message, unpack_input
+from liftd.runtime.shared import (
+    COMPUTE_OVER,
+    COMPUTE_SHARE,
+    COMPUTE_SUM_NS,
+    CYCLES,
+    EVENTS_DROPPED,
+    EXCEEDED,
+    LATENESS_SUM_NS,
+    LOADING,
+    REGRIDDED,
+    RELOAD,
+    RELOAD_TAKEN,
+    STOP,
+    Shared,
+    SharedSpec,
+)
 
-EXIT_FAULT = 3
 OVERRUN_EVENT_EVERY_NS = 1_000_000_000  # at most one geo.overrun event per second
 
 
@@ -46,8 +61,8 @@ class LoopConfig:
 
 
 class _Events:
-    def __init__(self, conn: Connection) -> None:
-        self.fd = conn.fileno()
+    def __init__(self, fd: int) -> None:
+        self.fd = fd
         os.set_blocking(self.fd, False)
         self.dropped = 0
 
@@ -59,11 +74,11 @@ class _Events:
 
 
 class GeoLoop:
-    def __init__(self, shared: Shared, cfg: LoopConfig, events: _Events, control: Connection):
+    def __init__(self, shared: Shared, cfg: LoopConfig, events: _Events, control_fd: int):
         self.shared = shared
         self.cfg = cfg
         self.events = events
-        self.control = control
+        self.control_fd = control_fd
         self.task = GeoTask(cfg.channel, cfg.program_text, autostart=cfg.autostart)
         if cfg.repeat:
             self.task.prepare_next_run()  # now, not in the cycle of the first repeat
@@ -72,30 +87,35 @@ class GeoLoop:
         self.reload_gen = 0
 
     def _check_reload(self, snap: GeoSnapshot) -> None:
-        if self.shared.get("reload") != self.reload_gen and self.control.poll():
-            self.shared.set("loading", 1)  # a large program takes a while to arrive
-            self.reload_gen, self.pending = self.control.recv()  # once per SIGHUP, in order
-            self.shared.set("loading", 0)
+        words = self.shared.words
+        if words[RELOAD] != self.reload_gen:
+            words[LOADING] += 1  # a large program takes a while to arrive
+            self.reload_gen, self.pending = read_message(
+                self.control_fd
+            )  # one per reload, in order
+            words[RELOAD_TAKEN] = self.reload_gen
+            words[LOADING] += 1
         pending = self.pending
         if pending is None or snap.state not in (ChannelState.READY, ChannelState.ERROR):
             return
         # the program boundary: the new lists and program take effect from where the axes are
         self.cfg, self.pending = pending, None
-        self.shared.set("loading", 1)  # decoding and planning: tell the supervisor it works
+        words[LOADING] += 1  # decoding and planning: tell the supervisor it works
         self.task = GeoTask(pending.channel, pending.program_text, autostart=False,
                             start_position=snap.positions)  # fmt: skip
         if pending.repeat:
             self.task.prepare_next_run()
-        self.shared.set("loading", 0)
+        words[LOADING] += 1
         self.plc = PlcInputs(pending.m_ack_auto, pending.m_ack_delay_s)
-        self.shared.set("reloads", self.shared.get("reloads") + 1)
         self.events.send(Event("geo.reloaded", snap.t, 0, 0.0, pending.program_name))
         if pending.autostart:
             self.plc.request(Command.START)
 
-    def run(self) -> int:
+    def run(self) -> None:
         shared, cfg = self.shared, self.cfg
+        words = shared.words
         period_ns = round(cfg.channel.cycle_time * 1e9)
+        quarter_ns = round(period_ns * COMPUTE_SHARE)
         dt = cfg.channel.cycle_time
         codec = shared.codec
         publish = shared.snapshot.write
@@ -103,12 +123,12 @@ class GeoLoop:
         comp_hist, late_hist = shared.compute_hist, shared.lateness_hist
         now_ns = time.perf_counter_ns
         clock = CycleClock(period_ns, now_ns() + period_ns, cfg.max_behind)
-        k = exceeded = regridded = 0
-        compute_ns = compute_max = late_max = 0
+        k = exceeded = over = regridded = 0
+        compute_ns = compute_max = late_max = compute_sum = late_sum = 0
         last: GeoSnapshot | None = None
         last_overrun_event = -OVERRUN_EVENT_EVERY_NS
         sleep_until = rt.sleep_until
-        while not shared.get("stop"):
+        while not words[STOP]:
             deadline = clock.deadline_ns
             if deadline > now_ns():
                 sleep_until(deadline)
@@ -123,12 +143,12 @@ class GeoLoop:
             inputs = self.plc.inputs(last, t)
             starting = inputs.command is Command.START  # may decode and plan the program
             if starting:
-                shared.set("loading", 1)
+                words[LOADING] += 1
             snap = self.task.step(inputs, t)
             if starting:
-                shared.set("loading", 0)
+                words[LOADING] += 1
             stats = LoopStats(k, exceeded, compute_ns / 1e3, compute_max / 1e3, late / 1e3,
-                              late_max / 1e3)  # fmt: skip
+                              late_max / 1e3, over)  # fmt: skip
             record = codec.pack(snap, stats)
             publish(record)
             if trace is not None:
@@ -146,43 +166,60 @@ class GeoLoop:
             late_max = max(late_max, late)
             comp_hist[bucket(compute_ns)] += 1
             late_hist[bucket(late)] += 1
+            compute_sum += compute_ns
+            late_sum += late
+            words[COMPUTE_SUM_NS] = compute_sum
+            words[LATENESS_SUM_NS] = late_sum
+            if compute_ns > quarter_ns:
+                over += 1
+                words[COMPUTE_OVER] = over
             if end > deadline + period_ns:
                 exceeded += 1
-                shared.set("exceeded", exceeded)
+                words[EXCEEDED] = exceeded
                 if end - last_overrun_event >= OVERRUN_EVENT_EVERY_NS:
                     last_overrun_event = end
                     self.events.send(Event("geo.overrun", t, snap.line, compute_ns / 1e3))
-            shared.set("cycles", k)
+            words[CYCLES] = k
             skipped = clock.next_cycle(end)
             if skipped:
                 regridded += skipped
-                shared.set("regridded", regridded)
+                words[REGRIDDED] = regridded
                 self.events.send(Event("geo.regrid", t, snap.line, float(skipped)))
             if self.events.dropped:
-                shared.set("events_dropped", self.events.dropped)
-        return 0
+                words[EVENTS_DROPPED] = self.events.dropped
 
 
-def main(spec: SharedSpec, cfg: LoopConfig, events_conn: Connection, control: Connection) -> None:
-    """Entry point of the GEO process (multiprocessing spawn target)."""
-    shared = Shared.attach(spec)
-    events = _Events(events_conn)
-    state = rt.apply(cfg.rt)
-    for r in state.results:
-        text = f"{r.setting}: {'ok' if r.ok else 'not permitted'} ({r.detail})"
-        events.send(Event("geo.rt_setting", 0.0, 0, 1.0 if r.ok else 0.0, text))
-    code = 0
+def main(control_fd: int, events_fd: int, shm_fd: int) -> bool:
+    """The GEO process (`python -m liftd.runtime`): read the configuration from the control
+    pipe, map the shared block, prepare the task, then lock memory, take the RT settings and
+    cycle until told to stop. True after a requested stop, False after a fault (reported as
+    a geo.fault event)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is for the daemon; it stops the loop
+    rt.die_with_parent()
+    events = _Events(events_fd)
     try:
-        loop = GeoLoop(shared, cfg, events, control)
+        spec, cfg = read_message(control_fd)
+    except EOFError:  # the daemon died before it sent the configuration
+        return False
+    assert isinstance(spec, SharedSpec) and isinstance(cfg, LoopConfig)
+    shared = Shared.attach(spec, shm_fd)
+    ok = True
+    state: rt.RtState | None = None
+    try:
+        loop = GeoLoop(shared, cfg, events, control_fd)
         gc.collect()
+        state = rt.apply(cfg.rt)  # after preparing: mlockall locks what the loop really uses
+        for r in state.results:
+            text = f"{r.setting}: {'ok' if r.ok else 'not permitted'} ({r.detail})"
+            events.send(Event("geo.rt_setting", 0.0, 0, 1.0 if r.ok else 0.0, text))
         gc.freeze()  # nothing allocated so far is ever collected: no GC pauses in the cycle
         gc.disable()
-        shared.set("ready", 1)
-        code = loop.run()
+        loop.run()
     except Exception as exc:  # a bug in the core: report it, stop serving (the daemon exits)
         events.send(Event("geo.fault", 0.0, 0, 0.0, f"{type(exc).__name__}: {exc}"))
-        code = EXIT_FAULT
+        ok = False
     finally:
-        state.close()
-        shared.close()  # the daemon owns and unlinks the block
-    sys.exit(code)
+        if state is not None:
+            state.close()
+        shared.close()
+    return ok

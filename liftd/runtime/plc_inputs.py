@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from collections import deque
 
-from liftd.cnc.plc import Schedule, SimPlc
+from liftd.cnc.plc import MAX_OVERRIDE, Schedule, SimPlc
 from liftd.cnc.snapshot import ChannelState, Command, GeoInputs, GeoSnapshot, PlcSignal, PlcWrite
 
 _COMMANDS = {PlcSignal.START: Command.START, PlcSignal.STOP: Command.STOP,
@@ -33,7 +33,7 @@ class PlcInputs:
         feed-hold level, or a command), False for a level written again unchanged."""
         sig = w.signal
         if sig is PlcSignal.OVERRIDE:
-            old, self.override = self.override, min(max(w.value, 0.0), 2.0)
+            old, self.override = self.override, min(max(w.value, 0.0), MAX_OVERRIDE)
             return self.override != old
         if sig is PlcSignal.FEED_HOLD:
             old_hold, self.feed_hold = self.feed_hold, w.value != 0.0

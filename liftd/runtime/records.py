@@ -1,10 +1,13 @@
 """Fixed binary layouts crossing the process boundary: a cycle's snapshot (+ loop timing), a
-PLC input, an event. Pure; struct only (packing a snapshot costs ~1 µs)."""
+PLC input, an event; and the framing of the control pipe's messages (a length, then a pickle).
+Pure; struct and pickle only (packing a snapshot costs ~1 µs)."""
 
 from __future__ import annotations
 
+import os
+import pickle
 import struct
-from typing import NamedTuple
+from typing import Any
 
 from liftd.cnc.snapshot import (
     ChannelState,
@@ -54,7 +57,7 @@ class SnapshotCodec:
 
     def __init__(self, n_axes: int) -> None:
         self.n = n_axes
-        self.fmt = struct.Struct(f"<qdiii{n_axes}ddddd???iddiiidd" + "qqdddd")
+        self.fmt = struct.Struct(f"<qdiii{n_axes}ddddd???iddiiidd" + "qqddddq")
         self.size = self.fmt.size
 
     def pack(self, s: GeoSnapshot, st: LoopStats) -> bytes:
@@ -118,8 +121,27 @@ class EventReader:
         return out
 
 
-class Control(NamedTuple):
-    """Flags the daemon sets for the loop (one u64 each in shared memory)."""
+MESSAGE_HEAD = struct.Struct("<Q")  # length of the pickle that follows
 
-    stop: int = 0
-    reload: int = 0  # generation: a new configuration waits in the control pipe
+
+def pack_message(obj: Any) -> bytes:
+    """One control-pipe message (daemon → GEO process): its configuration, a reload."""
+    data = pickle.dumps(obj, protocol=pickle.HIGHEST_PROTOCOL)
+    return MESSAGE_HEAD.pack(len(data)) + data
+
+
+def read_message(fd: int) -> Any:
+    """Read one whole message from a blocking descriptor; EOFError if the pipe is closed."""
+    (size,) = MESSAGE_HEAD.unpack(_read_exactly(fd, MESSAGE_HEAD.size))
+    return pickle.loads(_read_exactly(fd, size))
+
+
+def _read_exactly(fd: int, size: int) -> bytes:
+    parts, left = [], size
+    while left:
+        chunk = os.read(fd, min(left, 1 << 20))
+        if not chunk:
+            raise EOFError("the control pipe was closed")
+        parts.append(chunk)
+        left -= len(chunk)
+    return b"".join(parts)

@@ -1,87 +1,133 @@
 """The one shared-memory block between the daemon and the GEO loop process, and its layout:
-control words (daemon → loop), counters and timing histograms (loop → daemon), the snapshot
-seqlock, the PLC input ring and the optional trace ring."""
+words (u64: two control words daemon → loop, counters loop → daemon), the snapshot seqlock,
+the PLC input ring, the optional trace ring and the compute and lateness histograms.
+
+Words are read and written by index through `words` (the loop: one store per counter per
+cycle, no lookup) and read by name through the properties (the daemon).
+"""
 
 from __future__ import annotations
 
-import struct
 from dataclasses import dataclass
+from typing import NamedTuple
 
 from liftd.runtime.cycle import BUCKETS
 from liftd.runtime.records import INPUT, SnapshotCodec
 from liftd.runtime.shm import Block, Ring, Seqlock
 
-CONTROL_WORDS = ("stop", "reload", "ready")
-COUNTER_WORDS = ("exceeded", "regridded", "events_dropped", "cycles", "reloads", "loading")
+# word indices; daemon → loop:
+STOP = 0  # 1: stop at the next cycle boundary
+RELOAD = 1  # generation of the newest configuration the daemon is sending on the control pipe
+# loop → daemon:
+RELOAD_TAKEN = 2  # generation of the newest configuration the loop has read
+LOADING = 3  # +1 when the loop starts and +1 when it ends decoding and planning a program:
+# odd while it works on one (the supervisor waits), and any change is progress
+CYCLES = 4
+EXCEEDED = 5  # cycles that finished after the start of the next one
+COMPUTE_OVER = 6  # cycles whose compute took more than COMPUTE_SHARE of the period
+REGRIDDED = 7
+EVENTS_DROPPED = 8
+COMPUTE_SUM_NS = 9
+LATENESS_SUM_NS = 10
+WORDS = 11
+COMPUTE_SHARE = 0.25  # a cycle computing longer than this share of its period is counted
 INPUT_CAPACITY = 256
-U64 = struct.Struct("<Q")
+CACHE_LINE = 64
+
+
+def _line(offset: int) -> int:
+    """Each region starts on a cache line: a u64 index (seqlock sequence, ring head and tail)
+    never straddles two lines, where an 8-byte store is not atomic for the other process."""
+    return -(-offset // CACHE_LINE) * CACHE_LINE
+
+
+class LoopTotals(NamedTuple):
+    """The loop's counters at one moment (read by the daemon: summary, metrics)."""
+
+    cycles: int
+    exceeded: int
+    compute_over: int
+    regridded: int
+    events_dropped: int
+    compute_sum_ns: int
+    lateness_sum_ns: int
 
 
 @dataclass(frozen=True, slots=True)
 class SharedSpec:
-    """What the loop process needs to attach (picklable for the spawn start method)."""
+    """What the loop process needs to map the block (besides its descriptor)."""
 
-    name: str
     n_axes: int
     trace_capacity: int
 
 
 class Shared:
-    def __init__(self, n_axes: int, trace_capacity: int = 0, name: str | None = None) -> None:
+    def __init__(
+        self, n_axes: int, trace_capacity: int = 0, name: str | None = None, fd: int | None = None
+    ) -> None:
         self.codec = SnapshotCodec(n_axes)
         self.n_axes = n_axes
         self.trace_capacity = trace_capacity
-        words = len(CONTROL_WORDS) + len(COUNTER_WORDS)
-        at = 8 * words
-        self._snap_at = at
-        at += Seqlock.space(self.codec.size)
-        self._in_at = at
-        at += Ring.space(INPUT.size, INPUT_CAPACITY)
-        self._trace_at = at
-        at += Ring.space(self.codec.size, trace_capacity) if trace_capacity else 0
-        self._hist_at = at
-        at += 2 * 8 * BUCKETS
-        self.block = Block(at, name)
-        buf = self.block.buf
-        self.snapshot = Seqlock(self.block, self._snap_at, self.codec.size)
-        self.inputs = Ring(self.block, self._in_at, INPUT.size, INPUT_CAPACITY)
-        self.trace = (
-            Ring(self.block, self._trace_at, self.codec.size, trace_capacity)
-            if trace_capacity
-            else None
+        snap_at = _line(8 * WORDS)
+        in_at = _line(snap_at + Seqlock.space(self.codec.size))
+        trace_at = _line(in_at + Ring.space(INPUT.size, INPUT_CAPACITY))
+        hist_at = _line(
+            trace_at + (Ring.space(self.codec.size, trace_capacity) if trace_capacity else 0)
         )
-        self._hist = buf[self._hist_at : self._hist_at + 2 * 8 * BUCKETS].cast("q")
+        at = hist_at + 2 * 8 * BUCKETS
+        self.block = Block(at, name, fd=fd)
+        buf = self.block.buf
+        self.words = buf[: 8 * WORDS].cast("Q")
+        self.snapshot = Seqlock(self.block, snap_at, self.codec.size)
+        self.inputs = Ring(self.block, in_at, INPUT.size, INPUT_CAPACITY)
+        self.trace = (
+            Ring(self.block, trace_at, self.codec.size, trace_capacity) if trace_capacity else None
+        )
+        self._hist = buf[hist_at : hist_at + 2 * 8 * BUCKETS].cast("q")
         self.compute_hist = self._hist[:BUCKETS]
         self.lateness_hist = self._hist[BUCKETS:]
 
     @property
     def spec(self) -> SharedSpec:
-        return SharedSpec(self.block.name, self.n_axes, self.trace_capacity)
+        return SharedSpec(self.n_axes, self.trace_capacity)
 
     @classmethod
-    def attach(cls, spec: SharedSpec) -> Shared:
-        return cls(spec.n_axes, spec.trace_capacity, spec.name)
+    def attach(cls, spec: SharedSpec, fd: int) -> Shared:
+        """The loop process's view of the block whose descriptor it inherited."""
+        return cls(spec.n_axes, spec.trace_capacity, fd=fd)
 
-    def _word(self, names: tuple[str, ...], base: int, name: str) -> int:
-        return base + 8 * names.index(name)
+    # -- the daemon's side ------------------------------------------------------------------------
+    def request_stop(self) -> None:
+        self.words[STOP] = 1
 
-    def get(self, name: str) -> int:
-        if name in CONTROL_WORDS:
-            at = self._word(CONTROL_WORDS, 0, name)
-        else:
-            at = self._word(COUNTER_WORDS, 8 * len(CONTROL_WORDS), name)
-        return int(U64.unpack_from(self.block.buf, at)[0])
+    def announce_reload(self, generation: int) -> None:
+        self.words[RELOAD] = generation
 
-    def set(self, name: str, value: int) -> None:
-        if name in CONTROL_WORDS:
-            at = self._word(CONTROL_WORDS, 0, name)
-        else:
-            at = self._word(COUNTER_WORDS, 8 * len(CONTROL_WORDS), name)
-        U64.pack_into(self.block.buf, at, value)
+    @property
+    def reload_taken(self) -> int:
+        return int(self.words[RELOAD_TAKEN])
+
+    @property
+    def cycles(self) -> int:
+        return int(self.words[CYCLES])
+
+    @property
+    def loading(self) -> bool:
+        return bool(self.words[LOADING] & 1)
+
+    @property
+    def progress(self) -> tuple[int, int]:
+        """Changes whenever the loop cycles or starts or ends preparing a program."""
+        return int(self.words[CYCLES]), int(self.words[LOADING])
+
+    def totals(self) -> LoopTotals:
+        w = self.words
+        return LoopTotals(w[CYCLES], w[EXCEEDED], w[COMPUTE_OVER], w[REGRIDDED],
+                          w[EVENTS_DROPPED], w[COMPUTE_SUM_NS], w[LATENESS_SUM_NS])  # fmt: skip
 
     def close(self) -> None:
-        """Release the views, close the block (and unlink it if this side created it)."""
-        for view in (self.compute_hist, self.lateness_hist, self._hist):
+        """Release the views, unmap the block (and unlink it if this side created it)."""
+        for view in (self.compute_hist, self.lateness_hist, self._hist, self.words):
             view.release()
         self.snapshot.buf = self.inputs.buf = memoryview(b"")
         if self.trace is not None:

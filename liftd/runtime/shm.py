@@ -14,32 +14,68 @@ interpreter's byte copies; an ARM target needs a helper with barriers (rt-python
 
 from __future__ import annotations
 
+import contextlib
+import mmap
+import os
 import struct
-from multiprocessing import shared_memory
 
 U64 = struct.Struct("<Q")
 MAX_RETRIES = 100
+SHM_DIR = "/dev/shm"  # where POSIX shm_open(3) keeps its names on Linux
 
 
 class Block:
-    """A named shared-memory block; the creator unlinks it."""
+    """A POSIX shared-memory block mapped into this process, without multiprocessing's resource
+    tracker (a third process of 12 MiB that also warns about "leaked" blocks).
 
-    def __init__(self, size: int, name: str | None = None) -> None:
-        self.owner = name is None
-        if name is None:
-            self.shm = shared_memory.SharedMemory(create=True, size=max(size, 8))
-        else:
-            self.shm = shared_memory.SharedMemory(name=name)
-        buf = self.shm.buf
-        assert buf is not None
-        self.buf: memoryview = buf
-        self.name = self.shm.name
+    `Block(size)` creates one under a fresh name and owns it: `unlink()` removes the name (the
+    daemon does so as soon as the GEO process holds the descriptor, so nothing is left in
+    /dev/shm whatever happens to either process after that) and `close()` unlinks too.
+    `Block(0, name)` attaches by name, `Block(0, fd=fd)` to an inherited descriptor.
+    """
+
+    def __init__(self, size: int, name: str | None = None, *, fd: int | None = None) -> None:
+        self.owner = name is None and fd is None
+        self.name = name or ""
+        flags = os.O_RDWR | os.O_CLOEXEC | os.O_NOFOLLOW
+        if fd is None and name is None:
+            self.name = f"liftd-{os.getpid()}-{os.urandom(6).hex()}"
+            fd = os.open(self.path, flags | os.O_CREAT | os.O_EXCL, 0o600)
+            try:
+                os.ftruncate(fd, max(size, 8))
+            except OSError:
+                os.close(fd)
+                os.unlink(self.path)
+                raise
+        elif fd is None:
+            fd = os.open(self.path, flags)
+        self.fd = fd
+        self._linked = self.owner
+        self._map = mmap.mmap(fd, os.fstat(fd).st_size)
+        self.buf: memoryview = memoryview(self._map)
+
+    @property
+    def path(self) -> str:
+        return f"{SHM_DIR}/{self.name}"
+
+    def unlink(self) -> None:
+        """Remove the name (owner only, once); the memory lives on while it is mapped."""
+        if self._linked:
+            self._linked = False
+            with contextlib.suppress(FileNotFoundError):
+                os.unlink(self.path)
 
     def close(self) -> None:
+        """Unmap, close the descriptor and (owner) remove the name. The caller has released
+        every view it took of `buf`."""
+        self.unlink()
+        self.buf.release()
         self.buf = memoryview(b"")
-        self.shm.close()
-        if self.owner:
-            self.shm.unlink()
+        with contextlib.suppress(BufferError):  # a view still held elsewhere: unmapped at exit
+            self._map.close()
+        if self.fd >= 0:
+            os.close(self.fd)
+            self.fd = -1
 
 
 class Seqlock:

@@ -1,6 +1,9 @@
-"""The daemon side of `liftd run`: composition root (`daemon`), ADS configuration, logging,
-metrics, systemd notification and the trace recorder that drains the GEO process's ring.
+"""The daemon side of `liftd run`: the composition root (`daemon`), the GEO events as log lines
+(`geo_log`), ADS configuration (`adsconfig`), logging (`logs`), Prometheus metrics (`metrics`),
+systemd notification and the reload control socket (`systemd`, `control`) and the trace
+recorder that drains the GEO process's ring (`trace_recorder`).
 
-May import every layer below it (`ads`, `objects`, `runtime`, `settings`, `cnc`, `sim.trace`);
-nothing imports it but the CLI.
+May import every layer below it: `liftd.ads`, `liftd.objects`, `liftd.runtime`,
+`liftd.settings`, the core `liftd.cnc` and `liftd.sim` (the trace CSV writer); nothing imports
+it but the CLI.
 """

@@ -1,4 +1,9 @@
-"""Configuration: liftd.toml (pydantic) and the ISG lists, mapped to core parameters."""
+"""Configuration: liftd.toml (pydantic, frozen) and the ISG lists it points at, validated once
+and mapped to the core's parameters (`liftd.cnc` params); every problem names file, line, key
+and value.
+
+May import the core `liftd.cnc` (parameter types); nothing else of liftd.
+"""
 
 from __future__ import annotations
 

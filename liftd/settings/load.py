@@ -180,3 +180,26 @@ def load_settings(explicit: str | None = None, program: str | None = None) -> Se
         warnings=tuple(p for p in problems if p.severity is Severity.WARNING),
         files=(str(path), *lists.files),
     )
+
+
+def program_problem(settings: Settings, explicit: str | None = None) -> Problem | None:
+    """The program `liftd run` would start cannot be read: an error naming the file, and the
+    line, key and value of liftd.toml that name it (None when there is no program or it reads).
+    `liftd check` reports the same as a program error instead."""
+    program = settings.program
+    if program is None:
+        return None
+    try:
+        with program.open("rb"):
+            return None
+    except OSError as exc:
+        reason = exc.strerror or str(exc)
+    if explicit is not None:
+        return Problem(Severity.ERROR, explicit, None, None, None, f"cannot read program: {reason}")
+    try:
+        text = settings.path.read_text(encoding="utf-8")
+    except OSError:
+        text = ""
+    return Problem(Severity.ERROR, str(settings.path), toml_line(text, ("program", "file")),
+                   "program.file", settings.config.program.file,
+                   f"cannot read the program {program}: {reason}")  # fmt: skip

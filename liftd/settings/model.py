@@ -34,7 +34,7 @@ class CncSection(_Section):
 
 
 class ProgramSection(_Section):
-    file: str | None = "programs/demo.nc"  # relative to liftd.toml; optional
+    file: str | None = None  # relative to liftd.toml; none: the channel idles until a reload
     autostart: StrictBool = True
     repeat: StrictBool = False
 

@@ -15,8 +15,8 @@ from liftd.ads import wire
 from liftd.ads.client import RawClient
 from liftd.ads.wire import net_id_bytes
 from liftd.settings.model import AdsSection
-from tests.conftest import REPO
-from tests.daemon_helper import Daemon, write_config
+from tests.support.daemon import Daemon, write_config
+from tests.support.paths import REPO
 
 pytestmark = pytest.mark.integration
 LIFT = struct.pack("<III", 0x121301, 0x30095, 1)

@@ -12,8 +12,8 @@ import pyads
 import pytest
 
 from liftd.cnc.snapshot import PlcSignal, PlcWrite
-from tests.ads_harness import Harness
-from tests.conftest import make_channel
+from tests.support.ads_harness import Harness
+from tests.support.channel import make_channel
 
 pytestmark = pytest.mark.integration
 

@@ -13,8 +13,8 @@ import pytest
 from liftd.ads import wire
 from liftd.ads.client import RawClient
 from liftd.ads.wire import net_id_bytes
-from tests.ads_harness import Harness
-from tests.conftest import make_channel
+from tests.support.ads_harness import Harness
+from tests.support.channel import make_channel
 
 pytestmark = pytest.mark.integration
 LIFT = struct.pack("<III", 0x121301, 0x30095, 1)

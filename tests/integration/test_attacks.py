@@ -1,4 +1,4 @@
-"""The attack cases of tests/attacks.py against one running daemon: each gets exactly its
+"""The attack cases of tests/support/attacks.py against one running daemon: each gets exactly its
 expected reply or close; afterwards a well-behaved client is still served with normal latency,
 the daemon's memory stays bounded and the GEO loop kept cycling (its missed deadlines per attack
 are a figure: bench/attack_table.py)."""
@@ -11,9 +11,9 @@ from pathlib import Path
 
 import pytest
 
-from liftd.service.daemon import rss_mb
-from tests.attacks import ATTACK_ADS, CASES, Case, probe_ms
-from tests.daemon_helper import Daemon, write_config
+from liftd.runtime.geo_process import rss_mb
+from tests.support.attacks import ATTACK_ADS, CASES, Case, probe_ms
+from tests.support.daemon import Daemon, write_config
 
 pytestmark = pytest.mark.integration
 

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import GOLDEN, REPO
+from tests.support.paths import GOLDEN, REPO
 
 pytestmark = pytest.mark.integration
 

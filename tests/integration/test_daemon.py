@@ -17,7 +17,7 @@ import pyads
 import pytest
 
 from bench.gen import nesting_program
-from tests.daemon_helper import Daemon, Notify, write_config
+from tests.support.daemon import Daemon, Notify, write_config
 
 pytestmark = pytest.mark.integration
 
@@ -242,11 +242,13 @@ def test_prometheus_endpoint(tmp_path: Path) -> None:
     try:
         d.ready()
         body = urllib.request.urlopen(f"http://127.0.0.1:{port}/metrics", timeout=5).read().decode()
-        values = dict(line.rsplit(" ", 1) for line in body.splitlines() if not line.startswith("#"))
-        assert int(values["liftd_geo_cycles_total"]) > 0
-        assert values["liftd_geo_running"] == "1"
-        count = int(values["liftd_geo_lateness_seconds_count"])
-        assert int(values['liftd_geo_lateness_seconds_bucket{le="+Inf"}']) == count > 0
+        # prometheus_client writes every sample as a float ("1.0"): Prometheus reads both
+        values = {k: float(v) for k, v in (line.rsplit(" ", 1) for line in body.splitlines()
+                                           if not line.startswith("#"))}  # fmt: skip
+        assert values["liftd_geo_cycles_total"] > 0
+        assert values["liftd_geo_running"] == 1
+        count = values["liftd_geo_lateness_seconds_count"]
+        assert values['liftd_geo_lateness_seconds_bucket{le="+Inf"}'] == count > 0
         health = urllib.request.urlopen(f"http://127.0.0.1:{port}/healthz", timeout=5)
         assert health.status == 200
     finally:

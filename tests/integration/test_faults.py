@@ -11,7 +11,7 @@ from pathlib import Path
 import pyads
 import pytest
 
-from tests.daemon_helper import Daemon, write_config
+from tests.support.daemon import Daemon, write_config
 
 pytestmark = pytest.mark.integration
 

@@ -29,8 +29,8 @@ import pytest
 from liftd.ads import wire
 from liftd.ads.client import RawClient
 from liftd.ads.wire import net_id_bytes
-from tests.conftest import REPO
-from tests.daemon_helper import Daemon, write_config
+from tests.support.daemon import Daemon, write_config
+from tests.support.paths import REPO
 
 pytestmark = pytest.mark.integration
 NODE_DIR = REPO / "tests" / "interop" / "node"

@@ -17,8 +17,8 @@ from pathlib import Path
 import pyads
 import pytest
 
-from tests.conftest import REPO
-from tests.daemon_helper import Notify, write_config
+from tests.support.daemon import Notify, write_config
+from tests.support.paths import REPO
 
 pytestmark = pytest.mark.integration
 

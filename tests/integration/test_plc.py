@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import csv
 import json
+import re
 import socket
 import subprocess
 import sys
@@ -12,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.daemon_helper import Daemon, write_config
+from tests.support.daemon import Daemon, write_config
 
 pytestmark = pytest.mark.integration
 
@@ -104,3 +105,24 @@ def test_plc_exits_non_zero_when_the_daemon_is_unreachable_or_a_read_fails(
         assert d.stop() == 0
     down = healthcheck(cfg, "--port", str(port))
     assert down.returncode == 1 and "no ADS answer" in down.stderr
+
+
+ADSLIB_LINE = re.compile(r"\b(Info|Warning|Error|Verbose): ")
+
+
+def test_liftd_plc_prints_no_adslib_noise(tmp_path: Path) -> None:
+    """AdsLib logs "Info: connection closed by remote" and "Warning: Socket(): connect failed"
+    to stderr from C++; `liftd plc` switches that off, so the terminal holds liftd's lines."""
+    cfg = write_config(tmp_path, program={"repeat": True})
+    unreachable = plc(cfg, "--host", "127.0.0.1:1", "--duration", "1")
+    assert unreachable.returncode == 3
+    assert unreachable.stderr.startswith("liftd plc: cannot reach")
+    assert not ADSLIB_LINE.search(unreachable.stderr + unreachable.stdout)
+    d = Daemon(cfg)
+    try:
+        d.ready()
+        normal = plc(cfg, "--host", d.address, "--net-id", d.net_id, "--duration", "0.5")
+    finally:
+        assert d.stop() == 0
+    assert normal.returncode == 0, normal.stderr
+    assert normal.stderr == "" and not ADSLIB_LINE.search(normal.stdout)

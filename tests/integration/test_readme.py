@@ -14,8 +14,8 @@ from pathlib import Path
 import pyads
 import pytest
 
-from tests.conftest import REPO
-from tests.daemon_helper import Daemon, write_config
+from tests.support.daemon import Daemon, write_config
+from tests.support.paths import REPO
 
 pytestmark = pytest.mark.integration
 

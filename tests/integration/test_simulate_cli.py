@@ -12,7 +12,7 @@ import pytest
 
 from liftd import cli
 from liftd.sim import plot
-from tests.conftest import REPO
+from tests.support.paths import REPO
 
 pytestmark = pytest.mark.integration
 DEMO = str(REPO / "config" / "programs" / "demo.nc")

@@ -11,7 +11,7 @@ import sys
 import threading
 
 from liftd.service.logs import LineQueue
-from tests.conftest import REPO
+from tests.support.paths import REPO
 
 SCRIPT = """
 import sys, structlog

@@ -20,8 +20,8 @@ sys.path.insert(0, str(ROOT))
 import pyads  # noqa: E402
 
 from liftd.ads.framing import AmsFramer  # noqa: E402
-from tests.ads_harness import Harness  # noqa: E402
-from tests.conftest import make_channel  # noqa: E402
+from tests.support.ads_harness import Harness  # noqa: E402
+from tests.support.channel import make_channel  # noqa: E402
 
 
 def proxy(listen: socket.socket, target_port: int, log: list[tuple[str, bytes]]) -> None:

@@ -26,7 +26,7 @@ from liftd.ads.constants import IndexGroup
 from liftd.ads.framing import AmsFramer
 from liftd.ads.server import AdsConnection
 from liftd.ads.wire import net_id_bytes
-from tests.ads_fake import LIMITS, NET, QUEUE, FakeTransport, make_server
+from tests.support.ads_fake import LIMITS, NET, QUEUE, FakeTransport, make_server
 
 SOURCE = bytes([10, 0, 0, 9, 1, 1])
 STATS = {"chunks": 0, "bytes": 0}  # for bench/fuzz_connection.py

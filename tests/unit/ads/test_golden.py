@@ -10,7 +10,7 @@ import pytest
 from liftd.ads import wire
 from liftd.ads.constants import Command, StateFlag
 from liftd.ads.framing import AmsFramer
-from tests.conftest import GOLDEN
+from tests.support.paths import GOLDEN
 
 LINES = [
     line.split()

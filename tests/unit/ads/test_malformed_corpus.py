@@ -11,8 +11,8 @@ import pytest
 from liftd.ads import wire
 from liftd.ads.framing import AmsFramer
 from liftd.ads.server import AdsConnection
-from tests.ads_fake import FakeTransport, make_server
-from tests.conftest import GOLDEN
+from tests.support.ads_fake import FakeTransport, make_server
+from tests.support.paths import GOLDEN
 
 CORPUS = [
     [part.strip() for part in line.split("|")]

@@ -10,7 +10,8 @@ from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.params import LiftMethod
 from liftd.cnc.plc import Schedule, SimPlc
 from liftd.cnc.snapshot import ChannelState, Command, GeoInputs, GeoSnapshot
-from tests.conftest import REPO, make_channel
+from tests.support.channel import make_channel
+from tests.support.paths import REPO
 
 DEMO = (REPO / "config" / "programs" / "demo.nc").read_text()
 START = GeoInputs(command=Command.START)

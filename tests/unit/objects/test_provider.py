@@ -13,8 +13,8 @@ from liftd.ads.service import STATIC_HANDLE_BIT
 from liftd.cnc.snapshot import LoopStats, PlcSignal, PlcWrite
 from liftd.objects.catalog import Catalog, GeoView
 from liftd.objects.provider import CncProvider
-from tests.ads_harness import snapshot
-from tests.conftest import make_channel
+from tests.support.ads_harness import snapshot
+from tests.support.channel import make_channel
 
 
 class World:

@@ -13,7 +13,7 @@ from liftd.runtime.records import unpack_input
 from liftd.runtime.shared import INPUT_CAPACITY
 from liftd.service.daemon import Daemon
 from liftd.settings import load_settings
-from tests.conftest import REPO
+from tests.support.paths import REPO
 
 
 def test_a_full_input_queue_answers_0x708_and_keeps_what_it_holds() -> None:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from liftd.cnc.snapshot import ChannelState, Command, GeoInputs, PlcSignal, PlcWrite
 from liftd.runtime.plc_inputs import PlcInputs
-from tests.ads_harness import snapshot
+from tests.support.ads_harness import snapshot
 
 
 def test_levels_hold_and_commands_are_edges() -> None:

@@ -12,7 +12,7 @@ from liftd.runtime.records import (
     pack_input,
     unpack_input,
 )
-from tests.ads_harness import snapshot
+from tests.support.ads_harness import snapshot
 
 
 def test_snapshot_and_stats_round_trip_bit_exactly() -> None:

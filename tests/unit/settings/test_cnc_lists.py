@@ -9,7 +9,7 @@ import pytest
 
 from liftd.cnc.params import LiftMethod, MSync, SlopeType
 from liftd.settings import ConfigError, Severity, load_settings
-from tests.conftest import REPO
+from tests.support.paths import REPO
 
 Machine = Callable[..., Path]
 

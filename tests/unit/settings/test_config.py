@@ -9,7 +9,7 @@ import pytest
 from liftd.settings import ConfigError, load_settings
 from liftd.settings.load import default_config_path, find_config, parse_config_text
 from liftd.settings.model import LiftdConfig
-from tests.conftest import REPO
+from tests.support.paths import REPO
 
 CONTRACT = """
 [cnc]

@@ -7,7 +7,7 @@ from hypothesis import strategies as st
 
 from liftd.settings.isg_list import Severity, parse_list_text, parse_number, read_list
 from liftd.settings.isg_schema import CHANNEL_KEYS, type_list
-from tests.conftest import GOLDEN
+from tests.support.paths import GOLDEN
 
 
 def test_golden_syntax_sample_reads_every_rule() -> None:

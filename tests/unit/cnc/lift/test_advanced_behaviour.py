@@ -9,8 +9,8 @@ import pytest
 from liftd.cnc.params import LiftMethod
 from liftd.cnc.plc import Schedule, parse_feedhold_spec, parse_override_spec
 from liftd.cnc.snapshot import ChannelState, GeoInputs, GeoSnapshot, LiftPhase
-from tests.conftest import make_channel
-from tests.helpers import events, fd_ratios, run_task
+from tests.support.channel import make_channel
+from tests.support.closed_loop import events, fd_ratios, run_task
 
 MM = 1e-3
 TOL = 1 + 1e-9

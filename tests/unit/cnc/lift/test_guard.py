@@ -6,8 +6,8 @@ import pytest
 
 from liftd.cnc.lift.guard import LiftGuard
 from liftd.cnc.lift.profile import LiftProfiles, ProfileError
-from tests.conftest import make_channel
-from tests.helpers import events, fd_ratios, run_task
+from tests.support.channel import make_channel
+from tests.support.closed_loop import events, fd_ratios, run_task
 
 
 def test_guard_bounds_and_clamp() -> None:

@@ -23,8 +23,8 @@ from liftd.cnc.nc.blocks import ErrorId, Severity
 from liftd.cnc.params import ChannelParams, LiftMethod, SlopeType
 from liftd.cnc.plc import Schedule, parse_feedhold_spec, parse_override_spec
 from liftd.cnc.snapshot import ChannelState, GeoInputs, GeoSnapshot, LiftPhase
-from tests.conftest import make_channel
-from tests.helpers import events, run_task
+from tests.support.channel import make_channel
+from tests.support.closed_loop import events, run_task
 
 MM = 1e-3
 A, J = 10.0, 500.0

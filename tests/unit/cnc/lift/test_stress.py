@@ -10,7 +10,7 @@ import pytest
 
 from bench.stress_cases import describe, scenario, violations
 from liftd.cnc.params import LiftMethod
-from tests.helpers import run_task
+from tests.support.closed_loop import run_task
 
 REGRESSIONS = [7, 8, 25, 26, 39, 145, 158, 159, 174, 254, 312, 432, 499, 666, 673, 730, 875]
 

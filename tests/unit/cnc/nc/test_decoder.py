@@ -19,7 +19,8 @@ from liftd.cnc.nc import (
     decode,
 )
 from liftd.cnc.params import LiftMethod, SlopeType
-from tests.conftest import REPO, make_channel
+from tests.support.channel import make_channel
+from tests.support.paths import REPO
 
 MM = 1e-3
 

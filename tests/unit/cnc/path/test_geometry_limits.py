@@ -14,7 +14,7 @@ from liftd.cnc.path.limits import (
     line_limits,
     transition_velocity,
 )
-from tests.conftest import make_channel
+from tests.support.channel import make_channel
 
 
 def test_line_position_tangent_length() -> None:

@@ -15,8 +15,8 @@ from liftd.cnc.path.program import prepare
 from liftd.cnc.path.table import build_table
 from liftd.cnc.plc import Schedule, parse_feedhold_spec, parse_override_spec
 from liftd.cnc.snapshot import ChannelState, Command, GeoInputs
-from tests.conftest import make_channel
-from tests.helpers import events, fd_ratios, positions, run
+from tests.support.channel import make_channel
+from tests.support.closed_loop import events, fd_ratios, positions, run
 
 TOL = 1 + 1e-9
 MM = 1e-3

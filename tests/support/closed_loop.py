@@ -1,29 +1,25 @@
-"""Closed-loop helpers: drive a GeoTask with a virtual clock in a plain loop (no sleeps)."""
+"""Closed-loop helpers: drive a GeoTask with a virtual clock (no sleeps), through the cycle
+driver of `liftd simulate` (`run_cycles`), and measure what it did."""
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
 from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.params import ChannelParams
 from liftd.cnc.plc import Schedule, SimPlc
-from liftd.cnc.snapshot import ChannelState, GeoInputs, GeoSnapshot
+from liftd.cnc.snapshot import GeoInputs, GeoSnapshot
+from liftd.sim.simulate import run_cycles
 
 InputFn = Callable[[float, GeoSnapshot | None], GeoInputs]
 
 
-def run(
-    ch: ChannelParams,
-    text: str,
-    schedule: Schedule | None = None,
-    ack_delay: float = 0.02,
-    max_time: float = 120.0,
-    inputs: InputFn | None = None,
-) -> list[GeoSnapshot]:
-    """Run a program to its end; the simulated PLC acknowledges M functions after ack_delay."""
-    return run_task(ch, text, schedule, ack_delay, max_time, inputs)[1]
+def run(ch: ChannelParams, text: str, *args: Any, **kw: Any) -> list[GeoSnapshot]:
+    """Run a program to its end (run_task's arguments); the snapshots only."""
+    return run_task(ch, text, *args, **kw)[1]
 
 
 def run_task(
@@ -34,20 +30,22 @@ def run_task(
     max_time: float = 120.0,
     inputs: InputFn | None = None,
 ) -> tuple[GeoTask, list[GeoSnapshot]]:
+    """The task and every snapshot, through `liftd simulate`'s own cycle driver; `inputs`
+    replaces the simulated PLC."""
     task = GeoTask(ch, text)
-    plc = SimPlc(ack_delay)
-    sched = schedule or Schedule()
-    out: list[GeoSnapshot] = []
-    last: GeoSnapshot | None = None
-    dt = ch.cycle_time
-    for k in range(1, round(max_time / dt) + 1):
-        t = k * dt
-        inp = inputs(t, last) if inputs is not None else plc.inputs(last, t, sched)
-        last = task.step(inp, t)
-        out.append(last)
-        if last.state in (ChannelState.READY, ChannelState.ERROR) and task.runs:
-            break
-    return task, out
+    plc = SimPlc(ack_delay) if inputs is None else _InputsPlc(inputs)
+    snaps = list(run_cycles(task, plc, schedule or Schedule(), ch.cycle_time, max_time))  # type: ignore[arg-type]
+    return task, snaps
+
+
+class _InputsPlc:
+    """A PLC whose inputs a test computes from the time and the last snapshot."""
+
+    def __init__(self, fn: InputFn) -> None:
+        self.fn = fn
+
+    def inputs(self, last: GeoSnapshot | None, t: float, schedule: Schedule) -> GeoInputs:
+        return self.fn(t, last)
 
 
 def positions(snaps: list[GeoSnapshot]) -> np.ndarray:

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from liftd.ads import wire
 from liftd.ads.client import RawClient
 from liftd.ads.wire import net_id_bytes
-from tests.daemon_helper import Daemon
+from tests.support.daemon import Daemon
 
 ATTACK_ADS = {
     "max_connections": 64,

@@ -13,8 +13,8 @@ from liftd.ads.wire import net_id_bytes
 from liftd.cnc.snapshot import LoopStats
 from liftd.objects.catalog import Catalog, GeoView
 from liftd.objects.provider import CncProvider
-from tests.ads_harness import snapshot
-from tests.conftest import make_channel
+from tests.support.ads_harness import snapshot
+from tests.support.channel import make_channel
 
 NET = net_id_bytes("127.0.0.1.1.1")
 LIMITS = ServiceLimits(max_handles=8, max_notifications=6, max_sum_subcommands=500)

@@ -17,7 +17,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from tests.conftest import REPO
+from tests.support.paths import REPO
 
 _ids = itertools.count(1)
 
@@ -48,6 +48,13 @@ def write_config(tmp: Path, *, program_file: str | None = None, **sections: dict
     return path
 
 
+def free_port() -> int:
+    """A TCP port on loopback that nobody listens on right now."""
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
 class Notify:
     """A datagram socket in tmp standing in for systemd's notification socket."""
 
@@ -71,10 +78,14 @@ class Notify:
 
 
 class Daemon:
-    def __init__(self, config: Path, *args: str, env: dict[str, str] | None = None) -> None:
+    def __init__(
+        self, config: Path, *args: str, env: dict[str, str] | None = None,
+        wrapper: list[str] | None = None,
+    ) -> None:  # fmt: skip
+        """`wrapper`: a command that execs the rest (e.g. to set a process attribute first)."""
         full_env = {**os.environ, "PYTHONUNBUFFERED": "1", **(env or {})}
         self.proc = subprocess.Popen(
-            [sys.executable, "-m", "liftd", "run", "-c", str(config), *args],
+            [*(wrapper or []), sys.executable, "-m", "liftd", "run", "-c", str(config), *args],
             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=full_env,
         )  # fmt: skip
         self.logs: list[dict[str, Any]] = []

@@ -1,0 +1,291 @@
+"""`liftd run` as a Unix service (issue 17): every optional section of liftd.toml can be left
+out, a daemon without a program idles and takes one by reload, `liftd reload` reports what
+happened (and the daemon tells systemd RELOADING=1 … READY=1), no failure path leaves shared
+memory behind, the GEO process loads only what the loop needs, the heartbeat file behind the
+Docker HEALTHCHECK, the GEO timing symbols, the Prometheus exposition."""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import time
+import urllib.request
+from pathlib import Path
+
+import pytest
+
+from tests.support.daemon import Daemon, Notify, free_port, write_config
+from tests.support.paths import REPO
+
+pytestmark = pytest.mark.integration
+SHIPPED = REPO / "config"
+OPTIONAL_SECTIONS = ("program", "ads", "plc", "rt", "log", "metrics")
+
+
+def shm_names(pid: int) -> list[str]:
+    return [n for n in os.listdir("/dev/shm") if n.startswith(f"liftd-{pid}-")]
+
+
+def liftd(*args: str, env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "liftd", *args], capture_output=True, text=True,
+                          timeout=120, check=False, env={**os.environ, **(env or {})})  # fmt: skip
+
+
+SECTIONS = {  # the shipped [cnc] and [program], and what tests set instead of the defaults
+    "cnc": 'startup_list = "cnc/hochlauf.lis"\nchannel = 1\nlift_axis = "Z"\ncycle_time_us = 1000',
+    "program": 'file = "programs/demo.nc"\nautostart = true\nrepeat = true',
+    "ads": 'port = 0\nnet_id = "127.0.0.1.7.1"',
+    "plc": 'm_ack = "auto"',
+    "rt": "sched_fifo_priority = 0\nhold_cpu_dma_latency = false\nlock_memory = false",
+    "log": 'format = "json"',
+    "metrics": "prometheus_port = 0",
+}
+
+
+def config_without(tmp: Path, section: str) -> Path:
+    """The shipped configuration (lists and demo next to it) with one section left out."""
+    root = tmp / "config"
+    shutil.copytree(SHIPPED, root)
+    path = root / "liftd.toml"
+    path.write_text("\n\n".join(f"[{name}]\n{body}" for name, body in SECTIONS.items()
+                                  if name != section) + "\n")  # fmt: skip
+    return path
+
+
+def port_free(port: int) -> bool:
+    with socket.socket() as s:
+        try:
+            s.bind(("127.0.0.1", port))
+        except OSError:
+            return False
+    return True
+
+
+@pytest.mark.parametrize("section", OPTIONAL_SECTIONS)
+def test_the_daemon_starts_with_each_optional_section_left_out(
+    tmp_path: Path, section: str
+) -> None:
+    if section == "ads" and not port_free(48898):
+        pytest.skip("the default ADS port 48898 is taken on this machine")
+    cfg = config_without(tmp_path, section)
+    assert f"[{section}]" not in cfg.read_text()
+    d = Daemon(cfg)
+    if section == "ads":
+        d.net_id = "127.0.0.1.1.1"  # the defaults
+    try:
+        d.ready()
+        state = d.read_symbol("GEO.ch1.state", "<I")
+        assert state == (3 if section == "program" else 4)  # no program: READY, idle
+        assert not shm_names(d.proc.pid)  # the block's name is gone once the GEO process has it
+    finally:
+        assert d.stop() == 0
+    stderr = "".join(d.raw)
+    assert "Traceback" not in stderr and "leaked" not in stderr
+    assert not shm_names(d.proc.pid)
+
+
+def test_an_unreadable_program_is_a_configuration_error_naming_file_line_key_value(
+    tmp_path: Path,
+) -> None:
+    cfg = write_config(tmp_path, program_file="programs/none.nc")
+    r = liftd("run", "-c", str(cfg))
+    line = next(i for i, text in enumerate(cfg.read_text().splitlines(), 1) if "none.nc" in text)
+    assert r.returncode == 2
+    assert f"{cfg}:{line}: program.file = 'programs/none.nc' error: cannot read the program" in (
+        r.stderr
+    )
+    assert "Traceback" not in r.stderr
+    missing = liftd("run", "-c", str(cfg), "--program", str(tmp_path / "gone.nc"))
+    assert missing.returncode == 2 and "gone.nc: error: cannot read program" in missing.stderr
+
+
+def test_without_a_program_the_daemon_idles_and_liftd_reload_brings_one(tmp_path: Path) -> None:
+    """What a PLC integrator expects: the objects are served at once (READY), a program comes
+    with the configuration, `systemctl reload` (liftd reload) applies it and says so."""
+    runtime = tmp_path / "run"
+    runtime.mkdir()
+    env = {"RUNTIME_DIRECTORY": str(runtime)}
+    cfg = write_config(tmp_path, program={"autostart": True, "repeat": True})
+    demo = str(REPO / "config" / "programs" / "demo.nc")
+    cfg.write_text(cfg.read_text().replace(f'file = "{demo}"\n', ""))
+    d = Daemon(cfg, env=env)
+    try:
+        d.ready()
+        assert d.event("daemon.no_program", 1) is not None
+        assert d.read_symbol("GEO.ch1.state", "<I") == 3  # READY: idle, serving
+        cycles = d.read_symbol("GEO.cycle", "<Q")
+        cfg.write_text(cfg.read_text().replace("[program]", f'[program]\nfile = "{demo}"'))
+        r = liftd("reload", env=env)
+        assert r.returncode == 0, r.stderr
+        assert "applied" in r.stdout
+        assert d.event("geo.reloaded", 10) is not None
+        deadline = time.monotonic() + 10
+        while d.read_symbol("GEO.ch1.state", "<I") != 4:  # ACTIVE: autostart of the new program
+            assert time.monotonic() < deadline
+            time.sleep(0.02)
+        assert d.read_symbol("GEO.cycle", "<Q") > cycles
+    finally:
+        assert d.stop() == 0
+
+
+def test_reload_fails_for_a_rejected_configuration_and_succeeds_when_applied(
+    tmp_path: Path,
+) -> None:
+    runtime = tmp_path / "run"
+    runtime.mkdir()
+    notify = Notify(tmp_path)
+    env = {"RUNTIME_DIRECTORY": str(runtime), "NOTIFY_SOCKET": notify.path}
+    cfg = write_config(tmp_path, program={"repeat": True})
+    d = Daemon(cfg, env=env)
+    try:
+        d.ready()
+        started = len(notify.drain())  # READY=1 of the start
+        good = cfg.read_text()
+        cfg.write_text(good.replace("[cnc]", "[cnc]\nbogus_key = 1"))
+        t_before_us = time.clock_gettime_ns(time.CLOCK_MONOTONIC) // 1000
+        rejected = liftd("reload", env=env)
+        assert rejected.returncode == 2, rejected.stdout
+        assert "rejected" in rejected.stderr and "bogus_key" in rejected.stderr
+        cfg.write_text(good)
+        applied = liftd("reload", env=env)
+        assert applied.returncode == 0, applied.stderr
+        d.signal(signal.SIGHUP)  # the signal still reloads, with the same notifications
+        assert d.event("config.reload_accepted", 10) is not None
+        deadline = time.monotonic() + 10
+        while len([m for m in notify.drain()[started:] if m.startswith("READY=1")]) < 3:
+            assert time.monotonic() < deadline, notify.messages
+            time.sleep(0.02)
+        msgs = [m for m in notify.messages[started:] if m.startswith(("RELOADING=1", "READY=1"))]
+        assert [m.split("\n")[0] for m in msgs] == ["RELOADING=1", "READY=1"] * 3
+        stamp = int(re.search(r"MONOTONIC_USEC=(\d+)", msgs[0]).group(1))  # type: ignore[union-attr]
+        assert t_before_us <= stamp <= t_before_us + 60_000_000  # CLOCK_MONOTONIC, µs
+        assert "STATUS=reload rejected" in msgs[1] and "STATUS=reload applied" in msgs[3]
+        assert d.proc.poll() is None
+    finally:
+        assert d.stop() == 0
+        notify.close()
+    assert liftd("reload", env=env).returncode == 3  # no daemon: no answer
+
+
+def test_no_failure_path_leaves_shared_memory_behind(tmp_path: Path) -> None:
+    before = Daemon(write_config(tmp_path), "--trace", str(tmp_path / "nodir" / "t.csv"))
+    assert before.wait() == 3  # fails before the GEO process exists
+    first = Daemon(write_config(tmp_path))
+    try:
+        port = first.ready()
+        (tmp_path / "second").mkdir()
+        after = Daemon(write_config(tmp_path / "second", ads={"port": port}))
+        assert after.wait() == 3  # fails with the GEO process running
+    finally:
+        first.stop()
+    killed = Daemon(write_config(tmp_path))
+    killed.ready()
+    geo = subprocess.run(["pgrep", "-P", str(killed.proc.pid)], capture_output=True, text=True,
+                         check=False).stdout.split()  # fmt: skip
+    for pid in geo:
+        os.kill(int(pid), signal.SIGKILL)
+    assert killed.wait() == 3
+    daemon_killed = Daemon(write_config(tmp_path))
+    daemon_killed.ready()
+    daemon_killed.proc.kill()
+    daemon_killed.wait()
+    for d in (before, first, after, killed, daemon_killed):
+        assert not shm_names(d.proc.pid)
+        assert "leaked" not in "".join(d.raw) and "Traceback" not in "".join(d.raw)
+
+
+def test_the_geo_process_maps_no_library_the_loop_does_not_need(tmp_path: Path) -> None:
+    d = Daemon(write_config(tmp_path, program={"repeat": True}))
+    try:
+        d.ready()
+        (geo,) = subprocess.run(["pgrep", "-P", str(d.proc.pid)], capture_output=True,
+                                text=True, check=False).stdout.split()  # fmt: skip
+        maps = Path(f"/proc/{geo}/maps").read_text()
+        cmdline = Path(f"/proc/{geo}/cmdline").read_bytes().split(b"\0")
+    finally:
+        assert d.stop() == 0
+    assert cmdline[1:3] == [b"-m", b"liftd.runtime"]
+    for lib in ("numpy", "pydantic_core", "uvloop", "matplotlib", "AdsLib", "libcrypto"):
+        assert lib not in maps, lib
+    assert "ruckig" in maps  # the core's own
+
+
+def test_the_heartbeat_file_behind_the_docker_healthcheck(tmp_path: Path) -> None:
+    beat = tmp_path / "heartbeat"
+    check = re.search(r'HEALTHCHECK[^\n]*\\\n\s*CMD \["/bin/sh", "-c", "(.*)"\]',
+                      (REPO / "Dockerfile").read_text()).group(1).replace('\\"', '"')  # type: ignore[union-attr]  # fmt: skip
+
+    def healthy() -> bool:
+        r = subprocess.run(["/bin/sh", "-c", check], env={**os.environ, "LIFTD_HEARTBEAT": str(beat)},
+                           capture_output=True, check=False, timeout=10)  # fmt: skip
+        return r.returncode == 0
+
+    assert not healthy()  # no daemon yet
+    d = Daemon(write_config(tmp_path), env={"LIFTD_HEARTBEAT": str(beat)})
+    try:
+        d.ready()
+        deadline = time.monotonic() + 5
+        while not beat.exists():
+            assert time.monotonic() < deadline
+            time.sleep(0.05)
+        first = beat.stat().st_mtime_ns
+        os.utime(beat, (time.time() - 60, time.time() - 60))  # stale …
+        assert not healthy()
+        deadline = time.monotonic() + 5
+        while beat.stat().st_mtime_ns <= first:  # … renewed while the loop cycles
+            assert time.monotonic() < deadline
+            time.sleep(0.05)
+        assert healthy()
+    finally:
+        assert d.stop() == 0
+
+
+def test_geo_timing_reports_compute_max_and_the_cycles_over_a_quarter(tmp_path: Path) -> None:
+    d = Daemon(write_config(tmp_path, program={"repeat": True}))
+    try:
+        d.ready()
+        over = d.read_symbol("GEO.timing.compute_over_25pct", "<I")
+        cycles = d.read_symbol("GEO.cycle", "<Q")
+        assert 0 <= over <= cycles
+        assert d.read_symbol("GEO.timing.compute_max_us", "<d") > 0.0
+    finally:
+        assert d.stop() == 0
+    stopped = d.event("daemon.stopped", 1)
+    assert stopped is not None
+    assert stopped["compute_max_us"] > 0 and 0 <= stopped["compute_over_25pct"] <= stopped["cycles"]
+
+
+def test_prometheus_exposition_has_help_fixed_buckets_sums_and_process_metrics(
+    tmp_path: Path,
+) -> None:
+    port = free_port()
+    d = Daemon(write_config(tmp_path, metrics={"prometheus_port": port}))
+    try:
+        d.ready()
+        scrapes = [
+            urllib.request.urlopen(f"http://127.0.0.1:{port}/metrics", timeout=5).read().decode()
+            for _ in range(2)
+        ]
+    finally:
+        assert d.stop() == 0
+    body = scrapes[1]
+    names = set(re.findall(r"^# TYPE (\S+) ", body, re.M))
+    helps = set(re.findall(r"^# HELP (\S+) ", body, re.M))
+    assert names <= helps  # every metric explains itself
+    for name in ("liftd_geo_cycles_total", "liftd_geo_exceeded_total",
+                 "liftd_geo_compute_over_25pct_total", "liftd_ads_requests_total",
+                 "liftd_geo_compute_seconds", "liftd_geo_lateness_seconds",
+                 "process_resident_memory_bytes", "liftd_geo_process_resident_memory_bytes"):  # fmt: skip
+        assert name in names, name
+    buckets = [re.findall(r'liftd_geo_compute_seconds_bucket\{le="([^"]+)"\}', b) for b in scrapes]
+    assert buckets[0] == buckets[1] and len(buckets[0]) == 11 and buckets[0][-1] == "+Inf"
+    values = {k: float(v) for k, v in (line.rsplit(" ", 1) for line in body.splitlines()
+                                       if line and not line.startswith("#"))}  # fmt: skip
+    count = values["liftd_geo_compute_seconds_count"]
+    assert count > 0 and values['liftd_geo_compute_seconds_bucket{le="+Inf"}'] == count
+    assert 0 < values["liftd_geo_compute_seconds_sum"] < count * 0.01  # mean < 10 ms
