@@ -150,19 +150,19 @@ def wide_scenario(seed: int, method: LiftMethod = LiftMethod.ADVANCED) -> Scenar
             lines.append(f"G01 X{x:.3f} F6000")
     lines.append(f"G01 X{min(x + 5.0, 2900.0):.3f} F6000")
     lines.append("M30")
-    steps = tuple(
-        sorted(
-            (rng.uniform(0.0, 3.0), rng.choice([0.0, 0.1, 0.5, 0.8, 1.0, 1.2, 1.5, 2.0]))
-            for _ in range(rng.randint(0, 6))
-        )
+    steps = sorted(
+        (rng.uniform(0.0, 3.0), rng.choice([0.0, 0.1, 0.5, 0.8, 1.0, 1.2, 1.5, 2.0]))
+        for _ in range(rng.randint(0, 6))
     )
+    if steps and steps[-1][1] < 0.5:  # the program must end: the PLC turns it back up
+        steps.append((steps[-1][0] + rng.uniform(0.05, 0.5), rng.choice([0.5, 1.0, 2.0])))
     holds = tuple(
         sorted(
             (t, t + rng.uniform(0.01, 0.3))
             for t in (rng.uniform(0.05, 3.0) for _ in range(rng.randint(0, 3)))
         )
     )
-    return Scenario(seed, ch, "\n".join(lines) + "\n", Schedule(steps, holds))
+    return Scenario(seed, ch, "\n".join(lines) + "\n", Schedule(tuple(steps), holds))
 
 
 def violations(sc: Scenario, snaps: list, records: list) -> list[str]:  # type: ignore[type-arg]

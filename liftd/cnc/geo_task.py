@@ -63,6 +63,7 @@ class GeoTask:
         self.error_line = 0
         self.events: list[Event] = []
         self.waiting: list[Action] = []  # actions left at the boundary where the path rests
+        self.z_rest: float | None = None  # Z after a lift ended where the path still rests
         self.wait_since = 0.0  # time from which the current wait counts
         self.ack_time = 0.0
         self.runs = 0
@@ -170,9 +171,21 @@ class GeoTask:
         return segs[min(self.interp.segment, len(segs) - 1)].line if segs else 0
 
     def _positions(self) -> tuple[float, ...]:
-        pos = self.interp.position()
+        """Command positions: the path's, Z from the lift while a lift runs. Where the path rests
+        on a boundary, it is where the path arrived (the end of the block before), not the start
+        of the next block: the decoder puts a lift's POS there, which Z reaches only through the
+        lift (a range without path motion after a wait made Z jump, issue 15)."""
+        z = self.z_index
+        k = self.interp.stopped_at
+        segs = self.prog.path.segments
+        if k is not None and 0 < k <= len(segs):
+            pos = segs[k - 1].geom.end
+            if self.z_rest is not None:
+                pos = (*pos[:z], self.z_rest, *pos[z + 1 :])
+        else:
+            pos = self.interp.position()
         if self.lift.current is not None:
-            pos = (*pos[: self.z_index], self.lift.z, *pos[self.z_index + 1 :])
+            pos = (*pos[:z], self.lift.z, *pos[z + 1 :])
         return pos
 
     # -- lift horizon and override --------------------------------------------------------------
@@ -318,6 +331,7 @@ class GeoTask:
                 k = self.interp.stopped_at
                 rested = self.interp.t_state
                 self.interp.resume(self.wait_since)
+                self.z_rest = None
                 rng = self.lift.current
                 rec = self.lift.record
                 if rng is not None and rng.k_start < k and (rng.k_end < 0 or k < rng.k_end):
@@ -452,6 +466,7 @@ class GeoTask:
         rng = self.lift.current
         if rng is not None:
             self.interp.drop_lift_stop(rng.k_end)
+        self.z_rest = self.lift.z  # where Z stays while the path still rests here
         rec = self.lift.finish(t)
         if rec is not None:
             nominal = self.interp.nominal_arrival

@@ -107,7 +107,8 @@ def build_table(path: PathProgram) -> PathTable:
     replan = [True] * (n + 1)
     for k in range(1, n):
         changes = not (_same(feed[k], feed[k - 1]) and _same(cap[k], cap[k - 1]))
-        drop = feed[k] < feed[k - 1] or cap[k] < cap[k - 1]
+        drop = not _same(feed[k], feed[k - 1]) and feed[k] < feed[k - 1]
+        drop = drop or (not _same(cap[k], cap[k - 1]) and cap[k] < cap[k - 1])
         low_point = point_cap[k] < min(cap[k - 1], cap[k]) * (1.0 - LIMIT_TOL)
         constraint[k] = gate[k] or bounds[k].conditional_stop or drop or low_point
         replan[k] = constraint[k] or changes

@@ -37,10 +37,12 @@ from ruckig import Trajectory
 
 from liftd.cnc.path.table import PathTable
 from liftd.cnc.path.velocity import (
+    brake_below,
     brake_distance,
     lowest_reachable_from,
     projected_velocity,
     ramp_distance,
+    reach_below,
     reach_velocity,
 )
 from liftd.cnc.ruckig1 import ProfileError, Ruckig1
@@ -49,10 +51,16 @@ INF = float("inf")
 EPS_S = 1e-12  # m: a boundary counts as reached within this distance
 MAX_CANDIDATES = 24  # constraints considered at once; beyond, the last one counts as a stop
 SLACK_TOL = 1e-9  # m
+# A step is kept only if every constraint keeps this much slack: the profile toward it from the
+# step's start is then comfortably feasible for ruckig (at the very edge it may refuse by
+# rounding). 1 µm of path costs nothing measurable.
+SLACK_MARGIN = 1e-6  # m
+CHAIN_MARGIN = 2.0 * SLACK_MARGIN  # caps from a chain leave this much slack for the next one
 CAP_TOL = 1e-6  # relative: a crossing velocity within this of its cap is at the cap
 GATE_TOL = 1e-6  # m/s²: zero acceleration at a run boundary, within ruckig's precision
 CRUISE = -1
-BRAKE = -2
+BRAKE = -2  # the last resort: to rest (counted as an error)
+BRAKE_TO = -3  # to a constraint's cap at once, on its braking curve
 
 
 @dataclass(frozen=True, slots=True)
@@ -68,7 +76,7 @@ class _Plan:
     """A ruckig profile started at t0, extended at constant velocity after its end; its end
     snaps to the goal (target position, goal velocity) it was planned for."""
 
-    __slots__ = ("dur", "goal", "p_end", "t0", "traj", "v_end", "window")
+    __slots__ = ("dur", "goal", "p_end", "serves", "t0", "traj", "v_end", "window")
 
     def __init__(
         self, traj: Trajectory, t0: float, goal: int, window: int, p_goal: float | None,
@@ -76,7 +84,8 @@ class _Plan:
     ) -> None:  # fmt: skip
         self.traj = traj
         self.t0 = t0
-        self.goal = goal  # CRUISE, BRAKE or the target boundary
+        self.goal = goal  # CRUISE, BRAKE, BRAKE_TO or the target boundary
+        self.serves = goal  # the constraint boundary the profile keeps (-1 for none)
         self.window = window  # window end when planned
         self.dur: float = float(traj.duration)
         p, v, _ = traj.at_time(self.dur)
@@ -127,6 +136,8 @@ class Tracker:
         self.lift_stops = lift_stops if lift_stops is not None else set()
         self.acked = acked if acked is not None else set()
         self.plan: _Plan | None = None
+        self._beyond_key: tuple[int, int, float] | None = None
+        self._beyond_val = INF
         self.errors = 0
         self.last_error = ""
 
@@ -136,13 +147,17 @@ class Tracker:
     ) -> None:
         self.t, self.s, self.v, self.a, self.seg = t, s, v, a, seg
         self.stopped_at = stopped_at
+        self._beyond_key = None  # the stop sets may have changed
         self.parked = stopped_at is None and self.hold and v == 0.0 and a == 0.0
         self.plan = None
 
     def set_inputs(self, ov: float, hold: bool) -> None:
+        """Override (fraction) and feed hold. Override 0 acts as a hold; the caps keep the last
+        override above 0 (a stopping path does not make every corner a stop)."""
         hold = hold or ov <= 0.0
-        if ov != self.ov or hold != self.hold:
-            self.ov, self.hold = ov, hold
+        cap_ov = ov if ov > 0.0 else self.ov
+        if cap_ov != self.ov or hold != self.hold:
+            self.ov, self.hold = cap_ov, hold
             self.plan = None
             if not hold:
                 self.parked = False
@@ -210,7 +225,10 @@ class Tracker:
 
     def _collect(self, s: float, seg: int, reach: float) -> list[tuple[int, float, float, bool]]:
         """Constraints within `reach` of (s, seg), up to and including the first run boundary or
-        stop: (boundary, position, effective cap, zero acceleration required)."""
+        stop: (boundary, position, cap, zero acceleration required). The run boundary's cap is
+        lowered so that everything after it stays reachable (`_beyond`): the constraints after
+        it are not in the list. The others keep their own caps: every later one up to the run
+        boundary is in the list and checked by itself."""
         tb = self.tb
         n = tb.n
         out: list[tuple[int, float, float, bool]] = []
@@ -230,27 +248,32 @@ class Tracker:
             out.append((b, s_b, cap, gate))
             if gate:
                 break
-        # backward: arriving at each one at its cap leaves every later one reachable
-        for i in range(len(out) - 2, -1, -1):
-            bi, si, ci, gi = out[i]
-            bn, sn, cn, _ = out[i + 1]
-            a_max, j_max = self._limits(bn - 1)
-            lim = reach_velocity(cn, sn - si, a_max, j_max)
-            if lim < ci:
-                out[i] = (bi, si, lim, gi)
         return out
+
+    def _target_cap(self, cands: list[tuple[int, float, float, bool]], i: int) -> float:
+        """The velocity to plan for at candidate i (zero acceleration there): its cap, lowered
+        so that the later candidates in the list stay reachable from it."""
+        e = cands[-1][2]
+        for k in range(len(cands) - 2, i - 1, -1):
+            _, sk, ck, _ = cands[k]
+            bn, sn, _, _ = cands[k + 1]
+            a_max, j_max = self._limits(bn - 1)
+            e = min(ck, reach_below(e, max(sn - sk - CHAIN_MARGIN, 0.0), a_max, j_max))
+        return e
 
     def _beyond(self, g: int, cap: float, w: int) -> float:
         """Velocity at run boundary g (zero acceleration) from which every constraint after it
-        up to the window end stays reachable; only constraints within the stopping distance
-        from `cap` can lower it below `cap`."""
+        up to the window end stays reachable. Braking does not compose across run boundaries
+        (each one wants zero acceleration), so far constraints matter through the chain: it is
+        followed up to MAX_CANDIDATES constraints, the last counting as a stop (conservative).
+        Cached per (g, window end, override, stop set): a step within one segment asks again."""
+        key = (g, w, self.ov)
+        if self._beyond_key == key:
+            return self._beyond_val
         tb = self.tb
         s_g = tb.s[g]
         chain: list[tuple[float, float, int]] = []
         for b in self._ahead(g + 1, w):
-            a_max, j_max = self._limits(b - 1)
-            if tb.s[b] - s_g > reach_velocity_inverse(cap, a_max, j_max):
-                break
             c, _, stop = self._cap(b, w)
             chain.append((tb.s[b], c, b))
             if stop or len(chain) == MAX_CANDIDATES:
@@ -262,7 +285,8 @@ class Tracker:
             e = min(c_i, e)
             s_prev = chain[i - 1][0] if i > 0 else s_g
             a_max, j_max = self._limits(b_i - 1)
-            e = reach_velocity(e, s_i - s_prev, a_max, j_max)
+            e = reach_below(e, max(s_i - s_prev - CHAIN_MARGIN, 0.0), a_max, j_max)
+        self._beyond_key, self._beyond_val = key, e
         return e
 
     @staticmethod
@@ -270,8 +294,15 @@ class Tracker:
         """Least distance after which the path can be below `cap` (with zero acceleration where
         `gate`)."""
         if projected_velocity(v, a, j_max) > cap:
-            return brake_distance(v, a, cap, a_max, j_max)
-        return ramp_distance(v, a, j_max) if gate else 0.0
+            return brake_below(v, a, cap, a_max, j_max)
+        if not gate:
+            return 0.0
+        # zero acceleration there: ramp it to 0 now, or (shorter when already braking hard)
+        # brake to rest
+        ramp = ramp_distance(v, a, j_max)
+        if a < 0.0 and v > 0.0:
+            ramp = min(ramp, brake_distance(v, a, 0.0, a_max, j_max))
+        return ramp
 
     # -- planning -------------------------------------------------------------------------------
     def _replan(self, dt: float, force: int | None = None) -> None:
@@ -287,7 +318,8 @@ class Tracker:
         cands = self._collect(s, seg, reach)
         if force is not None and all(c[0] != force for c in cands):
             force = None  # not a constraint from here: the most binding one
-        for c in cands:
+        best_i = -1
+        for i, c in enumerate(cands):
             b, s_c, cap, gate = c
             if force is not None and b != force:
                 continue
@@ -295,32 +327,79 @@ class Tracker:
                 continue  # cannot bind from here
             slack = s_c - s - self._need(v, a, cap, gate, a_max, j_max)
             if slack < best_slack:
-                best, best_slack = c, slack
+                best, best_slack, best_i = c, slack, i
         if best is None:
             self._cruise(ceiling, a_max, j_max, w)
             return
-        b, s_c, cap, gate = best
+        b, s_c, _, gate = best
+        cap = self._target_cap(cands, best_i)
         d = s_c - s
-        if self.hold or best_slack < -SLACK_TOL:
-            target = min(cap, lowest_reachable_from(v, a, d, a_max, j_max))
-        elif v_p > cap:
-            target = cap
-        else:  # only the zero acceleration binds: a velocity surely reachable at s_c
-            ramp = ramp_distance(v, a, j_max)
-            target = min(
-                cap, max(ceiling, v_p), reach_velocity(v_p, max(d - ramp, 0.0), a_max, j_max)
-            )
-        v_max = max(v, target, 1e-12) if self.hold else max(ceiling, target, 1e-12)
-        for tgt in (target, target * (1.0 + 1e-7) + 1e-10, target * (1.0 - 1e-7)):
-            try:
-                traj = self.calc.position(s, v, a, s_c, tgt, max(v_max, tgt), a_max, j_max)
-            except ProfileError as exc:
-                self.last_error = str(exc)
-                continue
-            self.plan = _Plan(traj, self.t, b, w, s_c, tgt)
+        target = self._pick_target(v, a, v_p, d, cap, ceiling, a_max, j_max)
+        # above the ceiling (the override just dropped, or a hold): no acceleration, but the
+        # brake toward the target may start from the current velocity
+        # (a positive acceleration still lifts it to v_p while it is ramped down)
+        if self.hold or v > ceiling:
+            v_max = max(ceiling, target, v, v_p, 1e-12)
+        else:
+            v_max = max(ceiling, target)
+        # Ruckig decides at the edge of what is feasible (rounding): the target; else the
+        # value nearest to it, toward v_p (the velocity after ramping the acceleration to 0),
+        # that ruckig accepts; else rest or a cap. A feed cap the path cannot get down to after
+        # a sudden override drop is passed as slowly as it can: only the axes' and transitions'
+        # caps are hard.
+        if self._try_target(s, v, a, s_c, target, v_max, a_max, j_max, b, w):
             return
+        if target > 0.0 and self._try_target(s, v, a, s_c, 0.0, v_max, a_max, j_max, b, w):
+            return  # rest: safe whenever it fits
+        hard = 0.0 if self.is_stop(b) or b == w else min(tb.point_cap[b], tb.cap[b])
+        if v_p <= max(hard, target) and self._try_target(
+            s, v, a, s_c, v_p, max(v_max, v_p), a_max, j_max, b, w
+        ):
+            good, bad = v_p, target
+            for _ in range(14):  # from v_p toward the target while ruckig still accepts it
+                mid = 0.5 * (good + bad)
+                if self._try_target(s, v, a, s_c, mid, max(v_max, mid), a_max, j_max, b, w):
+                    good = mid
+                else:
+                    bad = mid
+            self._try_target(s, v, a, s_c, good, max(v_max, good), a_max, j_max, b, w)
+            return
+        for tgt in (0.0, cap, hard):
+            if self._try_target(s, v, a, s_c, tgt, max(v_max, tgt), a_max, j_max, b, w):
+                return
         self._count(f"target profile refused at boundary {b}")
         self._brake(a_max, j_max, w)
+
+    def _try_target(
+        self, s: float, v: float, a: float, s_c: float, tgt: float, v_max: float,
+        a_max: float, j_max: float, b: int, w: int,
+    ) -> bool:  # fmt: skip
+        try:
+            traj = self.calc.position(s, v, a, s_c, tgt, max(v_max, tgt), a_max, j_max)
+        except ProfileError as exc:
+            self.last_error = str(exc)
+            return False
+        self.plan = _Plan(traj, self.t, b, w, s_c, tgt)
+        return True
+
+    def _pick_target(
+        self, v: float, a: float, v_p: float, d: float, cap: float, ceiling: float,
+        a_max: float, j_max: float,
+    ) -> float:  # fmt: skip
+        """The highest velocity ≤ cap the path can have, with zero acceleration, at distance d:
+        after ramping the acceleration to 0 and speeding up as far as d allows, the cap after a
+        brake, or rest; the lowest reachable one if none fits (a hold, a sudden override drop)."""
+        if not self.hold:
+            top = min(cap, ceiling)  # the ceiling holds up to there
+            ramp = ramp_distance(v, a, j_max)
+            fits = d + SLACK_TOL
+            if v_p <= top and ramp <= fits:
+                return min(top, reach_velocity(v_p, max(d - ramp, 0.0), a_max, j_max))
+            if v_p > top and brake_distance(v, a, top, a_max, j_max) <= fits:
+                return top
+            if brake_distance(v, a, 0.0, a_max, j_max) <= fits:
+                return 0.0
+        return min(cap, lowest_reachable_from(v, a, d, a_max, j_max))
 
     def _cruise(self, ceiling: float, a_max: float, j_max: float, w: int) -> None:
         try:
@@ -371,20 +450,34 @@ class Tracker:
             cut = -1
             b = self.seg + 1
             while b <= n and s1 >= tb.s[b] - EPS_S:
+                if b == plan.goal:  # reached when its profile ends, exactly in its goal state
+                    if plan.t0 + plan.dur <= t_end:
+                        cut = b
+                    break
                 if tb.replan[b] or b == w or b in self.lift_stops:
                     cut = b
                     break
                 b += 1
-            if cut >= 0:
+            if cut >= 0 and cut == plan.goal:
+                t_end = plan.t0 + plan.dur
+                s1, v1, a1 = tb.s[cut], plan.v_end, 0.0
+                seg1 = cut
+            elif cut >= 0:
                 t_end = min(max(plan.time_at(tb.s[cut], t_end), self.t), t_end)
                 _, v1, a1 = plan.at(t_end)
                 s1 = tb.s[cut]
                 seg1 = cut
             else:
                 seg1 = b - 1
+                if b <= n and b == plan.goal and s1 > tb.s[b]:
+                    s1 = tb.s[b]  # not there before the profile ends (rounding of its tail)
             v1 = max(v1, 0.0)
             if forced < 4:
-                violated = self._violated(s1, v1, a1, seg1, dt, plan.goal)
+                violated = None
+                if cut >= 0 and cut != plan.serves and not self._passable(cut, v1, a1, w):
+                    violated = cut  # the step ends on a constraint it does not keep
+                if violated is None:
+                    violated = self._violated(s1, v1, a1, seg1, dt, plan.serves)
                 if violated is not None:
                     forced += 1
                     # the window end seen from the end state lies beyond the one seen now
@@ -394,12 +487,20 @@ class Tracker:
             forced = 0
             if cut >= 0:
                 self._arrive(cut, out)
-            elif plan.goal >= 0 and self.t >= plan.t0 + plan.dur:
-                self.plan = None  # a target reached between boundaries: plan the next one
-            elif plan.goal == BRAKE and self.v == 0.0:
-                self.plan = None
+            elif plan.goal != CRUISE and self.t >= plan.t0 + plan.dur:
+                self.plan = None  # a goal reached between boundaries: plan the next one
         self._count("advance did not converge")
         return out
+
+    def _passable(self, b: int, v: float, a: float, w: int) -> bool:
+        """Whether the path may reach constraint boundary b at (v, a)."""
+        tb = self.tb
+        if not tb.constraint[b] and b != w and b not in self.lift_stops:
+            return True
+        cap, gate, _ = self._cap(b, w)
+        if v > cap * (1.0 + CAP_TOL) + 1e-12:
+            return False
+        return not gate or abs(a) <= GATE_TOL
 
     def _violated(self, s: float, v: float, a: float, seg: int, dt: float, goal: int) -> int | None:
         """The first constraint that could no longer be kept from (s, v, a), if any."""
@@ -410,7 +511,7 @@ class Tracker:
             if b == goal:
                 continue
             slack = s_c - s - self._need(v, a, cap, gate, a_max, j_max)
-            if slack < -SLACK_TOL * (1.0 + s_c - s):
+            if slack < SLACK_MARGIN:
                 return b
         return None
 
@@ -456,11 +557,3 @@ class Tracker:
         self.seg = b if b < tb.n else tb.n
         if tb.needs_time[b]:
             out.append(Crossing(b, t, False, v, a))
-
-
-def reach_velocity_inverse(v: float, a_max: float, j_max: float) -> float:
-    """Distance needed to brake from v (zero acceleration) to rest: constraints farther away
-    than this cannot lower the velocity allowed at a point where the path runs at v."""
-    if v <= 0.0:
-        return 0.0
-    return brake_distance(v, 0.0, 0.0, a_max, j_max)

@@ -140,3 +140,26 @@ def lowest_reachable_from(v: float, a: float, length: float, a_max: float, j_max
         else:
             lo = mid
     return hi
+
+
+# -- caps are upper bounds: any end velocity below them will do ----------------------------------
+# With zero acceleration at both ends, the distance of a velocity change is not monotonic in the
+# end velocity near 0 (it rises from v1 = 0 to v1 = v/3, then falls): braking to rest can take
+# less distance than braking to a small positive velocity. A cap only asks for "at most", so
+# these take the better of the two ends of [0, cap].
+def reach_below(cap: float, length: float, a_max: float, j_max: float) -> float:
+    """Highest velocity (zero acceleration) from which some velocity ≤ cap (zero acceleration)
+    is reachable within `length`."""
+    best = reach_velocity(cap, length, a_max, j_max)
+    if cap > 0.0:
+        best = max(best, reach_velocity(0.0, length, a_max, j_max))
+    return best
+
+
+def brake_below(v: float, a: float, cap: float, a_max: float, j_max: float) -> float:
+    """Least distance in which the velocity from (v, a) gets to some value ≤ cap with zero
+    acceleration (the brake to cap or to rest, whichever is shorter)."""
+    d = brake_distance(v, a, cap, a_max, j_max)
+    if cap > 0.0:
+        d = min(d, brake_distance(v, a, 0.0, a_max, j_max))
+    return d

@@ -64,8 +64,10 @@ def test_a_start_from_elsewhere_prepares_the_program_for_that_position() -> None
     _, third = run_once(task, k + len(second), ch.cycle_time)
     assert task.programs.loads == 2  # prepared by the second run's START
     assert len(third) == len(second)  # the same run again, an other time base (rounding only)
+    # the tracker decides at sub-cycle instants against slack margins: rounding of the later
+    # time base may shift a decision by ulps, which shows as nanometres, never more
     assert max(abs(a - b) for s3, s2 in zip(third, second, strict=True)
-               for a, b in zip(s3.positions, s2.positions, strict=True)) < 1e-10  # fmt: skip
+               for a, b in zip(s3.positions, s2.positions, strict=True)) < 1e-8  # fmt: skip
 
 
 def test_a_task_created_mid_run_starts_its_path_in_its_first_cycle() -> None:
