@@ -34,9 +34,13 @@ def open_range(
     lineno: int,
     column: int,
     warnings: list[NcError],
+    unit: float = units.M_PER_MM,
+    offset: float = 0.0,
 ) -> LiftStart:
     """The range a LIFT_START / LIFT opens with the lift axis at z0 (m); NcFault if it is
-    refused, warnings appended as found."""
+    refused, warnings appended as found. `unit`: m per program length unit (G71 mm, G70
+    inch, vendor §3 "[mm, inch]"); `offset`: the lift axis' zero offset, added to absolute
+    POS / POS_LIMIT like to any absolute coordinate (G91 values are relative to z0)."""
     require_method(ctx, column)
     if open_lift is not None:
         if words.keyword is LiftKeyword.SINGLE:
@@ -81,9 +85,9 @@ def open_range(
                 Severity.WARNING,
             )
         )
-    base = z0 if words.incremental else 0.0
-    target = z0 if words.pos_mm is None else base + units.mm_to_m(words.pos_mm)
-    limit = base + units.mm_to_m(words.pos_limit_mm)
+    base = z0 if words.incremental else offset
+    target = z0 if words.pos_mm is None else base + words.pos_mm * unit
+    limit = base + words.pos_limit_mm * unit
     z = ctx.axis_names.index(ctx.lift_axis)
     ctx.check_position(z, target, column)
     ctx.check_position(z, limit, column)

@@ -1,21 +1,29 @@
 """The words of one NC block, collected before the decoder interprets them: a fast path for
-the plain address words CAM post-processors emit, and the full path over the lexer's tokens.
-Knows the address letters, not their meaning."""
+the plain address words CAM post-processors emit, and the full path over the lexer's tokens
+(expressions evaluated against the P parameters, assignments executed left to right).
+Knows the address letters, not their meaning.
+
+A word that cannot be used becomes a fault of the block and is skipped; the other words are
+still collected, so the block's modal state (F, G90/G91, the plane ...) is not lost with it
+(issue 19: no cascades)."""
 
 from __future__ import annotations
 
 from liftd.cnc.nc.blocks import ErrorId, NcFault
+from liftd.cnc.nc.expr import Expr, ExprError, Params, check_index, compile_text
 from liftd.cnc.nc.lexer import Token, TokenKind
 from liftd.cnc.nc.lift_words import LiftSyntaxError, LiftWords, is_lift_command, parse_lift_words
 
-TECHNOLOGY_LETTERS = frozenset("STDH")  # laser power, tool, ...: accepted and ignored
+TECHNOLOGY_LETTERS = frozenset("STH")  # laser power, tool number, H function: ignored
+VALUE_LETTERS = "FIJKRD"  # feed, circle centre / radius, tool radius selection (D)
 NUMBER_CHARS = frozenset("0123456789.+-eE")
 
 
 class Words:
-    """The words of one block, collected before they are interpreted."""
+    """The words of one block, collected before they are interpreted. Read-only once built
+    (a subroutine line's Words are reused for every call)."""
 
-    __slots__ = ("bare", "command", "gcodes", "lift", "m", "n", "values")
+    __slots__ = ("bare", "call", "command", "faults", "gcodes", "lift", "m", "n", "values")
 
     def __init__(self) -> None:
         self.n: int | None = None
@@ -25,58 +33,188 @@ class Words:
         self.lift: tuple[str, LiftWords, int] | None = None
         self.bare: list[tuple[float, int]] = []
         self.command: Token | None = None
+        self.call: Token | None = None  # LL / L / L SEQUENCE, always the block's last word
+        self.faults: list[NcFault] = []
 
 
-def collect(tokens: list[Token], axes: frozenset[str]) -> Words:
-    """The words of a block from the full lexer's tokens; NcFault for what is not allowed."""
+class Template:
+    """A subroutine line prepared once: the words that never change (G, M, N, numbers,
+    the call) collected, the expression words kept for evaluation per call."""
+
+    __slots__ = ("base", "dynamic", "ordered")
+
+    def __init__(self, base: Words, dynamic: list[Token], ordered: bool = False) -> None:
+        self.base = base
+        self.dynamic = dynamic
+        self.ordered = ordered  # a call or command in the line: collect all tokens in order
+
+    def words(self, axes: frozenset[str], params: Params) -> Words:
+        if self.ordered:
+            w = collect(self.dynamic, axes, params)
+            w.faults[:0] = self.base.faults
+            return w
+        base = self.base
+        w = Words()
+        w.n = base.n
+        w.gcodes = base.gcodes
+        w.m = base.m
+        w.bare = list(base.bare)
+        w.command = base.command
+        w.call = base.call
+        w.values = dict(base.values)
+        w.faults = list(base.faults)
+        values = w.values
+        for tok in self.dynamic:
+            expr = tok.expr
+            letter = tok.letter
+            if (
+                tok.kind is TokenKind.BRACKET
+                and expr is not None
+                and letter in axes
+                and letter not in values
+            ):
+                try:
+                    values[letter] = (expr.value(params), tok.column)
+                except ExprError as exc:
+                    w.faults.append(NcFault(ErrorId(exc.error_id), tok.column, exc.message))
+                continue
+            try:
+                _collect_one(tok, w, axes, params, self.dynamic)
+            except NcFault as fault:
+                w.faults.append(fault)
+            except ExprError as exc:
+                w.faults.append(NcFault(ErrorId(exc.error_id), tok.column, exc.message))
+        return w
+
+
+def template(tokens: list[Token], axes: frozenset[str]) -> Template | Words:
+    """Split a line's tokens for reuse; plain lines come back as their Words."""
+    dynamic = [
+        t
+        for t in tokens
+        if t.kind in (TokenKind.EXPR, TokenKind.ASSIGN) or (t.kind is TokenKind.BRACKET)
+    ]
+    static = [t for t in tokens if t not in dynamic]
+    base = collect(static, axes, {})
+    if not dynamic:
+        return base
+    if base.call is not None or base.command is not None:
+        return Template(Words(), tokens, ordered=True)  # order matters (21542)
+    return Template(base, dynamic)
+
+
+def _value(tok: Token, params: Params) -> float:
+    expr = tok.expr
+    if expr is None:
+        return float(tok.text)
+    return expr.value(params)
+
+
+def collect(tokens: list[Token], axes: frozenset[str], params: Params) -> Words:
+    """The words of a block from the full lexer's tokens. Problems become `faults`."""
     w = Words()
     values = w.values
+    faults = w.faults
     for tok in tokens:
         letter = tok.letter
-        if tok.kind is TokenKind.WORD and letter in axes and letter not in values:
-            values[letter] = (float(tok.text), tok.column)  # the common case first
-            continue
-        if tok.kind is TokenKind.COMMAND:
-            others = [t for t in tokens if t is not tok and t.letter != "N"]
-            if others:
-                raise NcFault(
-                    ErrorId.SYNTAX,
-                    others[0].column,
-                    "a # command excludes other words in its block (except N)",
-                )
-            w.command = tok
-        elif tok.kind is TokenKind.NUMBER:
-            w.bare.append((float(tok.text), tok.column))
-        elif tok.kind is TokenKind.BRACKET:
-            _bracket(tok, w, axes)
-        elif tok.letter == "N":
-            w.n = int(float(tok.text))
-        elif tok.letter in "GM":
-            code = float(tok.text)
-            if code != int(code) or code < 0:
-                raise NcFault(
-                    ErrorId.UNSUPPORTED,
+        if w.call is not None:
+            # ID 21542: "No further NC commands allowed after subroutine or cycle call"
+            # https://infosys.beckhoff.com/content/1033/tf5200_diagnosis/255123851.html
+            faults.append(
+                NcFault(
+                    ErrorId.WORDS_AFTER_CALL,
                     tok.column,
-                    f"{tok.letter}{tok.text} is not emulated by liftd",
+                    "no further NC words are allowed after a subroutine call in its block "
+                    "(program them before the call)",
                 )
-            (w.gcodes if tok.letter == "G" else w.m).append((int(code), tok.column))
-        elif tok.letter in TECHNOLOGY_LETTERS:
-            continue
-        elif tok.letter in axes or tok.letter in "FIJKR":
-            if tok.letter in w.values or (w.lift is not None and w.lift[0] == tok.letter):
-                eid = ErrorId.DOUBLE_F if tok.letter == "F" else ErrorId.AXIS_TWICE
-                raise NcFault(eid, tok.column, f"{tok.letter} programmed twice in one block")
-            w.values[tok.letter] = (float(tok.text), tok.column)
-        else:
-            raise NcFault(
-                ErrorId.UNKNOWN_AXIS,
-                tok.column,
-                f"{tok.letter} is not an axis of the channel nor a known address",
             )
+            break
+        kind = tok.kind
+        if letter in axes and letter not in values:  # the common cases first
+            if kind is TokenKind.WORD:
+                values[letter] = (float(tok.text), tok.column)
+                continue
+            expr = tok.expr
+            if kind is TokenKind.BRACKET and expr is not None:
+                try:
+                    values[letter] = (expr.value(params), tok.column)
+                except ExprError as exc:
+                    faults.append(NcFault(ErrorId(exc.error_id), tok.column, exc.message))
+                continue
+        try:
+            _collect_one(tok, w, axes, params, tokens)
+        except NcFault as fault:
+            faults.append(fault)
+        except ExprError as exc:
+            faults.append(NcFault(ErrorId(exc.error_id), tok.column, exc.message))
     return w
 
 
-def _bracket(tok: Token, w: Words, axes: frozenset[str]) -> None:
+def _collect_one(
+    tok: Token, w: Words, axes: frozenset[str], params: Params, tokens: list[Token]
+) -> None:
+    kind = tok.kind
+    letter = tok.letter
+    if kind is TokenKind.COMMAND:
+        others = [t for t in tokens if t is not tok and t.letter != "N"]
+        if others:
+            raise NcFault(
+                ErrorId.SYNTAX,
+                others[0].column,
+                "a # command excludes other words in its block (except N)",
+            )
+        w.command = tok
+    elif kind is TokenKind.CALL:
+        w.call = tok
+    elif kind is TokenKind.ASSIGN:
+        assert tok.expr is not None and tok.param is not None
+        index = check_index(tok.param.value(params))
+        params[index] = tok.expr.value(params)
+    elif kind is TokenKind.NUMBER or (kind is TokenKind.EXPR and not letter):
+        w.bare.append((_value(tok, params), tok.column))
+    elif kind is TokenKind.BRACKET:
+        _bracket(tok, w, axes, params)
+    elif letter == "N":
+        if kind is not TokenKind.WORD:
+            raise NcFault(ErrorId.UNSUPPORTED, tok.column, "N with an expression is not emulated")
+        w.n = int(float(tok.text))
+    elif letter in "GM":
+        if kind is not TokenKind.WORD:
+            raise NcFault(
+                ErrorId.UNSUPPORTED, tok.column, f"{letter} with an expression is not emulated"
+            )
+        code = float(tok.text)
+        if code != int(code) or code < 0:
+            raise NcFault(
+                ErrorId.UNSUPPORTED, tok.column, f"{letter}{tok.text} is not emulated by liftd"
+            )
+        (w.gcodes if letter == "G" else w.m).append((int(code), tok.column))
+    elif letter in TECHNOLOGY_LETTERS:
+        if kind is TokenKind.EXPR:
+            _value(tok, params)  # evaluated for its errors, the value is not used
+    elif letter in axes or letter in VALUE_LETTERS:
+        _store(w, letter, _value(tok, params), tok.column)
+    else:
+        raise NcFault(
+            ErrorId.UNKNOWN_AXIS,
+            tok.column,
+            f"{letter} is not an axis of the channel nor a known address",
+        )
+
+
+def _store(w: Words, letter: str, value: float, column: int) -> None:
+    if letter in w.values or (w.lift is not None and w.lift[0] == letter):
+        eid = ErrorId.DOUBLE_F if letter == "F" else ErrorId.AXIS_TWICE
+        raise NcFault(eid, column, f"{letter} programmed twice in one block")
+    w.values[letter] = (value, column)
+
+
+def _bracket(tok: Token, w: Words, axes: frozenset[str], params: Params) -> None:
+    if tok.expr is not None:  # X[P1*2+5]
+        if tok.letter not in axes and tok.letter not in VALUE_LETTERS:
+            raise NcFault(ErrorId.UNKNOWN_AXIS, tok.column, f"{tok.letter} is not an axis")
+        _store(w, tok.letter, tok.expr.value(params), tok.column)
+        return
     if tok.letter not in axes:
         raise NcFault(ErrorId.UNKNOWN_AXIS, tok.column, f"{tok.letter} is not an axis")
     if not is_lift_command(tok.text):
@@ -84,14 +222,22 @@ def _bracket(tok: Token, w: Words, axes: frozenset[str]) -> None:
             ErrorId.UNSUPPORTED,
             tok.column,
             f"{tok.letter}[{tok.text}] is not "
-            "emulated by liftd (lift commands and plain numbers are)",
+            "emulated by liftd (lift commands, numbers and expressions are)",
         )
     if w.lift is not None or tok.letter in w.values:
         raise NcFault(ErrorId.AXIS_TWICE, tok.column, f"{tok.letter} programmed twice")
+
+    def evaluate(text: str) -> float:
+        expr: Expr = compile_text(text[1:-1] if text.startswith("[") else text)
+        return expr.value(params)
+
     try:
-        w.lift = (tok.letter, parse_lift_words(tok.text), tok.column)
+        w.lift = (tok.letter, parse_lift_words(tok.text, evaluate), tok.column)
     except LiftSyntaxError as exc:
         raise NcFault(ErrorId.LIFT_SYNTAX, tok.column, str(exc)) from None
+    except ExprError as exc:  # a malformed value is a malformed lift command
+        eid = ErrorId.LIFT_SYNTAX if exc.error_id == ErrorId.SYNTAX else ErrorId(exc.error_id)
+        raise NcFault(eid, tok.column, f"lift command: {exc.message}") from None
 
 
 def collect_plain(line: str, axes: frozenset[str]) -> Words | None:
@@ -112,7 +258,7 @@ def collect_plain(line: str, axes: frozenset[str]) -> Words | None:
             return None
         if letter.islower():
             letter = letter.upper()
-        if letter in axes or letter in "FIJKR":
+        if letter in axes or letter in VALUE_LETTERS:
             if letter in values:
                 return None
             values[letter] = (value, col)
