@@ -36,3 +36,44 @@ def nesting_program(parts: int, lines_per_part: int = 6, arcs: bool = True) -> s
 
 def count_blocks(text: str) -> int:
     return sum(1 for line in text.splitlines() if line and not line.startswith(("%", "(")))
+
+
+PART_SUBROUTINE = """%L part
+( one part at P1/P2: pierce, kerf-compensated contour with a rounded corner, hole )
+N1 G00 X[P1-2] Y[P2+P3/2]
+N2 M04
+N3 G41 G01 X[P1] Y[P2+P3/2] F6000
+N4 Y[P2+P3-P4]
+N5 G02 X[P1+P4] Y[P2+P3] I[P4] J0
+N6 G01 X[P1+P3]
+N7 Y[P2]
+N8 X[P1+P5]
+N9 G03 X[P1+P5+2*P6] Y[P2] R[P6]
+N10 G01 X[P1]
+N11 Y[P2+P3/2]
+N12 G40 X[P1+2] Y[P2+P3/2+1]
+N13 M05
+N14 M17
+"""
+
+
+def subroutine_program(parts: int) -> str:
+    """A CAM-shaped nesting job: one local subroutine per part shape, called once per
+    placement with the position in P1/P2 (expressions in every coordinate), kerf
+    compensation G41/D, lifts between the placements. 15 executed blocks per placement from
+    4 main-program lines."""
+    cols = max(1, min(160, int(math.sqrt(parts * 3))))
+    pitch = 16.0
+    out = [PART_SUBROUTINE + "%nest", "N1 G90 G17 G71 G94", "#SLOPE[TYPE=TRAPEZ]", "D1",
+           "P3=10 P4=2 P5=3 P6=2", "G00 X5 Y5 Z1"]  # fmt: skip
+    for k in range(parts):
+        x = 10.0 + (k % cols) * pitch
+        y = 10.0 + (k // cols) * pitch
+        if k:
+            out.append("Z[LIFT_START POS=1 POS_LIMIT=30]")
+        out.append(f"P1={x:.3f} P2={y:.3f}")
+        if k:
+            out.append("Z[LIFT_END]")
+        out.append("LL part")
+    out.append("M30")
+    return "\n".join(out) + "\n"

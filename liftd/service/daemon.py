@@ -40,6 +40,7 @@ from liftd.service import systemd
 from liftd.service.adsconfig import server_config, service_limits
 from liftd.service.trace_recorder import TraceRecorder
 from liftd.settings import ConfigError, Settings, load_settings
+from liftd.settings.programs import program_channel
 
 EXIT_OK, EXIT_CONFIG, EXIT_RUNTIME = 0, 2, 3
 READY_CYCLES = 10
@@ -59,7 +60,7 @@ def loop_config(settings: Settings, program: Path | None) -> geo_loop.LoopConfig
     text = program.read_text(encoding="utf-8", errors="replace") if program else "M30\n"
     rt = cfg.rt
     return geo_loop.LoopConfig(
-        channel=settings.channel,
+        channel=program_channel(settings, program, text),  # with its subroutine files
         program_text=text,
         program_name=str(program) if program else "(none)",
         autostart=cfg.program.autostart,
@@ -193,12 +194,12 @@ class Daemon:
             self.log.warning("daemon.no_program", detail="no [program] file: the channel idles")
             return
         text = program.read_text(encoding="utf-8", errors="replace")
-        ch = self.settings.channel
+        ch = program_channel(self.settings, program, text)
         result = decode(text, DecoderContext.from_channel(ch, tuple(0.0 for _ in ch.axes)))
         for err in result.errors:
             level = "warning" if err.severity is Severity.WARNING else "error"
-            getattr(self.log, level)("nc.problem", file=str(program), line=err.line, id=err.id,
-                                     message=err.message)  # fmt: skip
+            getattr(self.log, level)("nc.problem", file=err.file or str(program), line=err.line,
+                                     id=err.id, message=err.message)  # fmt: skip
         self.log.info("daemon.program", file=str(program), blocks=len(result.blocks))
 
     async def _wait_cycling(self) -> None:

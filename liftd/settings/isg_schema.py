@@ -116,8 +116,8 @@ STARTUP_KEYS = (
     _spec("achs_mds[i]", Kind.PATH),  # P-STUP-00015
     _spec("default_achs_mds", Kind.PATH),  # P-STUP-00035
     _spec("hand_mds", Kind.KNOWN),
-    _spec("werkz_data[i]", Kind.KNOWN),
-    _spec("nullp_data[i]", Kind.KNOWN),
+    _spec("werkz_data[i]", Kind.PATH),  # P-STUP-00010: tool list per channel
+    _spec("nullp_data[i]", Kind.PATH),  # P-STUP-00011: zero-offset list per channel
     _spec("pzv_data[i]", Kind.KNOWN),
     _spec("zahl_kw", Kind.KNOWN),
     _spec("achs_kw[i]", Kind.KNOWN),
@@ -176,6 +176,32 @@ AXIS_KEYS = (
     _spec("kenngr.dyn_monitoring_j_warn", Kind.KNOWN),
     _spec("kenngr.dyn_monitoring_j_err", Kind.KNOWN),
     _spec("handbetrieb.hb.vb_max", Kind.KNOWN),
+)
+
+
+# Tool list (werkz_data[i]): TF5200 tool data P-TOOL-*, e.g. wz[5].radius 200000 = 20 mm
+# https://infosys.beckhoff.com/content/1033/tf5200_tool_data/104778123.html
+TOOL_KEYS = (
+    _spec("wz[i].radius", Kind.INT, S32),  # P-TOOL-00004, 0.1 µm (0.0001 inch)
+    _spec("wz[i].gueltig", Kind.BOOL),  # validity flag
+    _spec("wz[i].mass_einheit", Kind.BOOL),  # 0 mm, 1 inch
+    _spec("wz[i].laenge", Kind.KNOWN),
+    _spec("wz[i].ax_versatz[i]", Kind.KNOWN),
+    _spec("wz[i].log_ax_nr_spdl", Kind.KNOWN),
+    _spec("wz[i].vb_min", Kind.KNOWN),
+    _spec("wz[i].vb_max", Kind.KNOWN),
+    _spec("wz[i].a_max", Kind.KNOWN),
+    _spec("wz[i].param[i]", Kind.KNOWN),
+    _spec("wz[i].path[i].radius", Kind.KNOWN),
+)
+
+# Zero-offset list (nullp_data[i]): TF5200 zero offsets P-ZERO-*
+# https://infosys.beckhoff.com/content/1033/tf5200_zero_offsets/103724043.html
+ZERO_OFFSET_KEYS = (
+    _spec("g53_verfuegbar", Kind.BOOL),  # P-ZERO-00001: G53 data block used as an offset
+    _spec("default_index", Kind.INT, (0, 96)),  # P-ZERO-00002: group active at start
+    _spec("np_grp[i].achse[i].versch", Kind.INT, S32),  # P-ZERO-00003, 0.1 µm
+    _spec("np_grp[i].achse[i].inaktiv", Kind.BOOL),  # P-ZERO-00004: offset not applied
 )
 
 
