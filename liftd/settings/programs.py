@@ -46,10 +46,10 @@ def called_names(text: str) -> list[str]:
 def _find(name: str, dirs: Sequence[Path]) -> Path | None:
     path = Path(name.replace("\\", "/"))
     if path.is_absolute():
-        return path if path.is_file() else None
+        return path if path.exists() else None
     for d in dirs:
         candidate = d / path
-        if candidate.is_file():
+        if candidate.exists():  # a file, or something that will not read as one
             return candidate
         if len(path.parts) == 1 and d.is_dir():
             lower = name.lower()

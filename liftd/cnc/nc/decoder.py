@@ -122,6 +122,8 @@ class _Decoder:
         self.pos = tuple(ctx.start_position)
         self.z = ctx.axis_names.index(ctx.lift_axis)
         self.axes = frozenset(ctx.axis_names)
+        self.axis_index = {name: k for k, name in enumerate(ctx.axis_names)}
+        self.limits = tuple((lo - 1e-12, hi + 1e-12) for lo, hi in ctx.sw_limits)
         self.motion = MotionKind.LINEAR
         self.incremental = False
         self.center_absolute = False  # G161 absolute, G162 (default) relative centre
@@ -227,18 +229,22 @@ class _Decoder:
         self.last_file = self.tag = frame.tag
         try:
             self._line(frame, idx, line)
-        except _AlreadyReported:
-            pass
-        except TrcFault as err:
-            b = err.block
-            self._error(err.error_id, err.column, err.message, line=b.line,
-                        file=b.file or self.ctx.sources.program)  # fmt: skip
         except NcFault as err:
-            self._error(err.error_id, err.column, err.message)
+            self._report(err)
         if self.return_after:
             self.return_after = False
             if self.stack and self.stack[-1] is frame:
                 self._return(frame)
+
+    def _report(self, err: NcFault) -> None:
+        if isinstance(err, _AlreadyReported):
+            return
+        if isinstance(err, TrcFault):
+            b = err.block
+            self._error(err.error_id, err.column, err.message, line=b.line,
+                        file=b.file or self.ctx.sources.program)  # fmt: skip
+            return
+        self._error(err.error_id, err.column, err.message)
 
     def _leave(self, frame: _Frame) -> None:
         """The end of a section: M17 was left out (allowed), or the file ends."""
@@ -287,7 +293,7 @@ class _Decoder:
             return
         self.seen.add(key)
         if chain:
-            message += " (call chain: " + " > ".join(str(s) for s in chain) + ")"
+            message += f" (call chain: {_chain_text(chain)})"
         main = self.ctx.sources.program
         file_tag = "" if where == main else where
         self.errors.append(NcError(int(eid), lineno, column, message, severity, file_tag, chain))
@@ -394,24 +400,15 @@ class _Decoder:
     def _line(self, frame: _Frame, idx: int, line: str) -> None:
         w = self._words(frame, idx, line)
         lineno = idx + 1
-        values = w.values
-        if (  # the common block: axis words only (the fast path, same semantics)
-            not w.gcodes
-            and not w.faults
-            and w.call is None
-            and w.command is None
-            and not w.m
-            and w.lift is None
-            and not w.bare
-            and "F" not in values
-            and "R" not in values
-            and "D" not in values
-            and "K" not in values
-        ):
+        if w.simple:  # the common block: axis words only (the fast path, same semantics)
             motion = self._motion(lineno, w)
-            if motion is not None:
-                self._emit(Block(lineno, w.n, motion, None, (), None, None, None, None, False,
-                                 self.tag))  # fmt: skip
+            if motion is not None and not self.stopped:
+                simple = Block(lineno, w.n, motion, None, (), None, None, None, None, False,
+                               self.tag)  # fmt: skip
+                if self.trc.engaged:
+                    self._emit(simple)
+                else:
+                    self.out.append(simple)
             return
         if w.command is not None and not w.faults:
             self._command(lineno, w.n, parse_command(w.command))
@@ -424,9 +421,10 @@ class _Decoder:
             if fault is None:
                 fault = err
         if fault is not None:
+            self._report(fault)
             if w.call is not None:  # the call is checked even in a rejected block
                 _attempt([], self._call, frame, w.call, lineno)
-            raise fault
+            return
         if block is not None:
             self._emit(block)
         if w.call is not None:
@@ -666,13 +664,14 @@ class _Decoder:
         unit = self.unit
         offset = self.offset
         incremental = self.incremental
-        for k, name in enumerate(self.ctx.axis_names):
-            word = values.get(name)
-            if word is not None:
-                value = word[0] * unit
+        axis_index = self.axis_index
+        for letter, (word, col) in values.items():
+            k = axis_index.get(letter)
+            if k is not None:
+                value = word * unit
                 end[k] = start[k] + value if incremental else value + offset[k]
-                if not column or word[1] < column:
-                    column = word[1]
+                if not column or col < column:
+                    column = col
         kind = self.motion
         is_arc = kind is MotionKind.ARC_CW or kind is MotionKind.ARC_CCW
         if not column:
@@ -724,7 +723,11 @@ class _Decoder:
             motion = Motion(kind, start, end_t, feed)
         self.pos = end_t
         if not self.trc.engaged:  # under TRC the compensated path is checked (_output)
-            self._check_limits(motion, column)
+            for k, (lo, hi) in enumerate(self.limits):
+                if not lo <= end_t[k] <= hi:
+                    self.ctx.check_position(k, end_t[k], column)
+            if is_arc:
+                self._check_limits(motion, column)
         return motion
 
     def _check_limits(self, motion: Motion, column: int) -> None:
@@ -956,6 +959,23 @@ class _AlreadyReported(NcFault):
 
     def __init__(self) -> None:
         super().__init__(ErrorId.FILE_NOT_FOUND, 1, "")
+
+
+def _chain_text(chain: tuple[CallSite, ...]) -> str:
+    """`a.nc:3 LL x > b.nc:7 L y`, repeated calls folded: `b.nc:4 LL again (×20)`."""
+    parts: list[str] = []
+    last = ""
+    count = 0
+    for site in chain:
+        text = str(site)
+        if text == last:
+            count += 1
+            continue
+        if last:
+            parts.append(last if count == 1 else f"{last} (×{count})")
+        last, count = text, 1
+    parts.append(last if count == 1 else f"{last} (×{count})")
+    return " > ".join(parts)
 
 
 def _attempt(faults: list[NcFault], fn: Callable[..., _T], *args: object) -> _T | None:
