@@ -17,7 +17,7 @@ from typing import Any
 from pydantic import ValidationError
 
 from liftd.cnc import units
-from liftd.cnc.params import AxisParams, ChannelParams, NcSources
+from liftd.cnc.params import AxisParams, ChannelParams
 from liftd.settings.cnc_lists import read_channel_lists
 from liftd.settings.isg_list import Problem, Severity
 from liftd.settings.model import LiftdConfig
@@ -197,7 +197,6 @@ def load_settings(explicit: str | None = None, program: str | None = None) -> Se
         zero_offsets=zero_offsets,
         zero_offset_default=lists.zero_offset_default,
         g53_offsets=lists.g53_offsets or "G53" in nc.zero_offsets,
-        nc_sources=NcSources(str(program_path) if program_path is not None else ""),
         max_executed_blocks=nc.max_executed_blocks,
     )
     return Settings(

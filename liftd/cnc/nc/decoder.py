@@ -46,7 +46,7 @@ from liftd.cnc.nc.lexer import LexError, Token, tokenize
 from liftd.cnc.nc.lift_words import LiftKeyword, LiftWords
 from liftd.cnc.nc.sources import Section, Source, parse_source
 from liftd.cnc.nc.trc import Trc, TrcFault
-from liftd.cnc.nc.words import Template, Words, collect, collect_plain, template
+from liftd.cnc.nc.words import Template, Words, collect_plain, template
 from liftd.cnc.params import LiftMethod, SlopeType
 from liftd.cnc.path.geometry import ArcSeg
 
@@ -74,6 +74,7 @@ SMOOTHING_CMD = {
     "#CONTOUR MODE": "G261 (polynomial contouring)",
 }
 NO_RADIUS = "G41/G42 without a tool radius (programmed contour)"
+LINE_CACHE = 4096  # distinct lines prepared once and reused by their text (bounded memory)
 _T = TypeVar("_T")
 
 
@@ -123,6 +124,7 @@ class _Decoder:
         self.z = ctx.axis_names.index(ctx.lift_axis)
         self.axes = frozenset(ctx.axis_names)
         self.axis_index = {name: k for k, name in enumerate(ctx.axis_names)}
+        self.lift_axis = ctx.lift_axis
         self.limits = tuple((lo - 1e-12, hi + 1e-12) for lo, hi in ctx.sw_limits)
         self.motion = MotionKind.LINEAR
         self.incremental = False
@@ -146,6 +148,7 @@ class _Decoder:
         self.ended = False  # M02/M30 seen
         self.stack: list[_Frame] = []
         self.files: dict[str, Source] = {}
+        self.line_cache: dict[str, Words | Template] = {}  # prepared lines by their text
         self.missing: set[str] = set()
         self.visited_after_stop: set[tuple[str, int]] = set()
         self.not_emulated: dict[str, int] = {}
@@ -323,6 +326,17 @@ class _Decoder:
         self._output(block, checked=False)
 
     def _output(self, block: Block, checked: bool) -> None:
+        motion = block.motion
+        if motion is not None:
+            if checked:  # the compensated path
+                try:
+                    self._check_limits(motion, 1)
+                except NcFault as err:
+                    self._error(err.error_id, err.column, err.message, line=block.line,
+                                file=block.file or self.ctx.sources.program)  # fmt: skip
+                    return
+            self.out.append(block)
+            return
         if (
             block.motion is None
             and block.dwell is None
@@ -334,13 +348,6 @@ class _Decoder:
             and not block.program_end
         ):
             return
-        if checked and block.motion is not None:  # the compensated path
-            try:
-                self._check_limits(block.motion, 1)
-            except NcFault as err:
-                self._error(err.error_id, err.column, err.message, line=block.line,
-                            file=block.file or self.ctx.sources.program)  # fmt: skip
-                return
         self.out.append(block)
 
     def _close_lift(self, cause: LiftEndCause) -> LiftEnd:
@@ -377,25 +384,18 @@ class _Decoder:
                 if cache is not None:
                     cache[idx] = plain
                 return plain
-        errors: list[LexError] = []
-        tokens = tokenize(line, errors)
+        prepared = self.line_cache.get(line)
+        if prepared is None:
+            errors: list[LexError] = []
+            tokens = tokenize(line, errors)
+            prepared = template(tokens, self.axes, [_lex_fault(e) for e in errors])
+            if len(self.line_cache) < LINE_CACHE:  # recurring lines: lift commands, calls
+                self.line_cache[line] = prepared
         if cache is not None:
-            prepared = template(tokens, self.axes)
-            if errors:
-                base = prepared.base if isinstance(prepared, Template) else prepared
-                base.faults[:0] = [_lex_fault(e) for e in errors]
             cache[idx] = prepared
-            if isinstance(prepared, Words):
-                return prepared
-            return prepared.words(self.axes, self.params)
-        return self._collect(tokens, errors)
-
-    def _collect(self, tokens: list[Token], lex_errors: list[LexError]) -> Words:
-        w = collect(tokens, self.axes, self.params)
-        if lex_errors:
-            faults = [_lex_fault(e) for e in lex_errors]
-            w.faults[:0] = faults
-        return w
+        if isinstance(prepared, Words):
+            return prepared
+        return prepared.words(self.axes, self.params)
 
     def _line(self, frame: _Frame, idx: int, line: str) -> None:
         w = self._words(frame, idx, line)
@@ -665,11 +665,16 @@ class _Decoder:
         offset = self.offset
         incremental = self.incremental
         axis_index = self.axis_index
+        limits = self.limits
+        beyond = -1  # an axis beyond its software limit (reported after the other checks)
         for letter, (word, col) in values.items():
             k = axis_index.get(letter)
             if k is not None:
                 value = word * unit
-                end[k] = start[k] + value if incremental else value + offset[k]
+                v = end[k] = start[k] + value if incremental else value + offset[k]
+                lo, hi = limits[k]
+                if not lo <= v <= hi:
+                    beyond = k
                 if not column or col < column:
                     column = col
         kind = self.motion
@@ -678,8 +683,8 @@ class _Decoder:
             if not (is_arc and ("I" in values or "J" in values)):
                 return None
             column = min(col for _, col in values.values())
-        lift_word = values.get(self.ctx.lift_axis)
-        if self.open_lift is not None and lift_word is not None:
+        lift_word = values.get(self.lift_axis) if self.open_lift is not None else None
+        if lift_word is not None:
             raise NcFault(
                 ErrorId.LIFT_AXIS_PROGRAMMED,
                 lift_word[1],
@@ -723,9 +728,8 @@ class _Decoder:
             motion = Motion(kind, start, end_t, feed)
         self.pos = end_t
         if not self.trc.engaged:  # under TRC the compensated path is checked (_output)
-            for k, (lo, hi) in enumerate(self.limits):
-                if not lo <= end_t[k] <= hi:
-                    self.ctx.check_position(k, end_t[k], column)
+            if beyond >= 0:
+                self.ctx.check_position(beyond, end_t[beyond], column)
             if is_arc:
                 self._check_limits(motion, column)
         return motion
@@ -808,7 +812,10 @@ class _Decoder:
                 target, first, last, reps = self._sequence_args(name, col)
             source = frame.source if kind == "SEQ" and not target else self._global(target, col)
             if kind == "SEQ":
-                start, end = self._sequence_range(source, first, last, col)
+                # without NAME the sequence runs in the current program part, else in the
+                # named file's main program part
+                own = (frame.start, frame.end) if not target else None
+                start, end = self._sequence_range(source, first, last, col, own)
             else:
                 if source.main is None:
                     raise NcFault(
@@ -876,9 +883,14 @@ class _Decoder:
             raise NcFault(ErrorId.SYNTAX, col, "L SEQUENCE needs one or two block numbers N..")
         return name, numbers[0], numbers[-1], repeat - 1
 
-    def _sequence_range(self, source: Source, first: int, last: int, col: int) -> tuple[int, int]:
-        hi = len(source.lines)
-        start = source.block_number_line(first, 0, hi)
+    def _sequence_range(
+        self, source: Source, first: int, last: int, col: int, within: tuple[int, int] | None
+    ) -> tuple[int, int]:
+        if within is None:
+            main = source.main
+            within = (main.start, main.end) if main is not None else (0, len(source.lines))
+        lo, hi = within
+        start = source.block_number_line(first, lo, hi)
         if start is None:
             raise NcFault(ErrorId.SEQUENCE_NOT_FOUND, col, f"L SEQUENCE: no block N{first}")
         stop = source.block_number_line(last, start, hi)

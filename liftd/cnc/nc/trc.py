@@ -107,12 +107,15 @@ class _Element:
     def set_side(self, side: int) -> None:
         self.side = side
         if not self.arc:
-            t = _unit(_sub(self.p1, self.p0))
-            self.t0 = self.t1 = t
+            p0, p1 = self.p0, self.p1
+            dx, dy = p1[0] - p0[0], p1[1] - p0[1]
+            length = math.hypot(dx, dy)
+            tx, ty = dx / length, dy / length
+            self.t0 = self.t1 = (tx, ty)
             k = side * self.r
-            n = _left(t)
-            self.q0 = (self.p0[0] + k * n[0], self.p0[1] + k * n[1])
-            self.q1 = (self.p1[0] + k * n[0], self.p1[1] + k * n[1])
+            nx, ny = -ty * k, tx * k  # the left normal times the signed radius
+            self.q0 = (p0[0] + nx, p0[1] + ny)
+            self.q1 = (p1[0] + nx, p1[1] + ny)
             return
         c = self.center
         radius = _dist(self.p0, c)
@@ -293,7 +296,7 @@ class Trc:
                     "contour violation: the retract block is shorter than the tool radius",
                     block,
                 )
-            out.append(block._replace(motion=_line_motion(m, start, tail)))
+            out.append(_with_motion(block, _line_motion(m, start, tail)))
             return out
         if self.held is None:
             return [block]
@@ -349,15 +352,15 @@ class Trc:
 
     def _corner(self, a: _Element, b: _Element) -> tuple[Point, list[Motion], Point]:
         """End of a, transition motions, start of b at their common programmed point."""
-        qb = b.offset_point(False)
+        qb = b.q0
         if a.approach and a.direct:
             return qb, [], qb
-        qa = a.offset_point(True)
-        if _dist(qa, qb) < EPS:
+        qa = a.q1
+        if abs(qa[0] - qb[0]) < EPS and abs(qa[1] - qb[1]) < EPS:
             return qa, [], qb
-        ta = a.tangent(True)
-        tb = b.tangent(False)
-        turn = _cross(ta, tb)
+        ta = a.t1
+        tb = b.t0
+        turn = ta[0] * tb[1] - ta[1] * tb[0]
         inner = a.side * turn > 0.0 and a.side == b.side
         corner = a.p1
         if inner:
@@ -369,7 +372,9 @@ class Trc:
                     "(tool radius too large for the contour)",
                     b.block,
                 )
-            q = min(points, key=lambda p: _dist(p, corner))
+            q = points[0]
+            if len(points) > 1 and _dist(points[1], corner) < _dist(q, corner):
+                q = points[1]
             self._check_end(a, q)
             self._check_start(b, q)
             return q, [], q
@@ -381,7 +386,8 @@ class Trc:
 
     def _check_end(self, a: _Element, q: Point) -> None:
         if not a.arc:
-            if _dot(_sub(q, a.start), a.tangent(True)) < -EPS:
+            t = a.t1
+            if (q[0] - a.start[0]) * t[0] + (q[1] - a.start[1]) * t[1] < -EPS:
                 raise TrcFault(
                     ErrorId.TRC_CONTOUR_VIOLATION,
                     "contour violation: the compensated path of this block would run against "
@@ -399,7 +405,8 @@ class Trc:
 
     def _check_start(self, b: _Element, q: Point) -> None:
         if not b.arc:
-            if _dot(_sub(b.offset_point(True), q), b.tangent(False)) < -EPS:
+            t, end = b.t0, b.q1
+            if (end[0] - q[0]) * t[0] + (end[1] - q[1]) * t[1] < -EPS:
                 raise TrcFault(
                     ErrorId.TRC_CONTOUR_VIOLATION,
                     "contour violation: the compensated path of this block would run against "
@@ -421,28 +428,36 @@ class Trc:
         m = a.block.motion
         assert m is not None
         out: list[Block] = []
+        block = a.block
         if a.arc:
             sweep = _arc_sweep(a.center, a.start, end, a.ccw, full_if_closed=True)
             if abs(sweep) > abs(a.sweep) + 1e-9:  # a full circle stays one
                 sweep = a.sweep
             motion = Motion(m.kind, _with_xy(m.start, a.start), _with_xy(m.end, end), m.feed,
                             a.center, sweep)  # fmt: skip
-            out.append(a.block._replace(motion=motion))
-        elif _dist(a.start, end) > EPS:
-            out.append(a.block._replace(motion=_line_motion(m, a.start, end)))
+            out.append(_with_motion(block, motion))
+        elif abs(a.start[0] - end[0]) > EPS or abs(a.start[1] - end[1]) > EPS:
+            out.append(_with_motion(block, _line_motion(m, a.start, end)))
         else:
-            out.append(a.block._replace(motion=None))
+            out.append(_with_motion(block, None))
         for t in transition:
             out.append(Block(a.block.line, a.block.n, motion=t, file=a.block.file))
         where = transition[-1].end[:2] if transition else end
-        for waiting in self.after:
-            bm = waiting.motion
-            if bm is not None:
-                moved = bm._replace(start=_with_xy(bm.start, where), end=_with_xy(bm.end, where))
-                waiting = waiting._replace(motion=moved)  # noqa: PLW2901
-            out.append(waiting)
-        self.after = []
+        if self.after:
+            for waiting in self.after:
+                bm = waiting.motion
+                if bm is not None:
+                    moved = bm._replace(start=_with_xy(bm.start, where),
+                                        end=_with_xy(bm.end, where))  # fmt: skip
+                    waiting = _with_motion(waiting, moved)  # noqa: PLW2901
+                out.append(waiting)
+            self.after = []
         return out
+
+
+def _with_motion(block: Block, motion: Motion | None) -> Block:
+    """The block with another motion (NamedTuple._replace is several times slower)."""
+    return Block(block[0], block[1], motion, *block[3:])
 
 
 def _with_xy(pos: tuple[float, ...], xy: tuple[float, ...]) -> tuple[float, ...]:

@@ -9,11 +9,14 @@ still collected, so the block's modal state (F, G90/G91, the plane ...) is not l
 
 from __future__ import annotations
 
+import re
+
 from liftd.cnc.nc.blocks import ErrorId, NcFault
 from liftd.cnc.nc.expr import Expr, ExprError, Params, check_index, compile_text
 from liftd.cnc.nc.lexer import Token, TokenKind
 from liftd.cnc.nc.lift_words import LiftSyntaxError, LiftWords, is_lift_command, parse_lift_words
 
+_PARAMETER = re.compile(r"[Pp][\d\[]")  # a lift command with parameter values
 TECHNOLOGY_LETTERS = frozenset("STH")  # laser power, tool number, H function: ignored
 VALUE_LETTERS = "FIJKRD"  # feed, circle centre / radius, tool radius selection (D)
 NUMBER_CHARS = frozenset("0123456789.+-eE")
@@ -63,16 +66,16 @@ class Template:
             w.faults[:0] = self.base.faults
             return w
         base = self.base
-        w = Words()
+        w = Words.__new__(Words)  # every slot set here: no __init__ defaults to overwrite
         w.n = base.n
         w.gcodes = base.gcodes
         w.m = base.m
-        w.bare = list(base.bare)
+        w.lift = base.lift
+        w.bare = list(base.bare) if base.bare else []
         w.command = base.command
         w.call = base.call
-        w.values = dict(base.values)
-        w.faults = list(base.faults)
-        values = w.values
+        w.values = values = dict(base.values)
+        w.faults = list(base.faults) if base.faults else []
         for tok in self.dynamic:
             expr = tok.expr
             letter = tok.letter
@@ -113,20 +116,31 @@ def _is_simple(w: Words) -> bool:
     )
 
 
-def template(tokens: list[Token], axes: frozenset[str]) -> Template | Words:
-    """Split a line's tokens for reuse; plain lines come back as their Words."""
+def template(
+    tokens: list[Token], axes: frozenset[str], faults: list[NcFault] | None = None
+) -> Template | Words:
+    """Split a line's tokens for reuse; plain lines come back as their Words. `faults`: the
+    lexer's, placed first (they come first in the line's reading)."""
     dynamic = [
         t
         for t in tokens
-        if t.kind in (TokenKind.EXPR, TokenKind.ASSIGN) or (t.kind is TokenKind.BRACKET)
+        if t.kind in (TokenKind.EXPR, TokenKind.ASSIGN)
+        or (
+            t.kind is TokenKind.BRACKET
+            and (t.expr is not None or _PARAMETER.search(t.text) is not None)
+        )
     ]
     static = [t for t in tokens if t not in dynamic]
     base = collect(static, axes, {})
+    if faults:
+        base.faults[:0] = faults
     if not dynamic:
         base.simple = _is_simple(base)
         return base
     if base.call is not None or base.command is not None:
-        return Template(Words(), tokens, ordered=True)  # order matters (21542)
+        holder = Words()  # order matters (21542): all tokens are collected per run
+        holder.faults = list(faults or [])
+        return Template(holder, tokens, ordered=True)
     return Template(base, dynamic)
 
 

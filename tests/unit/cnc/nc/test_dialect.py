@@ -524,3 +524,11 @@ def test_expressions_compile_or_say_why(text: str) -> None:
         assert exc.error_id in set(ErrorId)
         return
     assert math.isfinite(value)
+
+
+def test_malformed_words_in_prepared_lines_are_reported_every_way() -> None:
+    # the same faulty lines in the main program (prepared by their text) and a subroutine
+    for text in ("%L s\nM17\n%m\nG01 X1 $ F100\n", "%L s\nG01 X1 $ F100\nM17\n%m\nLL s\n"):
+        assert errors(dec(text))[0][0] == ErrorId.SYNTAX, text
+    r = dec("%L s\nM17\n%m\nX1 $ LL s\n")  # a call in a line with a lexer error
+    assert errors(r)[0] == (ErrorId.SYNTAX, 4)
