@@ -410,6 +410,22 @@ class _Decoder:
                 else:
                     self.out.append(simple)
             return
+        g = w.fast_g
+        if g >= 0:  # G00..G03 with axis words, F, I, J, R: as _block would, fewer checks
+            values = w.values
+            feed = values.get("F")
+            if feed is None or feed[0] > 0.0:
+                self.motion = MOTION_G[g]
+                if feed is not None:
+                    self.feed = feed[0] * self.unit / 60.0
+                radius = values.get("R")
+                if radius is not None:
+                    self.radius = radius[0] * self.unit
+                motion = self._motion(lineno, w)
+                if not self.stopped:
+                    self._emit(Block(lineno, w.n, motion, None, (), None, None, None, None,
+                                     False, self.tag))  # fmt: skip
+                return
         if w.command is not None and not w.faults:
             self._command(lineno, w.n, parse_command(w.command))
             return

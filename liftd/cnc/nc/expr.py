@@ -56,6 +56,7 @@ MAX_PARAMETER = 100_000  # highest P index (the CNC's maximum is configuration-d
 MAX_DEPTH = 64  # bracket nesting: bounds recursion on hostile input
 
 _NUMBER = re.compile(r"(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")
+_PLAIN_NUMBER = re.compile(r"[ \t]*((?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)")
 _NAME = re.compile(r"[A-Za-z_][A-Za-z_0-9]*")
 _INDEX = re.compile(r"\d+")
 
@@ -402,6 +403,15 @@ def parse(text: str, pos: int = 0, bracketed: bool = False) -> tuple[Expr, int]:
 
     Unbracketed (after an address letter or `=`) the expression ends at a blank that is not
     followed by a binary operator, so ``P1=P2*3 X[P1]`` and ``P1 = P2 * 3`` both work."""
+    m = _PLAIN_NUMBER.match(text, pos)
+    if m is not None:  # a plain number (P1=26.000): the parser would read just the same
+        end = m.end()
+        after = end
+        while after < len(text) and text[after] in " \t":
+            after += 1
+        nxt = text[after : after + 3]
+        if not nxt or (nxt[0] not in "+-*/" and nxt.upper() != "MOD"):
+            return Expr(float(m.group(1)), None, text[pos:end]), end
     p = _Parser(text, pos, bracketed)
     expr = p.expr()
     return expr._replace(text=text[pos : p.pos]), p.pos

@@ -27,7 +27,8 @@ class Words:
     (a subroutine line's Words are reused for every call)."""
 
     __slots__ = (
-        "bare", "call", "command", "faults", "gcodes", "lift", "m", "n", "simple", "values",
+        "bare", "call", "command", "fast_g", "faults", "gcodes", "lift", "m", "n", "simple",
+        "values",
     )  # fmt: skip
 
     def __init__(self) -> None:
@@ -42,13 +43,16 @@ class Words:
         self.faults: list[NcFault] = []
         # axis words (and N) only: the decoder's fast path (same meaning, fewer checks)
         self.simple = False
+        # G00..G03 once with axis words, F, I, J, R (and N) only: that G's number, else -1
+        # (the decoder's second fast path)
+        self.fast_g = -1
 
 
 class Template:
     """A subroutine line prepared once: the words that never change (G, M, N, numbers,
     the call) collected, the expression words kept for evaluation per call."""
 
-    __slots__ = ("base", "dynamic", "ordered", "simple")
+    __slots__ = ("base", "dynamic", "fast_g", "ordered", "simple")
 
     def __init__(self, base: Words, dynamic: list[Token], ordered: bool = False) -> None:
         self.base = base
@@ -58,6 +62,15 @@ class Template:
             not ordered
             and _is_simple(base)
             and all(t.kind is TokenKind.BRACKET and t.expr is not None for t in dynamic)
+        )
+        self.fast_g = (
+            _fast_g(base)
+            if not ordered
+            and all(
+                t.kind is TokenKind.BRACKET and t.expr is not None and t.letter not in SLOW_LETTERS
+                for t in dynamic
+            )
+            else -1
         )
 
     def words(self, axes: frozenset[str], params: Params) -> Words:
@@ -74,6 +87,7 @@ class Template:
         w.bare = list(base.bare) if base.bare else []
         w.command = base.command
         w.call = base.call
+        w.fast_g = -1
         w.values = values = dict(base.values)
         w.faults = list(base.faults) if base.faults else []
         for tok in self.dynamic:
@@ -97,9 +111,9 @@ class Template:
             except ExprError as exc:
                 w.faults.append(NcFault(ErrorId(exc.error_id), tok.column, exc.message))
         # simple if every dynamic word was a new axis value and nothing failed
-        w.simple = (
-            self.simple and not w.faults and len(values) == len(base.values) + len(self.dynamic)
-        )
+        complete = not w.faults and len(values) == len(base.values) + len(self.dynamic)
+        w.simple = self.simple and complete
+        w.fast_g = self.fast_g if complete else -1
         return w
 
 
@@ -114,6 +128,25 @@ def _is_simple(w: Words) -> bool:
         and w.command is None
         and all(letter not in w.values for letter in VALUE_LETTERS)
     )
+
+
+SLOW_LETTERS = ("K", "D")  # values the decoder's fast paths do not handle
+
+
+def _fast_g(w: Words) -> int:
+    if (
+        len(w.gcodes) != 1
+        or w.m
+        or w.faults
+        or w.bare
+        or w.lift is not None
+        or w.call is not None
+        or w.command is not None
+        or any(letter in w.values for letter in SLOW_LETTERS)
+    ):
+        return -1
+    g = w.gcodes[0][0]
+    return g if g <= 3 else -1
 
 
 def template(
@@ -136,6 +169,7 @@ def template(
         base.faults[:0] = faults
     if not dynamic:
         base.simple = _is_simple(base)
+        base.fast_g = _fast_g(base)
         return base
     if base.call is not None or base.command is not None:
         holder = Words()  # order matters (21542): all tokens are collected per run
@@ -320,4 +354,6 @@ def collect_plain(line: str, axes: frozenset[str]) -> Words | None:
             return None
         col += len(word) - 1
     w.simple = simple
+    if not simple and w.gcodes:
+        w.fast_g = _fast_g(w)
     return w
