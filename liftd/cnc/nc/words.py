@@ -52,24 +52,37 @@ class Template:
     """A subroutine line prepared once: the words that never change (G, M, N, numbers,
     the call) collected, the expression words kept for evaluation per call."""
 
-    __slots__ = ("base", "dynamic", "fast_g", "ordered", "simple")
+    __slots__ = ("base", "compiled", "dynamic", "fast_g", "ordered", "simple")
 
-    def __init__(self, base: Words, dynamic: list[Token], ordered: bool = False) -> None:
+    def __init__(
+        self, base: Words, dynamic: list[Token], axes: frozenset[str], ordered: bool = False
+    ) -> None:
         self.base = base
         self.dynamic = dynamic
         self.ordered = ordered  # a call or command in the line: collect all tokens in order
-        self.simple = (
+        letters = [t.letter for t in dynamic]
+        # X[expr] Y[expr] F[expr] ... each a new value of an axis or a value letter: evaluated
+        # in a tight loop (the general loop below gives the same words, with more checks)
+        self.compiled: tuple[tuple[str, Expr, int], ...] | None = None
+        if (
             not ordered
-            and _is_simple(base)
             and all(t.kind is TokenKind.BRACKET and t.expr is not None for t in dynamic)
+            and len(set(letters)) == len(letters)
+            and all(
+                (letter in axes or letter in VALUE_LETTERS) and letter not in base.values
+                for letter in letters
+            )
+            and (base.lift is None or base.lift[0] not in letters)
+        ):
+            self.compiled = tuple((t.letter, t.expr, t.column) for t in dynamic if t.expr)
+        self.simple = (
+            self.compiled is not None
+            and _is_simple(base)
+            and all(letter in axes for letter in letters)
         )
         self.fast_g = (
             _fast_g(base)
-            if not ordered
-            and all(
-                t.kind is TokenKind.BRACKET and t.expr is not None and t.letter not in SLOW_LETTERS
-                for t in dynamic
-            )
+            if self.compiled is not None and all(letter not in SLOW_LETTERS for letter in letters)
             else -1
         )
 
@@ -79,17 +92,17 @@ class Template:
             w.faults[:0] = self.base.faults
             return w
         base = self.base
-        w = Words.__new__(Words)  # every slot set here: no __init__ defaults to overwrite
-        w.n = base.n
-        w.gcodes = base.gcodes
-        w.m = base.m
-        w.lift = base.lift
-        w.bare = list(base.bare) if base.bare else []
-        w.command = base.command
-        w.call = base.call
-        w.fast_g = -1
-        w.values = values = dict(base.values)
-        w.faults = list(base.faults) if base.faults else []
+        compiled = self.compiled
+        values = dict(base.values)
+        if compiled is not None:
+            try:
+                for name, compiled_expr, column in compiled:
+                    values[name] = (compiled_expr.value(params), column)
+            except ExprError:  # the general loop below reports it at its word
+                values = dict(base.values)
+            else:
+                return self._words(values, self.simple, self.fast_g)
+        w = self._words(values, False, -1)
         for tok in self.dynamic:
             expr = tok.expr
             letter = tok.letter
@@ -110,10 +123,22 @@ class Template:
                 w.faults.append(fault)
             except ExprError as exc:
                 w.faults.append(NcFault(ErrorId(exc.error_id), tok.column, exc.message))
-        # simple if every dynamic word was a new axis value and nothing failed
-        complete = not w.faults and len(values) == len(base.values) + len(self.dynamic)
-        w.simple = self.simple and complete
-        w.fast_g = self.fast_g if complete else -1
+        return w
+
+    def _words(self, values: dict[str, tuple[float, int]], simple: bool, fast_g: int) -> Words:
+        base = self.base
+        w = Words.__new__(Words)  # every slot set here: no __init__ defaults to overwrite
+        w.n = base.n
+        w.gcodes = base.gcodes
+        w.m = base.m
+        w.lift = base.lift
+        w.bare = list(base.bare) if base.bare else []
+        w.command = base.command
+        w.call = base.call
+        w.values = values
+        w.faults = list(base.faults) if base.faults else []
+        w.simple = simple
+        w.fast_g = fast_g
         return w
 
 
@@ -171,11 +196,13 @@ def template(
         base.simple = _is_simple(base)
         base.fast_g = _fast_g(base)
         return base
-    if base.call is not None or base.command is not None:
-        holder = Words()  # order matters (21542): all tokens are collected per run
+    letters = [t.letter for t in tokens if t.letter and t.kind is not TokenKind.ASSIGN]
+    if base.call is not None or base.command is not None or len(set(letters)) < len(letters):
+        # order matters (21542; a word twice: the first one counts): all tokens per run
+        holder = Words()
         holder.faults = list(faults or [])
-        return Template(holder, tokens, ordered=True)
-    return Template(base, dynamic)
+        return Template(holder, tokens, axes, ordered=True)
+    return Template(base, dynamic, axes)
 
 
 def _value(tok: Token, params: Params) -> float:

@@ -14,6 +14,8 @@ from hypothesis import strategies as st
 from liftd.cnc.nc import DecoderContext, DecodeResult, ErrorId, MotionKind, Severity, decode
 from liftd.cnc.nc.decoder import iter_decode
 from liftd.cnc.nc.expr import ExprError, compile_text
+from liftd.cnc.nc.lexer import LexError, tokenize
+from liftd.cnc.nc.words import VALUE_LETTERS, Template, collect, collect_plain, template
 from liftd.cnc.params import ChannelParams, LiftMethod, NcFile, NcSources
 from tests.conftest import make_channel
 
@@ -203,6 +205,23 @@ def test_parameters_expressions_and_functions() -> None:
         (10, 8, 0),  # cos 60° * 20; 9 - 1 + 90 - 90
     ]
     assert r.blocks[0].motion is not None and r.blocks[0].motion.feed == pytest.approx(0.1)
+
+
+def test_subroutine_words_from_expressions_set_feed_radius_and_centre() -> None:
+    # prepared subroutine lines take F, R, I, J from expressions as well as axes
+    r = ok(
+        "%L s\nG01\nX[P1] F[P2]\nG02 X[P1+2*P3] Y0 I[P3] J0\nG03 X[P1] R[P3]\nM17\n%main\n"
+        "G01 X1 Y0 F100\nP1=5 P2=6000 P3=5\nLL s\nP1=7 P2=1200 P3=6\nLL s\nM30\n"
+    )
+    feeds = [round(b.motion.feed * 60 / MM) for b in r.blocks if b.motion]
+    assert feeds == [100, 6000, 6000, 6000, 1200, 1200, 1200]
+    centres = [b.motion.center for b in r.blocks if b.motion and b.motion.center]
+    assert [tuple(round(v / MM, 4) for v in c) for c in centres] == [
+        (10, 0),
+        (10, 0),
+        (13, 0),
+        (13, 0),
+    ]
 
 
 def test_cos_90_is_exactly_zero_so_dividing_by_it_is_20396() -> None:
@@ -532,3 +551,41 @@ def test_malformed_words_in_prepared_lines_are_reported_every_way() -> None:
         assert errors(dec(text))[0][0] == ErrorId.SYNTAX, text
     r = dec("%L s\nM17\n%m\nX1 $ LL s\n")  # a call in a line with a lexer error
     assert errors(r)[0] == (ErrorId.SYNTAX, 4)
+
+
+LINE_WORDS = st.sampled_from(
+    [
+        "G00", "G01", "G02", "G03", "G90", "G91", "M05", "N7", "X1", "Y-2.5", "Z3", "F100",
+        "F0", "R5", "I2", "J-1", "K1", "D1", "X[P1*2]", "Y[P2-1]", "F[P1*10]", "R[P2]",
+        "I[P1]", "J[P2/P3]", "D[P1]", "K[P1]", "Q[P1]", "X[P9]", "Z[LIFT_END]", "XP1",
+    ]
+)  # fmt: skip
+
+
+@settings(max_examples=400, deadline=None)
+@given(st.lists(LINE_WORDS, min_size=1, max_size=6).map(" ".join))
+def test_prepared_lines_give_the_words_of_the_general_path(line: str) -> None:
+    """The decoder's fast paths (plain words, prepared lines with a tight expression loop)
+    must collect what the general path collects; `simple`/`fast_g` only where they hold."""
+    axes = frozenset("XYZ")
+    params = {1: 2.0, 2: 4.0, 3: 0.0}
+    lex_errors: list[LexError] = []
+    tokens = tokenize(line, lex_errors)
+    general = collect(tokens, axes, dict(params))
+    prepared = template(tokens, axes)
+    fast = prepared.words(axes, dict(params)) if isinstance(prepared, Template) else prepared
+    plain = collect_plain(line, axes)
+    for w in (fast, plain):
+        if w is None:
+            continue
+        assert w.values == general.values
+        assert (w.gcodes, w.m, w.n) == (general.gcodes, general.m, general.n)
+        assert [f.error_id for f in w.faults] == [f.error_id for f in general.faults]
+        if w.simple:
+            assert not w.gcodes and not w.m and not w.faults and w.lift is None
+            assert all(letter in axes for letter in w.values)
+        if w.fast_g >= 0:
+            assert [g for g, _ in w.gcodes] == [w.fast_g] and w.fast_g <= 3
+            assert not w.m and not w.faults and w.lift is None and w.call is None
+            assert all(letter in axes or letter in VALUE_LETTERS for letter in w.values)
+            assert "K" not in w.values and "D" not in w.values
