@@ -9,7 +9,7 @@ Figures (issues 2 and 19):
   fixed size repeated with L SEQUENCE to 10 000 … 300 000 executed blocks, decoded as a stream
   (`iter_decode`, blocks not kept): the peak stays flat.
 
-Speed is best of 3 (the 2-vCPU VM is shared: ±25 % between runs).
+Speed is best of 5 (the 2-vCPU VM is shared: ±25 % between runs).
 Run: .venv/bin/python bench/bench_decode.py
 """
 
@@ -48,7 +48,7 @@ def main() -> None:
     for parts in (715, 3572, 7143):  # ~10 000, 50 000, 100 000 blocks
         text = nesting_program(parts)
         blocks = count_blocks(text)
-        seconds = best_of(3, lambda t=text: decode(t, ctx))
+        seconds = best_of(5, lambda t=text: decode(t, ctx))
         tracemalloc.start()
         result = decode(text, ctx)
         _, peak = tracemalloc.get_traced_memory()
@@ -63,7 +63,7 @@ def main() -> None:
         text = subroutine_program(6667, kerf=kerf)
         result = decode(text, ctx)
         assert result.first_error is None, result.first_error
-        seconds = best_of(3, lambda t=text: decode(t, ctx))
+        seconds = best_of(5, lambda t=text: decode(t, ctx))
         print(json.dumps({"bench": "decode_subroutines", "kerf_compensation": kerf,
                           "program_lines": text.count("\n"),
                           "executed_blocks": len(result.blocks),
