@@ -420,9 +420,14 @@ def _look_ahead(
             f"configuration.channel[{idx}].interpolator.number_blocks_lah"
         )
         if value is None:
-            rd.error(ipo_ref, "FCT_LOOK_AHEAD_CUSTOM needs number_blocks_lah (P-CHAN-00653)")
+            if not any(p.key and p.key.endswith(".number_blocks_lah") for p in rd.problems):
+                # (a value out of range is reported where it is written, once)
+                rd.error(ipo_ref, "FCT_LOOK_AHEAD_CUSTOM needs number_blocks_lah (P-CHAN-00653)")
             return DEFAULT_LOOK_AHEAD
-        return _as_int(value)
+        # 0 blocks (allowed by vendor §4.2.1, its meaning not documented): no look-ahead
+        # beyond the block being run, the path planned one block at a time -- it can stop at
+        # every block end -- which the interpolator gets as a window of one block
+        return max(1, _as_int(value))
     return sizes[0] if sizes else DEFAULT_LOOK_AHEAD
 
 
