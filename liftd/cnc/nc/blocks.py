@@ -50,6 +50,17 @@ class ErrorId(enum.IntEnum):
     TRC_NON_RELEVANT_BLOCKS = 90011  # too many blocks without plane motion while TRC is active
     TRC_RADIUS_TOO_LARGE = 90017  # tool radius >= radius of an (inner) arc of the contour
     TRC_RADIUS_CHANGE_ARC = 90047  # tool radius changed right before a circular block
+    # words and G groups twice in a block, program structure, M functions (issue 15 item 7:
+    # the ids a PLC checks; tf5200_diagnosis/251085195, 250789259, 250815371, 250832779,
+    # 250871947, 251054731, 254175115, 250945931)
+    AXIS_TWICE = 20203  # an axis programmed twice in one block ("Double-programmed axis")
+    MOTION_G_TWICE = 20108  # two of G00/G01/G02/G03 in one block ("block mode")
+    TRC_G_TWICE = 20114  # two of G40/G41/G42 in one block
+    UNIT_G_TWICE = 20118  # G70 and G71 in one block
+    CENTRE_G_TWICE = 20127  # G161 and G162 in one block
+    PERCENT_IN_MAIN = 20193  # a % line inside the main program part (%L after it, 2nd main)
+    PERCENT_IN_SUBROUTINE = 21313  # the same inside a global subroutine file
+    M_NUMBER_TOO_LARGE = 20160  # M above the numbers P-CHAN-00041 can define (>= 1000)
     # liftd's own ids
     SYNTAX = 990001  # unknown character or word
     NUMBER = 990002  # missing or malformed number
@@ -63,9 +74,9 @@ class ErrorId(enum.IntEnum):
     ZERO_LENGTH = 990010  # warning: motion block without motion
     HELIX = 990011  # circle with motion outside the plane
     ARC_GEOMETRY = 990012  # circle cannot be constructed
-    AXIS_TWICE = 990013  # a word programmed twice in one block
+    WORD_TWICE = 990013  # I, J, K, R or D programmed twice in one block
     M_NOT_CONFIGURED = 990014  # M function without m_synch entry
-    LIFT_DOWN_LIMIT_SIDE = 990015  # DOWN with POS_LIMIT above start and target
+    # 990015 retired: DOWN with POS_LIMIT above start and target is special case 1 (issue 15)
     DWELL_MISSING = 990016  # G04 without a time
     LIFT_WRONG_AXIS = 990017  # lift command on an axis that is not the configured lift axis
     UNKNOWN_AXIS = 990018  # address letter that is not an axis of the channel
@@ -86,6 +97,7 @@ class ErrorId(enum.IntEnum):
     TRC_DESELECT_ARC = 990033  # TRC deselected with a circular block (retract must be linear)
     SEQUENCE_NOT_FOUND = 990034  # L SEQUENCE: block number not found
     DUPLICATE_SUBROUTINE = 990035  # %L name defined twice in a file
+    LIFT_LIMIT_CLAMPED = 990036  # warning: POS_LIMIT beyond the software limit, held there
 
 
 class Severity(enum.Enum):
@@ -173,6 +185,9 @@ class LiftStart(NamedTuple):
     line: int  # line of the programmed LIFT_START / LIFT
     single_block: bool = False
     implicit: bool = False  # re-start inserted after #FLUSH
+    # POS_LIMIT as programmed when it lies beyond the software limit and `pos_limit` is the
+    # limit instead (issue 15 item 3); None when programmed within the limits
+    limit_programmed: float | None = None
 
 
 class LiftEnd(NamedTuple):

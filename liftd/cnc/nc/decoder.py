@@ -56,6 +56,14 @@ from liftd.cnc.path.geometry import ArcSeg
 INTERNAL_M = frozenset({0, 1, 2, 3, 4, 17, 19, 29, 30})
 MOTION_G = {0: MotionKind.RAPID, 1: MotionKind.LINEAR, 2: MotionKind.ARC_CW, 3: MotionKind.ARC_CCW}
 INF = float("inf")
+# G groups a block holds one of, with the ISG id for a second one (TF5200 diagnosis: 20108
+# .../tf5200_diagnosis/250789259.html, 20114 …/250815371, 20118 …/250832779, 20127 …/250871947)
+G_GROUPS = {
+    **dict.fromkeys((0, 1, 2, 3), ErrorId.MOTION_G_TWICE),
+    **dict.fromkeys((40, 41, 42), ErrorId.TRC_G_TWICE),
+    **dict.fromkeys((70, 71), ErrorId.UNIT_G_TWICE),
+    **dict.fromkeys((161, 162), ErrorId.CENTRE_G_TWICE),
+}
 MODE_G = frozenset({17, 94, 163})  # XY plane, F in mm/min, radius programming
 ZERO_OFFSET_G = {53: 0, 54: 1, 55: 2, 56: 3, 57: 4, 58: 5, 59: 6}
 # Smoothing the decoder accepts and runs unsmoothed: G code -> (kind, selects (True) or
@@ -525,16 +533,17 @@ class _Decoder:
 
     def _gcodes(self, w: Words, faults: list[NcFault]) -> tuple[bool, bool]:
         dwell = g92 = False
-        motion_seen = False
+        groups: set[ErrorId] = set()
         side: int | None = None
         for code, col in w.gcodes:
-            if code in MOTION_G:
-                if motion_seen:
-                    faults.append(
-                        NcFault(ErrorId.AXIS_TWICE, col, "two motion G functions in one block")
-                    )
+            twice = G_GROUPS.get(code)
+            if twice is not None:
+                if twice in groups:
+                    message = f"G{code:02d}: a second G function of its group in one block"
+                    faults.append(NcFault(twice, col, message + " (the first one counts)"))
                     continue
-                motion_seen = True
+                groups.add(twice)
+            if code in MOTION_G:
                 self.motion = MOTION_G[code]
             elif code == 4:
                 dwell = True
@@ -656,6 +665,13 @@ class _Decoder:
                     )
                 self.return_after = True
                 continue
+            if number >= 1000:  # beyond m_synch[0..999]: taken as internal, unknown
+                raise NcFault(
+                    ErrorId.M_NUMBER_TOO_LARGE,
+                    col,
+                    f"M{number}: unknown internal M function (M functions are 0..999, "
+                    "P-CHAN-00041)",
+                )
             if number not in INTERNAL_M and number not in self.ctx.configured_m:
                 raise NcFault(
                     ErrorId.M_NOT_CONFIGURED,
@@ -862,7 +878,7 @@ class _Decoder:
             reason = nc_file.error if nc_file is not None and nc_file.error else "not found"
             self._error(ErrorId.FILE_NOT_FOUND, col, f"L {name}: global subroutine {reason}")
             raise _AlreadyReported
-        source = parse_source(nc_file.path, nc_file.text)
+        source = parse_source(nc_file.path, nc_file.text, called=True)
         self.files[name] = source
         self._source_problems(source)
         return source
@@ -933,14 +949,8 @@ class _Decoder:
                 interrupted = self.open_lift
                 end = self._close_lift(LiftEndCause.FLUSH)
                 self._emit(Block(lineno, n, flush=cmd.flush, lift_end=end, file=tag))
-                restart = LiftStart(
-                    interrupted.axis,
-                    interrupted.target,
-                    interrupted.target,
-                    interrupted.pos_limit,
-                    interrupted.down,
-                    interrupted.line,
-                    implicit=True,
+                restart = interrupted._replace(
+                    z_start=interrupted.target, single_block=False, implicit=True
                 )
                 self.open_lift = restart
                 self._emit(Block(lineno, n, lift_start=restart, file=tag))

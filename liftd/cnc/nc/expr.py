@@ -302,21 +302,30 @@ class _Parser:
             return operand if sign == "+" else _apply1(lambda x: -x, operand)
         return self.atom()
 
-    def bracket(self) -> Expr:
-        """`[ expr ]` with the position at `[`."""
+    def _open(self) -> bool:
+        """Enter `[` at the position; returns the bracketed state to restore."""
         self.depth += 1
         if self.depth > MAX_DEPTH:
             raise self.error(f"brackets nested deeper than {MAX_DEPTH}")
         self.pos += 1
         saved = self.bracketed
         self.bracketed = True
-        inner = self.expr()
+        return saved
+
+    def _close(self, saved: bool, message: str) -> None:
+        """Leave at `]` (after blanks), else `message`."""
         self.skip()
         if self.pos >= len(self.text) or self.text[self.pos] != "]":
-            raise self.error("']' expected")
+            raise self.error(message)
         self.pos += 1
         self.bracketed = saved
         self.depth -= 1
+
+    def bracket(self) -> Expr:
+        """`[ expr ]` with the position at `[`."""
+        saved = self._open()
+        inner = self.expr()
+        self._close(saved, "']' expected")
         return inner
 
     def atom(self) -> Expr:
@@ -353,23 +362,14 @@ class _Parser:
         raise ExprError(SYNTAX, f"unknown name {m.group(0)!r} in the expression", pos)
 
     def call(self, name: str) -> Expr:
-        self.depth += 1
-        if self.depth > MAX_DEPTH:
-            raise self.error(f"brackets nested deeper than {MAX_DEPTH}")
-        self.pos += 1  # '['
-        saved = self.bracketed
-        self.bracketed = True
+        saved = self._open()
         args = [self.expr()]
         self.skip()
         while self.pos < len(self.text) and self.text[self.pos] == ",":
             self.pos += 1
             args.append(self.expr())
             self.skip()
-        if self.pos >= len(self.text) or self.text[self.pos] != "]":
-            raise self.error("']' expected after the function argument")
-        self.pos += 1
-        self.bracketed = saved
-        self.depth -= 1
+        self._close(saved, "']' expected after the function argument")
         if name in FUNCTIONS1:
             if len(args) != 1:
                 raise self.error(f"{name} takes one argument")

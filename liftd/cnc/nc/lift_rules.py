@@ -89,14 +89,26 @@ def open_range(
     target = z0 if words.pos_mm is None else base + words.pos_mm * unit
     limit = base + words.pos_limit_mm * unit
     z = ctx.axis_names.index(ctx.lift_axis)
-    ctx.check_position(z, target, column)
-    ctx.check_position(z, limit, column)
-    if words.down and limit > max(z0, target):
-        raise NcFault(
-            ErrorId.LIFT_DOWN_LIMIT_SIDE,
-            column,
-            "DOWN with POS_LIMIT above the "
-            "start and the target: the lowering depth is on the wrong side",
+    ctx.check_position(z, target, column)  # POS beyond the software limits: 50041 / 50042
+    # A lift height (or DOWN depth) beyond the software limit cannot be reached anyway: the
+    # limit is the software limit, with a warning (issue 15 item 3; the vendor's own §3
+    # example programs POS_LIMIT=300). DOWN with POS_LIMIT above start and POS is special
+    # case 1 mirrored (§2.1.3: the limit has no effect, Z goes to POS at the start).
+    neg, pos = ctx.sw_limits[z]
+    programmed: float | None = None
+    if not neg - 1e-12 <= limit <= pos + 1e-12:
+        programmed = limit
+        limit = min(max(limit, neg), pos)
+        side = "positive" if programmed > pos else "negative"
+        warnings.append(
+            NcError(
+                int(ErrorId.LIFT_LIMIT_CLAMPED),
+                lineno,
+                column,
+                f"POS_LIMIT {programmed * 1e3:.4f} mm lies beyond the {side} software limit "
+                f"{limit * 1e3:.4f} mm of {axis}: the lift is limited to the software limit",
+                Severity.WARNING,
+            )
         )
     return LiftStart(
         axis,
@@ -106,6 +118,7 @@ def open_range(
         words.down,
         lineno,
         single_block=words.keyword is LiftKeyword.SINGLE,
+        limit_programmed=programmed,
     )
 
 

@@ -75,34 +75,34 @@ def _has_words(line: str) -> bool:
     return bool(text) and not text.upper().startswith("#COMMENT")
 
 
-def parse_source(name: str, text: str) -> Source:
+def parse_source(name: str, text: str, called: bool = False) -> Source:
     """Split a file into its sections; structural problems are kept for the decoder to
-    report where the file is first run."""
+    report where the file is first run. `called`: a global subroutine file (L name), whose
+    misplaced % lines are ID 21313 instead of the main program's 20193."""
     lines = text.splitlines()
     headers = [i for i, line in enumerate(lines) if line.lstrip().startswith("%")]
     problems: list[SourceProblem] = []
     locals_: dict[str, Section] = {}
     if not headers:
         return Source(name, lines, locals_, Section("", 0, len(lines), False), problems)
-    for i in range(headers[0]):
-        if _has_words(lines[i]):
-            problems.append(
-                SourceProblem(
-                    i + 1,
-                    ErrorId.PROGRAM_STRUCTURE,
-                    "NC words before the program definition (the first % line)",
-                )
-            )
-            break
+    # "The execution of a main program is also started if the first character found in the
+    # file outside comments is neither a space nor a %" -- then every % line is inside that
+    # program part: ID 20193 (main program) / 21313 (global subroutine) at the % line
+    # https://infosys.beckhoff.com/content/1033/tf5200_diagnosis/251054731.html
+    # https://infosys.beckhoff.com/content/1033/tf5200_diagnosis/254175115.html
+    percent = ErrorId.PERCENT_IN_SUBROUTINE if called else ErrorId.PERCENT_IN_MAIN
     main: Section | None = None
+    after = ""
+    first_words = next((i for i in range(headers[0]) if _has_words(lines[i])), None)
+    if first_words is not None:
+        main = Section("", first_words, headers[0], False)
+        after = f" (the NC words in line {first_words + 1} began an unnamed program part)"
     for k, h in enumerate(headers):
         end = headers[k + 1] if k + 1 < len(headers) else len(lines)
         m = _LOCAL.match(lines[h])
         if m is None:
             if main is not None:
-                problems.append(
-                    SourceProblem(h + 1, ErrorId.PROGRAM_STRUCTURE, "a second main program")
-                )
+                problems.append(SourceProblem(h + 1, percent, "a second main program part" + after))
                 continue
             title = lines[h].strip()[1:].strip()
             main = Section(title, h + 1, end, False)
@@ -112,9 +112,9 @@ def parse_source(name: str, text: str) -> Source:
             problems.append(
                 SourceProblem(
                     h + 1,
-                    ErrorId.PROGRAM_STRUCTURE,
-                    f"local subroutine {sub} after the main program: local subroutines are "
-                    "defined before it",
+                    percent,
+                    f"local subroutine {sub} after the main program part: local subroutines "
+                    "are defined before it" + after,
                 )
             )
             continue

@@ -306,7 +306,13 @@ def _collect_one(
 
 def _store(w: Words, letter: str, value: float, column: int) -> None:
     if letter in w.values or (w.lift is not None and w.lift[0] == letter):
-        eid = ErrorId.DOUBLE_F if letter == "F" else ErrorId.AXIS_TWICE
+        eid = (
+            ErrorId.DOUBLE_F
+            if letter == "F"
+            else ErrorId.WORD_TWICE
+            if letter in VALUE_LETTERS
+            else ErrorId.AXIS_TWICE
+        )
         raise NcFault(eid, column, f"{letter} programmed twice in one block")
     w.values[letter] = (value, column)
 

@@ -226,7 +226,7 @@ CASES = [
     ("G01 X3011 F100\n", ErrorId.SW_LIMIT_POS, 1, {}),
     ("G01 X-2 F100\n", ErrorId.SW_LIMIT_NEG, 1, {}),
     ("G01 X1500 Y1509 F100\nG02 I0 J1\n", ErrorId.SW_LIMIT_POS, 2, {}),  # arc bulges out
-    ("Z[LIFT_START POS_LIMIT=151]\n", ErrorId.SW_LIMIT_POS, 1, {}),
+    ("Z[LIFT_START POS=151 POS_LIMIT=160]\n", ErrorId.SW_LIMIT_POS, 1, {}),
     ("Z[LIFT_START DOWN POS=-6 POS_LIMIT=-2]\n", ErrorId.SW_LIMIT_NEG, 1, {}),
     ("X1 $\n", ErrorId.SYNTAX, 1, {}),
     ("G01 XYZ\n", ErrorId.SYNTAX, 1, {}),
@@ -256,12 +256,16 @@ CASES = [
     ("Z[LIFT_END POS=3]\n", ErrorId.LIFT_SYNTAX, 1, {}),
     ("G01 X1 Y2 Y3 F100\n", ErrorId.AXIS_TWICE, 1, {}),
     ("Z5 Z[LIFT_START POS_LIMIT=9]\n", ErrorId.AXIS_TWICE, 1, {}),
-    ("G01 G02 X1 F1\n", ErrorId.AXIS_TWICE, 1, {}),
+    ("G01 G02 X1 F1\n", ErrorId.MOTION_G_TWICE, 1, {}),
+    ("G01 G41 X1 G42 F1\n", ErrorId.TRC_G_TWICE, 1, {}),
+    ("G70 G71 X1\n", ErrorId.UNIT_G_TWICE, 1, {}),
+    ("G161 G02 X1 I1 G162 F1\n", ErrorId.CENTRE_G_TWICE, 1, {}),
+    ("G02 X1 Y1 I1 I2 F100\n", ErrorId.WORD_TWICE, 1, {}),
+    ("M1001\n", ErrorId.M_NUMBER_TOO_LARGE, 1, {}),
     ("G02 X1 Y1 F100\n", ErrorId.ARC_GEOMETRY, 1, {}),
     ("G02 X10 Y0 R2 F100\n", ErrorId.ARC_GEOMETRY, 1, {}),
     ("G02 X10 Y0 Z5 I5 F100\n", ErrorId.HELIX, 1, {}),
     ("M77\n", ErrorId.M_NOT_CONFIGURED, 1, {}),
-    ("G01 Z10 F100\nZ[LIFT_START DOWN POS=5 POS_LIMIT=20]\n", ErrorId.LIFT_DOWN_LIMIT_SIDE, 2, {}),
     ("G04\n", ErrorId.DWELL_MISSING, 1, {}),
     ("Y[LIFT_START POS_LIMIT=9]\n", ErrorId.LIFT_WRONG_AXIS, 1, {}),
     ("A10\n", ErrorId.UNKNOWN_AXIS, 1, {}),
@@ -304,6 +308,9 @@ def test_every_error_id_is_tested() -> None:
             ErrorId.TRC_LIFT_AXIS,  # test_lift_axis_in_the_compensation_plane_is_an_error
             ErrorId.TRC_RADIUS_TOO_LARGE,  # test_arcs_get_the_offset_radius_and_...
             ErrorId.TRC_RADIUS_CHANGE_ARC,  # test_side_change_and_radius_change
+            ErrorId.PERCENT_IN_SUBROUTINE,  # test_percent_line_inside_a_global_subroutine_...
+            # tests/fidelity/test_s3_programming.py: the vendor's own POS_LIMIT=300 example
+            ErrorId.LIFT_LIMIT_CLAMPED,
         }
     )
     assert tested == set(ErrorId)

@@ -147,6 +147,13 @@ def test_missing_file_is_one_error_at_its_first_call() -> None:
     assert "not found" in r.errors[0].message
 
 
+def test_percent_line_inside_a_global_subroutine_is_21313() -> None:
+    # the file's first words start an unnamed program part; its %L line is then inside it
+    r = dec("L part.nc\nM30\n", {"part.nc": "G01 X1 F100\n%L late\nM17\n"})
+    assert errors(r) == [(ErrorId.PERCENT_IN_SUBROUTINE, 2)]
+    assert r.errors[0].file == "/subs/part.nc"
+
+
 def test_expansion_is_bounded_and_streamed() -> None:
     sub = "%L s\nG91 G01 X0.001 F1000\nG90\nM17\n%m\n"
     text = sub + "L SEQUENCE [N1 N2 REPEAT=1000000]\nN1 LL s\nN2 M00\nM30\n"
@@ -164,7 +171,9 @@ SUB_ERRORS = [
     ("%L a\nM17\n%m\nG01 X1 F100 LL a X2\n", ErrorId.WORDS_AFTER_CALL, 4),
     ("%L a\nM17\n%main\nLL a G01 X1\n", ErrorId.WORDS_AFTER_CALL, 4),
     ("L SEQUENCE [N7]\n", ErrorId.SEQUENCE_NOT_FOUND, 1),
-    ("G01 X1 F100\n%L a\nM17\n%main\nM30\n", ErrorId.PROGRAM_STRUCTURE, 1),
+    ("G01 X1 F100\n%L a\nM17\n%main\nM30\n", ErrorId.PERCENT_IN_MAIN, 2),
+    ("%main\nM30\n%L late\nM17\n", ErrorId.PERCENT_IN_MAIN, 3),
+    ("%one\nM30\n%two\nM30\n", ErrorId.PERCENT_IN_MAIN, 3),
     ("%L a\nM17\n%L a\nM17\n%main\nM30\n", ErrorId.DUPLICATE_SUBROUTINE, 3),
     ("%L a\nM17\n", ErrorId.PROGRAM_STRUCTURE, 1),
     ("".join(f"%L s{i}\nM17\n" for i in range(51)) + "%m\nM30\n", ErrorId.TOO_MANY_LOCAL_SUBS, 101),
