@@ -14,6 +14,8 @@ from typing import TYPE_CHECKING, Any, TextIO
 from liftd import __version__
 from liftd.cnc.nc import DecoderContext, Severity
 from liftd.cnc.nc.decoder import iter_decode
+from liftd.cnc.nc.lift_summary import LiftRangeTracker
+from liftd.cnc.nc.lift_summary import describe as describe_lift
 from liftd.settings import ConfigError, Settings, load_settings
 from liftd.settings.programs import program_channel, with_program
 
@@ -50,14 +52,18 @@ def check_program(settings: Settings, path: Path) -> int:
     ch = program_channel(settings, path, text)
     stream, decoder = iter_decode(text, DecoderContext.from_channel(ch))
     blocks = lifts = 0
+    ranges = LiftRangeTracker(ch.lift_min_dist)
     for block in stream:
         blocks += 1
         lifts += block.lift_start is not None and not block.lift_start.implicit
+        ranges.feed(block)
     result = decoder.result(())
     errors = 0
     for problem in result.errors:
         print(problem.located(str(path)), file=sys.stderr)
         errors += problem.severity is Severity.ERROR
+    for summary in ranges.finish():  # one line per lift range (issue 15)
+        print(f"{path}: {describe_lift(summary, ch.lift_method)}")
     if not errors:
         print(f"{path}: ok ({blocks} blocks, {lifts} lift ranges)")
     approx = ", ".join(f"{kind} in {n} block{'s' * (n != 1)}" for kind, n in result.not_emulated)

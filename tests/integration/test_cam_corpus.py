@@ -8,12 +8,12 @@ import json
 import re
 import shutil
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
 from tests.conftest import GOLDEN, REPO
+from tests.integration.test_cli_check import liftd as run_liftd
 
 pytestmark = pytest.mark.integration
 CAM = GOLDEN / "nc" / "cam"
@@ -29,14 +29,7 @@ WARNINGS: dict[str, set[int]] = {
 
 
 def liftd(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "liftd", *args],
-        check=False,
-        capture_output=True,
-        text=True,
-        timeout=300,
-        cwd=cwd,
-    )
+    return run_liftd(*args, cwd=cwd, timeout=300)  # simulate --compare on a shared VM
 
 
 def programs() -> list[Path]:

@@ -10,8 +10,10 @@ from pathlib import Path
 import pytest
 
 from liftd.settings import ConfigError, load_settings
-from liftd.settings.load import parse_config_text
 from liftd.settings.programs import called_names, read_sources
+from tests.unit.settings.test_config import (
+    test_bad_values_name_file_line_key_value as check_bad_value,
+)
 
 MM = 1e-3
 Machine = Callable[..., Path]
@@ -78,13 +80,7 @@ def test_toml_values_override_the_lists(machine: Machine) -> None:
 def test_bad_nc_values_name_file_line_key_value(
     text: str, line: int, key: str, value: str | None, fragment: str
 ) -> None:
-    with pytest.raises(ConfigError) as exc:
-        parse_config_text(text, "bad.toml")
-    (p,) = exc.value.problems
-    assert (p.file, p.line, p.key) == ("bad.toml", line, key)
-    if value is not None:
-        assert p.value == value
-    assert fragment in p.message
+    check_bad_value(text, line, key, value, fragment)
 
 
 def test_zero_offset_of_an_unknown_axis_is_a_configuration_error(machine: Machine) -> None:
