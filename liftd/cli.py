@@ -13,8 +13,12 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, TextIO
 
 from liftd import __version__
-from liftd.cnc.nc import DecoderContext, Severity, decode
+from liftd.cnc.nc import DecoderContext, Severity
+from liftd.cnc.nc.decoder import iter_decode
+from liftd.cnc.nc.lift_summary import LiftRangeTracker
+from liftd.cnc.nc.lift_summary import describe as describe_lift
 from liftd.settings import ConfigError, Settings, load_settings
+from liftd.settings.programs import program_channel, with_program
 
 if TYPE_CHECKING:
     from liftd.cnc.plc import Schedule
@@ -45,22 +49,32 @@ def _schedule(args: argparse.Namespace) -> Schedule:
 
 
 def check_program(settings: Settings, path: Path) -> int:
-    """Decode one program and print its problems; returns the number of errors."""
+    """Decode one program (streamed: its expansion is never held) and print its problems,
+    then one line saying what liftd runs approximated; returns the number of errors."""
     try:
         text = path.read_text(encoding="utf-8", errors="replace")
     except OSError as exc:
         print(f"{path}: error: cannot read program: {exc.strerror or exc}", file=sys.stderr)
         return 1
-    result = decode(text, DecoderContext.from_channel(settings.channel))
+    ch = program_channel(settings, path, text)
+    stream, decoder = iter_decode(text, DecoderContext.from_channel(ch))
+    blocks = lifts = 0
+    ranges = LiftRangeTracker(ch.lift_min_dist)
+    for block in stream:
+        blocks += 1
+        lifts += block.lift_start is not None and not block.lift_start.implicit
+        ranges.feed(block)
+    result = decoder.result(())
     errors = 0
     for problem in result.errors:
-        print(f"{path}:{problem}", file=sys.stderr)
+        print(problem.located(str(path)), file=sys.stderr)
         errors += problem.severity is Severity.ERROR
+    for summary in ranges.finish():  # one line per lift range (issue 15)
+        print(f"{path}: {describe_lift(summary, ch.lift_method)}")
     if not errors:
-        lifts = sum(
-            1 for b in result.blocks if b.lift_start is not None and not b.lift_start.implicit
-        )
-        print(f"{path}: ok ({len(result.blocks)} blocks, {lifts} lift ranges)")
+        print(f"{path}: ok ({blocks} blocks, {lifts} lift ranges)")
+    approx = ", ".join(f"{kind} in {n} block{'s' * (n != 1)}" for kind, n in result.not_emulated)
+    print(f"{path}: not emulated: {approx or 'nothing (everything runs as on the CNC)'}")
     return errors
 
 
@@ -97,6 +111,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     except OSError as exc:
         print(f"{program}: error: cannot read program: {exc.strerror or exc}", file=sys.stderr)
         return EXIT_PROGRAM
+    settings = with_program(settings, program, text)  # its subroutine files
     methods = ("advanced", "lifting") if args.compare else (args.method,)
     names = _trace_names(args.trace, methods) if args.trace else {}
     traces: dict[str, TextIO] = {}

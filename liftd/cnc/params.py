@@ -58,6 +58,33 @@ class AxisParams:
 
 
 @dataclass(frozen=True, slots=True)
+class NcFile:
+    """A global subroutine file as the caller resolved it (reading files is IO, outside the
+    core): `name` as written after `L` in the program, `path` for messages, `text` or, when
+    it could not be found or read, `error` (reported where the program calls it)."""
+
+    name: str
+    path: str
+    text: str | None = None
+    error: str | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class NcSources:
+    """The program's display name and the global subroutine files it (transitively) calls,
+    read before decoding. Empty for a program without `L` calls."""
+
+    program: str = ""
+    files: tuple[NcFile, ...] = ()
+
+    def find(self, name: str) -> NcFile | None:
+        for f in self.files:
+            if f.name == name:
+                return f
+        return None
+
+
+@dataclass(frozen=True, slots=True)
 class ChannelParams:
     """One CNC channel as configured by the start-up, channel and axis lists."""
 
@@ -73,6 +100,14 @@ class ChannelParams:
     m_synch: tuple[tuple[int, MSync], ...] = ()
     path_prep_flags: frozenset[str] = field(default_factory=frozenset)
     ipo_flags: frozenset[str] = field(default_factory=frozenset)
+    # NC dialect support (issue 19); all optional, the defaults decode plain DIN programs
+    tool_radii: tuple[tuple[int, float], ...] = ()  # D number -> tool radius, m (G41/G42)
+    # zero-offset groups 0..6 (G53 data block, G54..G59) -> offset per channel axis, m
+    zero_offsets: tuple[tuple[int, tuple[float, ...]], ...] = ()
+    zero_offset_default: int = 0  # P-ZERO-00002 default_index: group active at program start
+    g53_offsets: bool = False  # P-ZERO-00001 g53_verfuegbar: G53 applies group 0 values
+    nc_sources: NcSources = field(default_factory=NcSources)
+    max_executed_blocks: int = 2_000_000  # expansion bound (subroutines, repetitions)
 
     def axis(self, name: str) -> AxisParams:
         for ax in self.axes:

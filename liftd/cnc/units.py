@@ -14,6 +14,8 @@ M_S2_PER_ISG_ACC = 1e-3  # mm/s² (P-AXIS-00008 a_max)
 S_PER_ISG_TIME = 1e-6  # µs (P-AXIS-00201 tr_min)
 FRACTION_PER_ISG_PERMILLE = 1e-3  # 0.1 % (P-AXIS-00441/00442, overrides)
 M_S_PER_MM_MIN = 1e-3 / 60.0  # F word under G94
+M_PER_INCH = 25.4e-3  # G70: positions in inch, F in inch/min
+M_PER_ISG_INCH = 2.54e-6  # 0.0001 inch (tool list wz[i].radius with mass_einheit 1)
 
 
 def isg_pos_to_m(raw: int) -> float:
@@ -63,3 +65,17 @@ def mm_min_to_m_s(value_mm_min: float) -> float:
 def jerk_from_ramp(a_max_m_s2: float, tr_min_s: float) -> float:
     """Axis jerk limit = a_max / tr_min (P-AXIS-00201); tr_min = 0 means no jerk limit."""
     return a_max_m_s2 / tr_min_s if tr_min_s > 0.0 else float("inf")
+
+
+def inch_to_m(value_inch: float) -> float:
+    return value_inch * M_PER_INCH
+
+
+def isg_inch_to_m(raw: int) -> float:
+    """0.0001 inch (ISG tool data in inch, P-TOOL-00004) to m."""
+    return raw * M_PER_ISG_INCH
+
+
+def program_length_factor(inch: bool) -> float:
+    """m per unit of a length word in the NC program: mm under G71, inch under G70."""
+    return M_PER_INCH if inch else M_PER_MM

@@ -47,6 +47,7 @@ from liftd.service.control import Verdict
 from liftd.service.geo_log import GeoEventLog
 from liftd.settings import ConfigError, Settings, load_settings
 from liftd.settings.load import program_problem
+from liftd.settings.programs import program_channel
 
 if TYPE_CHECKING:
     from liftd.service.metrics import Sample
@@ -67,7 +68,7 @@ def loop_config(settings: Settings) -> LoopConfig:
     program = settings.program
     text = program.read_text(encoding="utf-8", errors="replace") if program else ""
     return LoopConfig(
-        channel=settings.channel,
+        channel=program_channel(settings, program, text),  # with its subroutine files
         program_text=text,
         program_name=str(program) if program else "(none)",
         autostart=cfg.program.autostart and program is not None,
@@ -221,13 +222,13 @@ class Daemon:
             idle = "no [program] file: the channel idles until a reload brings one"
             self.log.warning("daemon.no_program", detail=idle)
             return cfg
-        ch = settings.channel
+        ch = cfg.channel  # with the program's subroutine files
         result = decode(cfg.program_text,
                         DecoderContext.from_channel(ch, tuple(0.0 for _ in ch.axes)))  # fmt: skip
         for err in result.errors:
             level = "warning" if err.severity is Severity.WARNING else "error"
-            getattr(self.log, level)("nc.problem", file=str(settings.program), line=err.line,
-                                     id=err.id, message=err.message)  # fmt: skip
+            getattr(self.log, level)("nc.problem", file=err.file or str(settings.program),
+                                     line=err.line, id=err.id, message=err.message)  # fmt: skip
         self.log.info("daemon.program", file=str(settings.program), blocks=len(result.blocks))
         return cfg
 

@@ -18,6 +18,8 @@ from liftd.settings.isg_schema import (
     AXIS_KEYS,
     CHANNEL_KEYS,
     STARTUP_KEYS,
+    TOOL_KEYS,
+    ZERO_OFFSET_KEYS,
     KeySpec,
     TypedList,
     Value,
@@ -52,6 +54,10 @@ class ChannelLists:
     path_prep_flags: frozenset[str]
     ipo_flags: frozenset[str]
     files: tuple[str, ...]
+    tool_radii: tuple[tuple[int, float], ...] = ()  # D number -> m
+    zero_offsets: tuple[tuple[int, tuple[float, ...]], ...] = ()  # group 0..6 -> m per axis
+    zero_offset_default: int = 0
+    g53_offsets: bool = False
 
 
 class _Reader:
@@ -102,8 +108,15 @@ def _resolve(base: Path, value: Value) -> Path:
     return path if path.is_absolute() else base / path
 
 
-def read_channel_lists(startup: Path, channel: int) -> tuple[ChannelLists | None, list[Problem]]:
-    """Read the lists of logical channel `channel` (1-based; list index channel - 1).
+def read_channel_lists(
+    startup: Path,
+    channel: int,
+    tool_list: Path | None = None,
+    zero_offset_list: Path | None = None,
+) -> tuple[ChannelLists | None, list[Problem]]:
+    """Read the lists of logical channel `channel` (1-based; list index channel - 1); the
+    tool and zero-offset lists come from `werkz_data[i]` / `nullp_data[i]` of the start-up
+    list unless given.
 
     Returns the channel's parameters, or None when any error was found; the problem list
     always carries every error and warning with file, line, key and value.
@@ -144,6 +157,8 @@ def read_channel_lists(startup: Path, channel: int) -> tuple[ChannelLists | None
     look_ahead = _look_ahead(rd, ipo, ipo_ref, channel_values, stup, idx)
     m_synch = _m_synch(rd, channel_values)
     slope = SlopeType(_int(channel_values, "prog_start.slope.profile", 0))
+    tools = _tools(rd, _list_path(base, stup, f"werkz_data[{idx}]", tool_list))
+    zero = _zero_offsets(rd, _list_path(base, stup, f"nullp_data[{idx}]", zero_offset_list), axes)
     if any(p.severity is Severity.ERROR for p in rd.problems) or axes is None:
         return None, rd.problems
     lists = ChannelLists(
@@ -160,8 +175,83 @@ def read_channel_lists(startup: Path, channel: int) -> tuple[ChannelLists | None
         path_prep_flags=pp,
         ipo_flags=ipo,
         files=tuple(rd.files),
+        tool_radii=tools,
+        zero_offsets=zero[0],
+        zero_offset_default=zero[1],
+        g53_offsets=zero[2],
     )
     return lists, rd.problems
+
+
+def _list_path(
+    base: Path, stup: TypedList, key: str, explicit: Path | None
+) -> tuple[Path, Value | None] | None:
+    if explicit is not None:
+        return explicit, None
+    ref = stup.get(key)
+    return (_resolve(base, ref), ref) if ref is not None else None
+
+
+def _tools(rd: _Reader, where: tuple[Path, Value | None] | None) -> tuple[tuple[int, float], ...]:
+    """Tool radii per tool number from the tool list (wz[i].radius, P-TOOL-00004; the D word
+    selects tool i). Invalid tools (wz[i].gueltig 0) have no radius."""
+    if where is None:
+        return ()
+    values = rd.read(where[0], TOOL_KEYS, where[1])
+    if values is None:
+        return ()
+    radii: dict[int, float] = {}
+    for key, value in values.items():
+        if not key.endswith(".radius") or key.count("[") != 1:
+            continue
+        number = int(key[3 : key.index("]")])
+        valid = values.get(f"wz[{number}].gueltig")
+        if valid is not None and not valid.value:
+            continue
+        inch = values.get(f"wz[{number}].mass_einheit")
+        raw = _as_int(value)
+        radii[number] = (
+            units.isg_inch_to_m(raw) if inch is not None and inch.value else units.isg_pos_to_m(raw)
+        )
+    return tuple(sorted(radii.items()))
+
+
+def _zero_offsets(
+    rd: _Reader, where: tuple[Path, Value | None] | None, axes: tuple[AxisParams, ...] | None
+) -> tuple[tuple[tuple[int, tuple[float, ...]], ...], int, bool]:
+    """Zero-offset groups 0..6 (G53, G54..G59) per channel axis j (np_grp[i].achse[j].versch,
+    P-ZERO-00003; inaktiv hides an axis' offset, P-ZERO-00004)."""
+    if where is None or axes is None:
+        return (), 0, False
+    values = rd.read(where[0], ZERO_OFFSET_KEYS, where[1])
+    if values is None:
+        return (), 0, False
+    groups: dict[int, list[float]] = {}
+    for key, value in values.items():
+        if not key.endswith(".versch"):
+            continue
+        grp = int(key[len("np_grp[") : key.index("]")])
+        axis = int(key[key.index("achse[") + 6 : key.rindex("]")])
+        if axis >= len(axes):
+            rd.error(value, f"axis index {axis}: the channel has {len(axes)} axes")
+            continue
+        if grp > 6:
+            continue  # G159 groups are not emulated
+        inactive = values.get(key.replace(".versch", ".inaktiv"))
+        if inactive is not None and inactive.value:
+            continue
+        groups.setdefault(grp, [0.0] * len(axes))[axis] = units.isg_pos_to_m(_as_int(value))
+    default = values.get("default_index")
+    default_index = _as_int(default) if default is not None else 0
+    if default is not None and default_index > 6:
+        rd.error(default, "liftd emulates the zero offsets G53 … G59 (index 0 … 6)")
+        default_index = 0
+    g53 = values.get("g53_verfuegbar")
+    return (
+        tuple((g, tuple(v)) for g, v in sorted(groups.items())),
+        default_index,
+        bool(g53.value) if g53 is not None else False,
+    )
 
 
 def _read_axes(
@@ -188,8 +278,12 @@ def _read_axes(
     seen_names: set[str] = set()
     for name in names:
         text = str(name.value)
-        if len(text) != 1 or not text.isalpha() or text.upper() in "FGIJKMNPRST":
-            rd.error(name, "liftd needs single-letter axis names other than F G I J K M N P R S T")
+        if len(text) != 1 or not text.isalpha() or text.upper() in "DFGHIJKLMNPRST":
+            rd.error(
+                name,
+                "liftd needs single-letter axis names other than the addresses "
+                "D F G H I J K L M N P R S T",
+            )
         if text in seen_names:
             rd.error(name, "axis name used twice")
         seen_names.add(text)
@@ -326,9 +420,14 @@ def _look_ahead(
             f"configuration.channel[{idx}].interpolator.number_blocks_lah"
         )
         if value is None:
-            rd.error(ipo_ref, "FCT_LOOK_AHEAD_CUSTOM needs number_blocks_lah (P-CHAN-00653)")
+            if not any(p.key and p.key.endswith(".number_blocks_lah") for p in rd.problems):
+                # (a value out of range is reported where it is written, once)
+                rd.error(ipo_ref, "FCT_LOOK_AHEAD_CUSTOM needs number_blocks_lah (P-CHAN-00653)")
             return DEFAULT_LOOK_AHEAD
-        return _as_int(value)
+        # 0 blocks (allowed by vendor §4.2.1, its meaning not documented): no look-ahead
+        # beyond the block being run, the path planned one block at a time -- it can stop at
+        # every block end -- which the interpolator gets as a window of one block
+        return max(1, _as_int(value))
     return sizes[0] if sizes else DEFAULT_LOOK_AHEAD
 
 

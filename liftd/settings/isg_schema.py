@@ -116,14 +116,17 @@ STARTUP_KEYS = (
     _spec("achs_mds[i]", Kind.PATH),  # P-STUP-00015
     _spec("default_achs_mds", Kind.PATH),  # P-STUP-00035
     _spec("hand_mds", Kind.KNOWN),
-    _spec("werkz_data[i]", Kind.KNOWN),
-    _spec("nullp_data[i]", Kind.KNOWN),
+    _spec("werkz_data[i]", Kind.PATH),  # P-STUP-00010: tool list per channel
+    _spec("nullp_data[i]", Kind.PATH),  # P-STUP-00011: zero-offset list per channel
     _spec("pzv_data[i]", Kind.KNOWN),
     _spec("zahl_kw", Kind.KNOWN),
     _spec("achs_kw[i]", Kind.KNOWN),
     _spec("configuration.channel[i].path_preparation.function", Kind.FLAGS, None, PATH_PREP_FLAGS),
     _spec("configuration.channel[i].interpolator.function", Kind.FLAGS, None, IPO_FLAGS),
-    _spec("configuration.channel[i].interpolator.number_blocks_lah", Kind.INT, (10, 10000)),
+    # P-STUP-00071 / P-CHAN-00653: [0; 200] as the vendor's lift text §4.2.1 and the start-up
+    # list page give it (https://infosys.beckhoff.com/content/1033/tccncstartuplist/
+    # 15280831883.html); later builds allow more (500, 10000 with STEP slopes), not liftd
+    _spec("configuration.channel[i].interpolator.number_blocks_lah", Kind.INT, (0, 200)),
     _spec("configuration.channel[i].interpolator.parameter", Kind.INT, (0, 10000)),
 )
 
@@ -132,7 +135,7 @@ CHANNEL_KEYS = (
     _spec("enable_time_based_lift", Kind.BOOL),  # P-CHAN-00345
     _spec("configuration.path_preparation.function", Kind.FLAGS, None, PATH_PREP_FLAGS),
     _spec("configuration.interpolator.function", Kind.FLAGS, None, IPO_FLAGS),
-    _spec("configuration.interpolator.number_blocks_lah", Kind.INT, (10, 10000)),  # 00653
+    _spec("configuration.interpolator.number_blocks_lah", Kind.INT, (0, 200)),  # 00653
     _spec("configuration.interpolator.blocks_per_call", Kind.KNOWN),  # P-CHAN-00654
     _spec("grp_anzahl", Kind.INT, (1, 1)),  # P-CHAN-00023: one axis group only
     _spec("gruppe[0].bezeichnung", Kind.STR),
@@ -176,6 +179,29 @@ AXIS_KEYS = (
     _spec("kenngr.dyn_monitoring_j_warn", Kind.KNOWN),
     _spec("kenngr.dyn_monitoring_j_err", Kind.KNOWN),
     _spec("handbetrieb.hb.vb_max", Kind.KNOWN),
+)
+
+
+# Tool list (werkz_data[i]): TF5200 tool data P-TOOL-*, e.g. wz[5].radius 200000 = 20 mm
+# https://infosys.beckhoff.com/content/1033/tf5200_tool_data/104778123.html
+TOOL_KEYS_NOT_READ = (  # known to the CNC, not read by liftd
+    "laenge", "ax_versatz[i]", "log_ax_nr_spdl", "vb_min", "vb_max", "a_max", "param[i]",
+    "path[i].radius",
+)  # fmt: skip
+TOOL_KEYS = (
+    _spec("wz[i].radius", Kind.INT, S32),  # P-TOOL-00004, 0.1 µm (0.0001 inch)
+    _spec("wz[i].gueltig", Kind.BOOL),  # validity flag
+    _spec("wz[i].mass_einheit", Kind.BOOL),  # 0 mm, 1 inch
+    *(_spec(f"wz[i].{key}", Kind.KNOWN) for key in TOOL_KEYS_NOT_READ),
+)
+
+# Zero-offset list (nullp_data[i]): TF5200 zero offsets P-ZERO-*
+# https://infosys.beckhoff.com/content/1033/tf5200_zero_offsets/103724043.html
+ZERO_OFFSET_KEYS = (
+    _spec("g53_verfuegbar", Kind.BOOL),  # P-ZERO-00001: G53 data block used as an offset
+    _spec("default_index", Kind.INT, (0, 96)),  # P-ZERO-00002: group active at start
+    _spec("np_grp[i].achse[i].versch", Kind.INT, S32),  # P-ZERO-00003, 0.1 µm
+    _spec("np_grp[i].achse[i].inaktiv", Kind.BOOL),  # P-ZERO-00004: offset not applied
 )
 
 

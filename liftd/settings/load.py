@@ -16,7 +16,8 @@ from typing import Any
 
 from pydantic import ValidationError
 
-from liftd.cnc.params import ChannelParams
+from liftd.cnc import units
+from liftd.cnc.params import AxisParams, ChannelParams
 from liftd.settings.cnc_lists import read_channel_lists
 from liftd.settings.isg_list import Problem, Severity
 from liftd.settings.model import LiftdConfig
@@ -41,6 +42,7 @@ class Settings:
     program: Path | None
     warnings: tuple[Problem, ...]
     files: tuple[str, ...]  # every file read, for messages and reloads
+    subroutine_dirs: tuple[Path, ...] = ()  # [nc] subroutine_dirs, resolved
 
 
 def default_config_path() -> Path:
@@ -64,23 +66,31 @@ def find_config(explicit: str | None) -> Path:
 
 
 def toml_line(text: str, loc: tuple[str | int, ...]) -> int | None:
-    """Line of key `loc` (section, key) in TOML `text`; None if not found (default used)."""
-    if not loc:
+    """Line of key `loc` (section, …, key) in TOML `text`; None if not found (default used).
+
+    The deepest key that is written on a line of its own wins: `[nc.tools]` + `D1 = 0.1`
+    finds the D1 line, `tools = { D1 = 0.1 }` under `[nc]` the tools line."""
+    keys = [part for part in loc if isinstance(part, str) and part != "[key]"]
+    if not keys:
         return None
-    keys = [str(part) for part in loc if isinstance(part, str)]
-    section, key = (keys[0], keys[1]) if len(keys) >= 2 else ("", keys[0])
-    current = ""
+    lines = text.splitlines()
     header = re.compile(r"^\s*\[\s*([A-Za-z0-9_.]+)\s*\]")
     assign = re.compile(r"^\s*([A-Za-z0-9_]+)\s*=")
-    for lineno, line in enumerate(text.splitlines(), start=1):
-        m = header.match(line)
-        if m:
-            current = m.group(1)
-            if not section and current == key:
+    for depth in range(len(keys) - 1, 0, -1):
+        section, key = ".".join(keys[:depth]), keys[depth]
+        current = ""
+        for lineno, line in enumerate(lines, start=1):
+            m = header.match(line)
+            if m:
+                current = m.group(1)
+                continue
+            m = assign.match(line)
+            if m and m.group(1) == key and current == section:
                 return lineno
-            continue
-        m = assign.match(line)
-        if m and m.group(1) == key and current == section:
+    wanted = ".".join(keys)
+    for lineno, line in enumerate(lines, start=1):
+        m = header.match(line)
+        if m and m.group(1) == wanted:
             return lineno
     return None
 
@@ -101,8 +111,8 @@ def parse_config_text(text: str, file: str) -> LiftdConfig:
         problems = []
         for err in exc.errors():
             loc = tuple(err["loc"])
-            key = ".".join(str(p) for p in loc)
-            value = _value_at(data, loc)
+            key = ".".join(str(p) for p in loc if p != "[key]")
+            value = str(loc[-2]) if loc[-1:] == ("[key]",) else _value_at(data, loc)
             message = err["msg"]
             if err["type"] == "extra_forbidden":
                 message = "unknown key"
@@ -136,8 +146,19 @@ def load_settings(explicit: str | None = None, program: str | None = None) -> Se
         ) from None
     config = parse_config_text(text, str(path))
     base = path.parent
+    program_path: Path | None = None
+    if program is not None:
+        program_path = Path(program)
+    elif config.program.file:
+        program_path = base / config.program.file
     startup = base / config.cnc.startup_list
-    lists, problems = read_channel_lists(startup, config.cnc.channel)
+    nc = config.nc
+    lists, problems = read_channel_lists(
+        startup,
+        config.cnc.channel,
+        base / nc.tool_list if nc.tool_list else None,
+        base / nc.zero_offset_list if nc.zero_offset_list else None,
+    )
     if lists is not None:
         names = [ax.name for ax in lists.axes]
         if config.cnc.lift_axis not in names:
@@ -151,8 +172,14 @@ def load_settings(explicit: str | None = None, program: str | None = None) -> Se
                     f"not an axis of channel {config.cnc.channel} (axes: {', '.join(names)})",
                 )
             )
+    zero_offsets = lists.zero_offsets if lists is not None else ()
+    if lists is not None:
+        zero_offsets = _zero_offsets(config, text, str(path), lists.axes, zero_offsets, problems)
     if lists is None or any(p.severity is Severity.ERROR for p in problems):
         raise ConfigError(problems)
+    tools = dict(lists.tool_radii)
+    for key, radius_mm in nc.tools.items():
+        tools[int(key[1:])] = units.mm_to_m(radius_mm)
     channel = ChannelParams(
         channel_id=lists.channel_id,
         axes=lists.axes,
@@ -166,12 +193,12 @@ def load_settings(explicit: str | None = None, program: str | None = None) -> Se
         m_synch=lists.m_synch,
         path_prep_flags=lists.path_prep_flags,
         ipo_flags=lists.ipo_flags,
+        tool_radii=tuple(sorted(tools.items())),
+        zero_offsets=zero_offsets,
+        zero_offset_default=lists.zero_offset_default,
+        g53_offsets=lists.g53_offsets or "G53" in nc.zero_offsets,
+        max_executed_blocks=nc.max_executed_blocks,
     )
-    program_path: Path | None = None
-    if program is not None:
-        program_path = Path(program)
-    elif config.program.file:
-        program_path = base / config.program.file
     return Settings(
         path=path,
         config=config,
@@ -179,6 +206,7 @@ def load_settings(explicit: str | None = None, program: str | None = None) -> Se
         program=program_path,
         warnings=tuple(p for p in problems if p.severity is Severity.WARNING),
         files=(str(path), *lists.files),
+        subroutine_dirs=tuple(base / d for d in nc.subroutine_dirs),
     )
 
 
@@ -203,3 +231,34 @@ def program_problem(settings: Settings, explicit: str | None = None) -> Problem 
     return Problem(Severity.ERROR, str(settings.path), toml_line(text, ("program", "file")),
                    "program.file", settings.config.program.file,
                    f"cannot read the program {program}: {reason}")  # fmt: skip
+
+
+def _zero_offsets(
+    config: LiftdConfig,
+    text: str,
+    file: str,
+    axes: tuple[AxisParams, ...],
+    from_list: tuple[tuple[int, tuple[float, ...]], ...],
+    problems: list[Problem],
+) -> tuple[tuple[int, tuple[float, ...]], ...]:
+    """The zero-offset list's groups with liftd.toml's [nc.zero_offsets] over them (mm)."""
+    groups = {g: list(v) for g, v in from_list}
+    names = [ax.name for ax in axes]
+    for key, values in config.nc.zero_offsets.items():
+        group = int(key[1:]) - 53
+        row = groups.setdefault(group, [0.0] * len(axes))
+        for name, mm in values.items():
+            if name not in names:
+                problems.append(
+                    Problem(
+                        Severity.ERROR,
+                        file,
+                        toml_line(text, ("nc", "zero_offsets", key, name)),
+                        f"nc.zero_offsets.{key}.{name}",
+                        str(mm),
+                        f"not an axis of the channel (axes: {', '.join(names)})",
+                    )
+                )
+                continue
+            row[names.index(name)] = units.mm_to_m(mm)
+    return tuple((g, tuple(v)) for g, v in sorted(groups.items()))

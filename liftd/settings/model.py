@@ -8,9 +8,9 @@ from __future__ import annotations
 
 import ipaddress
 import re
-from typing import Literal
+from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, StrictBool, field_validator
+from pydantic import BaseModel, ConfigDict, Field, StrictBool, StringConstraints, field_validator
 
 NET_ID = re.compile(r"^(\d{1,3})\.(\d{1,3})\.(\d{1,3})\.(\d{1,3})\.(\d{1,3})\.(\d{1,3})$")
 
@@ -126,6 +126,31 @@ class MetricsSection(_Section):
     prometheus_host: str = "127.0.0.1"
 
 
+ToolKey = Annotated[str, StringConstraints(pattern=r"^D\d{1,5}$")]  # D1, D12
+ToolRadiusMm = Annotated[float, Field(ge=0.0, le=1000.0)]
+ZeroOffsetKey = Literal["G53", "G54", "G55", "G56", "G57", "G58", "G59"]
+OffsetMm = Annotated[float, Field(ge=-1e6, le=1e6)]
+
+
+class NcSection(_Section):
+    """What NC programs need beyond the ISG lists' channel data (issue 19)."""
+
+    # searched for `L file.nc` after the program's own directory, relative to liftd.toml
+    subroutine_dirs: tuple[str, ...] = ()
+    # ISG tool list (wz[i].radius, P-TOOL-00004) and zero-offset list (np_grp[i].achse[j].versch,
+    # P-ZERO-00003), relative to liftd.toml; default: werkz_data[i] / nullp_data[i] of the
+    # start-up list (P-STUP-00010 / 00011)
+    tool_list: str | None = None
+    zero_offset_list: str | None = None
+    # tool radius per D number in mm, over the tool list: D1 = 0.1
+    tools: dict[ToolKey, ToolRadiusMm] = Field(default_factory=dict)
+    # zero offsets in mm per axis, over the zero-offset list: G54 = { X = 1200.0, Y = 0.0 }
+    zero_offsets: dict[ZeroOffsetKey, dict[str, OffsetMm]] = Field(default_factory=dict)
+    # liftd prepares whole programs: subroutine calls and repetitions may expand a program to
+    # at most this many executed blocks (decoding and planning cost ≈ 40 µs per block)
+    max_executed_blocks: int = Field(2_000_000, ge=1_000, le=20_000_000)
+
+
 class LiftdConfig(_Section):
     cnc: CncSection = CncSection()
     program: ProgramSection = ProgramSection()
@@ -134,3 +159,4 @@ class LiftdConfig(_Section):
     rt: RtSection = RtSection()
     log: LogSection = LogSection()
     metrics: MetricsSection = MetricsSection()
+    nc: NcSection = NcSection()

@@ -35,6 +35,32 @@ class ErrorId(enum.IntEnum):
     # which of the two is positive/negative is our assumption).
     SW_LIMIT_POS = 50041
     SW_LIMIT_NEG = 50042
+    # subroutines (TF5200 diagnosis pages tf5200_diagnosis/255123851, 251402891, 251420299)
+    WORDS_AFTER_CALL = 21542  # further NC words after an L / LL call in its block
+    CALL_DEPTH = 20360  # subroutine stack overflow (nesting too deep, endless recursion)
+    TOO_MANY_LOCAL_SUBS = 20365  # more %L definitions than P-STUP-00053 allows (50)
+    # expressions (tf5200_diagnosis/251507339, 253008779, 251524747, 251494283)
+    DIVISION_BY_ZERO = 20396
+    UNKNOWN_PARAMETER = 20925  # P parameter read before it was written
+    PARAMETER_INDEX = 20400  # P parameter number 0, negative or too large
+    BRACKET_AFTER_FUNCTION = 20387  # SIN45 instead of SIN[45]
+    # tool radius compensation (tf5200_diagnosis/261625739, 261660555, 261725835; tccncdiagnosis
+    # ID-range 90000-90249)
+    TRC_SELECT_ARC = 90008  # TRC selected with a circular block (approach must be linear)
+    TRC_NON_RELEVANT_BLOCKS = 90011  # too many blocks without plane motion while TRC is active
+    TRC_RADIUS_TOO_LARGE = 90017  # tool radius >= radius of an (inner) arc of the contour
+    TRC_RADIUS_CHANGE_ARC = 90047  # tool radius changed right before a circular block
+    # words and G groups twice in a block, program structure, M functions (issue 15 item 7:
+    # the ids a PLC checks; tf5200_diagnosis/251085195, 250789259, 250815371, 250832779,
+    # 250871947, 251054731, 254175115, 250945931)
+    AXIS_TWICE = 20203  # an axis programmed twice in one block ("Double-programmed axis")
+    MOTION_G_TWICE = 20108  # two of G00/G01/G02/G03 in one block ("block mode")
+    TRC_G_TWICE = 20114  # two of G40/G41/G42 in one block
+    UNIT_G_TWICE = 20118  # G70 and G71 in one block
+    CENTRE_G_TWICE = 20127  # G161 and G162 in one block
+    PERCENT_IN_MAIN = 20193  # a % line inside the main program part (%L after it, 2nd main)
+    PERCENT_IN_SUBROUTINE = 21313  # the same inside a global subroutine file
+    M_NUMBER_TOO_LARGE = 20160  # M above the numbers P-CHAN-00041 can define (>= 1000)
     # liftd's own ids
     SYNTAX = 990001  # unknown character or word
     NUMBER = 990002  # missing or malformed number
@@ -48,13 +74,30 @@ class ErrorId(enum.IntEnum):
     ZERO_LENGTH = 990010  # warning: motion block without motion
     HELIX = 990011  # circle with motion outside the plane
     ARC_GEOMETRY = 990012  # circle cannot be constructed
-    AXIS_TWICE = 990013  # a word programmed twice in one block
+    WORD_TWICE = 990013  # I, J, K, R or D programmed twice in one block
     M_NOT_CONFIGURED = 990014  # M function without m_synch entry
-    LIFT_DOWN_LIMIT_SIDE = 990015  # DOWN with POS_LIMIT above start and target
+    # 990015 retired: DOWN with POS_LIMIT above start and target is special case 1 (issue 15)
     DWELL_MISSING = 990016  # G04 without a time
     LIFT_WRONG_AXIS = 990017  # lift command on an axis that is not the configured lift axis
     UNKNOWN_AXIS = 990018  # address letter that is not an axis of the channel
     LIFT_STEP_SLOPE = 990019  # warning: STEP slope with path-based Lifting (Z overload)
+    SUBROUTINE_NOT_FOUND = 990020  # LL name: no %L name in the file
+    FILE_NOT_FOUND = 990021  # L file: not found in the search path or not readable
+    SUBROUTINE_END_OUTSIDE = 990022  # M17 / M29 outside a subroutine
+    PROGRAM_END_IN_SUBROUTINE = 990023  # warning: M02 / M30 in a subroutine ends the program
+    PROGRAM_STRUCTURE = 990024  # NC words before the program's % line, no main program ...
+    EXPANSION_LIMIT = 990025  # more executed blocks than liftd prepares (max_executed_blocks)
+    NOT_EMULATED = 990026  # warning: accepted, runs approximated (e.g. unsmoothed)
+    SMOOTHING_IN_LIFT_RANGE = 990027  # smoothing selected inside a lift range (vendor §2.4)
+    TRC_NO_RADIUS = 990028  # warning: G41/G42 without a configured radius, programmed contour
+    TRC_LIFT_AXIS = 990029  # the lift axis takes part in TRC during a lift range (vendor §2.4)
+    ARITH_OVERFLOW = 990030  # expression result not finite
+    ARITH_DOMAIN = 990031  # function argument outside its domain (SQRT[-1], LN[0])
+    TRC_CONTOUR_VIOLATION = 990032  # the compensated path runs against the contour
+    TRC_DESELECT_ARC = 990033  # TRC deselected with a circular block (retract must be linear)
+    SEQUENCE_NOT_FOUND = 990034  # L SEQUENCE: block number not found
+    DUPLICATE_SUBROUTINE = 990035  # %L name defined twice in a file
+    LIFT_LIMIT_CLAMPED = 990036  # warning: POS_LIMIT beyond the software limit, held there
 
 
 class Severity(enum.Enum):
@@ -73,15 +116,33 @@ class NcFault(Exception):
 
 
 @dataclass(frozen=True, slots=True)
+class CallSite:
+    """Where a subroutine was called: file, line, and the call as written."""
+
+    file: str
+    line: int
+    call: str  # "LL part_hole", "L hole.nc", "L SEQUENCE [N10 N20]"
+
+    def __str__(self) -> str:
+        return f"{self.file}:{self.line} {self.call}"
+
+
+@dataclass(frozen=True, slots=True)
 class NcError:
     id: int
-    line: int  # 1-based source line
+    line: int  # 1-based source line (in `file`)
     column: int  # 1-based column of the offending word
-    message: str
+    message: str  # inside a subroutine it ends with the call chain
     severity: Severity = Severity.ERROR
+    file: str = ""  # the program or subroutine file the line is in ("" = the program)
+    chain: tuple[CallSite, ...] = ()  # outermost call first; () in the main program
 
     def __str__(self) -> str:
         return f"{self.line}:{self.column}: {self.severity.value} {self.id}: {self.message}"
+
+    def located(self, program: str) -> str:
+        """`file:line:col: severity id: message`, the file defaulting to `program`."""
+        return f"{self.file or program}:{self}"
 
 
 class MotionKind(enum.Enum):
@@ -124,6 +185,9 @@ class LiftStart(NamedTuple):
     line: int  # line of the programmed LIFT_START / LIFT
     single_block: bool = False
     implicit: bool = False  # re-start inserted after #FLUSH
+    # POS_LIMIT as programmed when it lies beyond the software limit and `pos_limit` is the
+    # limit instead (issue 15 item 3); None when programmed within the limits
+    limit_programmed: float | None = None
 
 
 class LiftEnd(NamedTuple):
@@ -135,7 +199,7 @@ class LiftEnd(NamedTuple):
 
 
 class Block(NamedTuple):
-    line: int  # 1-based source line
+    line: int  # 1-based source line (of `file` when the block comes from a subroutine)
     n: int | None = None
     motion: Motion | None = None
     dwell: float | None = None  # s (G04, #TIME)
@@ -145,6 +209,7 @@ class Block(NamedTuple):
     lift_start: LiftStart | None = None
     lift_end: LiftEnd | None = None
     program_end: bool = False  # M02 / M30
+    file: str = ""  # "" = the main program; else the subroutine file the line is in
 
 
 @dataclass(frozen=True, slots=True)
@@ -155,6 +220,10 @@ class DecodeResult:
     blocks: tuple[Block, ...]
     errors: tuple[NcError, ...]
     open_lift: LiftStart | None  # a lift range still open where execution stops
+    # what the program uses that liftd accepts but runs approximated, with how many blocks:
+    # ("#HSC ON", 3), ("G41/G42 without a tool radius", 1) ...
+    not_emulated: tuple[tuple[str, int], ...] = ()
+    executed_lines: int = 0  # NC lines executed, subroutine bodies counted per call
 
     @property
     def first_error(self) -> NcError | None:

@@ -3,6 +3,11 @@
 #FLUSH, #FLUSH WAIT, #FLUSH CONTINUE; #SLOPE [TYPE=STEP|TRAPEZ|SIN2|HSC [NO_OPT=0|1]] and
 #SLOPE DEFAULT; #TIME <s>. #ROTATION, #TRAFO and #CS are recognised so that the lift-specific
 errors can be given; liftd does not emulate coordinate transformations.
+
+Smoothing commands are accepted (the path runs unsmoothed, the decoder warns once per kind):
+#HSC ON [..] / #HSC OFF / #HSC [..] (HSC mode, TF5200 HSC pack), #SPLINE ON / OFF,
+#CONTOUR MODE [..] (parameters only) / #CONTOUR MODE ON [..] (= G261) / OFF (= G260),
+https://infosys.beckhoff.com/content/1033/tf5250_hsc_pack/475156491.html
 """
 
 from __future__ import annotations
@@ -23,6 +28,7 @@ class CommandKind(enum.Enum):
     TIME = "time"
     TRANSFORM = "transform"  # #ROTATION / #TRAFO: forbidden inside a lift range (120606)
     CS = "cs"
+    SMOOTHING = "smoothing"  # #HSC, #SPLINE, #CONTOUR MODE
 
 
 @dataclass(frozen=True, slots=True)
@@ -33,6 +39,8 @@ class CommandResult:
     slope: SlopeType | None = None
     seconds: float | None = None
     text: str = ""
+    smoothing: str = ""  # "#HSC", "#SPLINE", "#CONTOUR MODE"
+    on: bool | None = None  # selected / deselected / only parameterised
 
 
 _SLOPE = re.compile(r"#SLOPE\s*\[\s*TYPE\s*=\s*([A-Z0-9]+)\s*(NO_OPT\s*=\s*[01]\s*)?\]\Z")
@@ -62,6 +70,13 @@ def parse_command(token: Token) -> CommandResult:
         if NUMBER_RE.fullmatch(value) is None or float(value) < 0.0:
             raise NcFault(ErrorId.DWELL_MISSING, col, "#TIME needs a time in seconds >= 0")
         return CommandResult(CommandKind.TIME, col, seconds=float(value))
+    for name in ("#HSC", "#SPLINE", "#CONTOUR MODE"):
+        if text == name or text.startswith((name + " ", name + "[")):
+            rest = text[len(name) :].strip()
+            on = True if rest.startswith("ON") else False if rest.startswith("OFF") else None
+            if on is None and rest and not rest.startswith("["):
+                raise NcFault(ErrorId.SYNTAX, col, f"{name} ON [..] | OFF | [..] expected")
+            return CommandResult(CommandKind.SMOOTHING, col, text=text, smoothing=name, on=on)
     if text.startswith(("#ROTATION", "#TRAFO")):
         return CommandResult(CommandKind.TRANSFORM, col, text=text)
     if text.startswith("#CS"):

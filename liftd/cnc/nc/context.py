@@ -1,12 +1,20 @@
 """What the decoder knows of the channel: axes, lift axis and method, software limits, start
-position, circle tolerance, slope and configured M functions (SI units)."""
+position, circle tolerance, slope, configured M functions, tool radii, zero offsets and the
+subroutine files the caller read for the program (SI units)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from liftd.cnc.nc.blocks import ErrorId, NcFault
-from liftd.cnc.params import ChannelParams, LiftMethod, SlopeType
+from liftd.cnc.params import ChannelParams, LiftMethod, NcSources, SlopeType
+
+# Subroutine nesting: the TF5200 subroutine page says the depth is "fixed" by the system
+# (https://infosys.beckhoff.com/content/1033/tf5200_programming_manual/206822155.html) without
+# naming the number in our copy; ID 20360 reports the limit. liftd uses 20 levels below the
+# main program, the figure of the ISG system parameter overview as we remember it
+# (not confirmed from a page we could read).
+MAX_CALL_DEPTH = 20
 
 
 @dataclass(frozen=True, slots=True)
@@ -19,6 +27,13 @@ class DecoderContext:
     max_radius_diff: float  # m, P-CHAN-00171
     slope: SlopeType
     configured_m: frozenset[int]
+    tool_radii: dict[int, float] = field(default_factory=dict)  # D number -> m
+    zero_offsets: dict[int, tuple[float, ...]] = field(default_factory=dict)  # group -> m
+    zero_offset_default: int = 0  # group active at program start (P-ZERO-00002)
+    g53_offsets: bool = False  # G53 applies group 0 (P-ZERO-00001)
+    sources: NcSources = field(default_factory=NcSources)
+    max_executed_blocks: int = 2_000_000
+    max_call_depth: int = MAX_CALL_DEPTH
 
     @staticmethod
     def from_channel(ch: ChannelParams, start: tuple[float, ...] | None = None) -> DecoderContext:
@@ -31,6 +46,12 @@ class DecoderContext:
             max_radius_diff=ch.max_radius_diff,
             slope=ch.slope,
             configured_m=frozenset(num for num, _ in ch.m_synch),
+            tool_radii=dict(ch.tool_radii),
+            zero_offsets=dict(ch.zero_offsets),
+            zero_offset_default=ch.zero_offset_default,
+            g53_offsets=ch.g53_offsets,
+            sources=ch.nc_sources,
+            max_executed_blocks=ch.max_executed_blocks,
         )
 
     def check_position(self, k: int, value: float, column: int) -> None:

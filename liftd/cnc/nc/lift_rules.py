@@ -34,9 +34,13 @@ def open_range(
     lineno: int,
     column: int,
     warnings: list[NcError],
+    unit: float = units.M_PER_MM,
+    offset: float = 0.0,
 ) -> LiftStart:
     """The range a LIFT_START / LIFT opens with the lift axis at z0 (m); NcFault if it is
-    refused, warnings appended as found."""
+    refused, warnings appended as found. `unit`: m per program length unit (G71 mm, G70
+    inch, vendor §3 "[mm, inch]"); `offset`: the lift axis' zero offset, added to absolute
+    POS / POS_LIMIT like to any absolute coordinate (G91 values are relative to z0)."""
     require_method(ctx, column)
     if open_lift is not None:
         if words.keyword is LiftKeyword.SINGLE:
@@ -81,18 +85,30 @@ def open_range(
                 Severity.WARNING,
             )
         )
-    base = z0 if words.incremental else 0.0
-    target = z0 if words.pos_mm is None else base + units.mm_to_m(words.pos_mm)
-    limit = base + units.mm_to_m(words.pos_limit_mm)
+    base = z0 if words.incremental else offset
+    target = z0 if words.pos_mm is None else base + words.pos_mm * unit
+    limit = base + words.pos_limit_mm * unit
     z = ctx.axis_names.index(ctx.lift_axis)
-    ctx.check_position(z, target, column)
-    ctx.check_position(z, limit, column)
-    if words.down and limit > max(z0, target):
-        raise NcFault(
-            ErrorId.LIFT_DOWN_LIMIT_SIDE,
-            column,
-            "DOWN with POS_LIMIT above the "
-            "start and the target: the lowering depth is on the wrong side",
+    ctx.check_position(z, target, column)  # POS beyond the software limits: 50041 / 50042
+    # A lift height (or DOWN depth) beyond the software limit cannot be reached anyway: the
+    # limit is the software limit, with a warning (issue 15 item 3; the vendor's own §3
+    # example programs POS_LIMIT=300). DOWN with POS_LIMIT above start and POS is special
+    # case 1 mirrored (§2.1.3: the limit has no effect, Z goes to POS at the start).
+    neg, pos = ctx.sw_limits[z]
+    programmed: float | None = None
+    if not neg - 1e-12 <= limit <= pos + 1e-12:
+        programmed = limit
+        limit = min(max(limit, neg), pos)
+        side = "positive" if programmed > pos else "negative"
+        warnings.append(
+            NcError(
+                int(ErrorId.LIFT_LIMIT_CLAMPED),
+                lineno,
+                column,
+                f"POS_LIMIT {programmed * 1e3:.4f} mm lies beyond the {side} software limit "
+                f"{limit * 1e3:.4f} mm of {axis}: the lift is limited to the software limit",
+                Severity.WARNING,
+            )
         )
     return LiftStart(
         axis,
@@ -102,6 +118,7 @@ def open_range(
         words.down,
         lineno,
         single_block=words.keyword is LiftKeyword.SINGLE,
+        limit_programmed=programmed,
     )
 
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import enum
 import re
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from liftd.cnc.nc.lexer import NUMBER_RE
@@ -39,7 +40,8 @@ class LiftSyntaxError(Exception):
     pass
 
 
-_ITEM = re.compile(r"\s*([A-Za-z_][A-Za-z_0-9]*)\s*(=\s*(\S+))?")
+_ITEM = re.compile(r"\s*([A-Za-z_][A-Za-z_0-9]*)\s*(=\s*(\[|[^\s,\[]+))?")
+Evaluate = Callable[[str], float]  # an expression value (POS=[P1+2], POS_LIMIT=P3)
 
 
 def is_lift_command(content: str) -> bool:
@@ -47,8 +49,23 @@ def is_lift_command(content: str) -> bool:
     return first in KEYWORDS
 
 
-def parse_lift_words(content: str) -> LiftWords:
-    """Parse the bracket content of a lift command; raises LiftSyntaxError."""
+def _balanced(text: str, start: int) -> int:
+    """Position after the `]` closing the `[` at start."""
+    depth = 0
+    for k in range(start, len(text)):
+        if text[k] == "[":
+            depth += 1
+        elif text[k] == "]":
+            depth -= 1
+            if depth == 0:
+                return k + 1
+    raise LiftSyntaxError("'[' in the lift command is not closed")
+
+
+def parse_lift_words(content: str, evaluate: Evaluate | None = None) -> LiftWords:
+    """Parse the bracket content of a lift command; raises LiftSyntaxError. Values that are
+    not plain numbers go to `evaluate` (P parameters, expressions); without it they are
+    syntax errors."""
     items: list[tuple[str, str | None]] = []
     pos = 0
     text = content.strip()
@@ -56,8 +73,13 @@ def parse_lift_words(content: str) -> LiftWords:
         m = _ITEM.match(text, pos)
         if m is None or m.end() == pos:
             raise LiftSyntaxError(f"cannot read {text[pos:]!r}")
-        items.append((m.group(1).upper(), m.group(3)))
+        value = m.group(3)
         pos = m.end()
+        if value == "[":
+            end = _balanced(text, m.start(3))
+            value = text[m.start(3) : end]
+            pos = end
+        items.append((m.group(1).upper(), value))
         while pos < len(text) and text[pos] in " \t,":
             pos += 1
     if not items:
@@ -90,12 +112,18 @@ def parse_lift_words(content: str) -> LiftWords:
             incremental = name == "G91" or incremental
             continue
         if name in ("POS", "POS_LIMIT"):
-            if value is None or NUMBER_RE.fullmatch(value) is None:
+            if value is None:
+                raise LiftSyntaxError(f"{name}= needs a number")
+            if NUMBER_RE.fullmatch(value) is not None:
+                number = float(value)
+            elif evaluate is not None:
+                number = evaluate(value)
+            else:
                 raise LiftSyntaxError(f"{name}= needs a number")
             if name == "POS":
-                pos_mm = float(value)
+                pos_mm = number
             else:
-                limit_mm = float(value)
+                limit_mm = number
             continue
         raise LiftSyntaxError(f"unknown lift parameter {name}")
     return LiftWords(keyword, down, incremental, pos_mm, limit_mm)

@@ -227,17 +227,18 @@ CASES = [
     ("G01 X3011 F100\n", ErrorId.SW_LIMIT_POS, 1, {}),
     ("G01 X-2 F100\n", ErrorId.SW_LIMIT_NEG, 1, {}),
     ("G01 X1500 Y1509 F100\nG02 I0 J1\n", ErrorId.SW_LIMIT_POS, 2, {}),  # arc bulges out
-    ("Z[LIFT_START POS_LIMIT=151]\n", ErrorId.SW_LIMIT_POS, 1, {}),
+    ("Z[LIFT_START POS=151 POS_LIMIT=160]\n", ErrorId.SW_LIMIT_POS, 1, {}),
     ("Z[LIFT_START DOWN POS=-6 POS_LIMIT=-2]\n", ErrorId.SW_LIMIT_NEG, 1, {}),
     ("X1 $\n", ErrorId.SYNTAX, 1, {}),
     ("G01 XYZ\n", ErrorId.SYNTAX, 1, {}),
     ("G01 X F100\n", ErrorId.NUMBER, 1, {}),
     ("#COMMENT BEGIN\nX1\n", ErrorId.COMMENT_OPEN, 1, {}),
     ("G18\n", ErrorId.UNSUPPORTED, 1, {}),
-    ("G01 X[1+2] F100\n", ErrorId.UNSUPPORTED, 1, {}),
+    ("G01 X[1+2] F100 Y=V.L.A\n", ErrorId.UNSUPPORTED, 1, {}),
     ("#CS ON[1,2,3,0,0,0]\n", ErrorId.UNSUPPORTED, 1, {}),
-    ("#HSC ON\n", ErrorId.UNSUPPORTED, 1, {}),
-    ("M17\n", ErrorId.UNSUPPORTED, 1, {}),
+    ("#MCS ON\n", ErrorId.UNSUPPORTED, 1, {}),
+    ("$IF P1 == 2\n", ErrorId.UNSUPPORTED, 1, {}),
+    ("M17\n", ErrorId.SUBROUTINE_END_OUTSIDE, 1, {}),
     ("Z[LIFT_START POS_LIMIT=9]\nG01 X1 Z5 F100\n", ErrorId.LIFT_AXIS_PROGRAMMED, 2, {}),
     (
         "Z[LIFT_START DOWN POS_LIMIT=-1]\n",
@@ -256,12 +257,16 @@ CASES = [
     ("Z[LIFT_END POS=3]\n", ErrorId.LIFT_SYNTAX, 1, {}),
     ("G01 X1 Y2 Y3 F100\n", ErrorId.AXIS_TWICE, 1, {}),
     ("Z5 Z[LIFT_START POS_LIMIT=9]\n", ErrorId.AXIS_TWICE, 1, {}),
-    ("G01 G02 X1 F1\n", ErrorId.AXIS_TWICE, 1, {}),
+    ("G01 G02 X1 F1\n", ErrorId.MOTION_G_TWICE, 1, {}),
+    ("G01 G41 X1 G42 F1\n", ErrorId.TRC_G_TWICE, 1, {}),
+    ("G70 G71 X1\n", ErrorId.UNIT_G_TWICE, 1, {}),
+    ("G161 G02 X1 I1 G162 F1\n", ErrorId.CENTRE_G_TWICE, 1, {}),
+    ("G02 X1 Y1 I1 I2 F100\n", ErrorId.WORD_TWICE, 1, {}),
+    ("M1001\n", ErrorId.M_NUMBER_TOO_LARGE, 1, {}),
     ("G02 X1 Y1 F100\n", ErrorId.ARC_GEOMETRY, 1, {}),
     ("G02 X10 Y0 R2 F100\n", ErrorId.ARC_GEOMETRY, 1, {}),
     ("G02 X10 Y0 Z5 I5 F100\n", ErrorId.HELIX, 1, {}),
     ("M77\n", ErrorId.M_NOT_CONFIGURED, 1, {}),
-    ("G01 Z10 F100\nZ[LIFT_START DOWN POS=5 POS_LIMIT=20]\n", ErrorId.LIFT_DOWN_LIMIT_SIDE, 2, {}),
     ("G04\n", ErrorId.DWELL_MISSING, 1, {}),
     ("Y[LIFT_START POS_LIMIT=9]\n", ErrorId.LIFT_WRONG_AXIS, 1, {}),
     ("A10\n", ErrorId.UNKNOWN_AXIS, 1, {}),
@@ -280,12 +285,35 @@ def test_error_ids(text: str, eid: ErrorId, line: int, kw: dict[str, object]) ->
 
 
 def test_every_error_id_is_tested() -> None:
-    # the warnings are tested below and in tests/unit/cnc/lift/test_path_based.py
-    tested = {c[1] for c in CASES} | {
-        ErrorId.ZERO_LENGTH,
-        ErrorId.DWELL_WITH_AXES,
-        ErrorId.LIFT_STEP_SLOPE,
-    }
+    # the warnings are tested below and in tests/unit/cnc/lift/test_path_based.py; the
+    # dialect's ids (subroutines, expressions, TRC, smoothing) in test_dialect.py
+    from tests.unit.cnc.nc import test_dialect as d  # noqa: PLC0415
+
+    tested = (
+        {c[1] for c in CASES}
+        | {c[1] for c in d.SUB_ERRORS}
+        | {c[1] for c in d.EXPR_ERRORS}
+        | {c[1] for c in d.TRC_ERRORS}
+        | {
+            ErrorId.ZERO_LENGTH,
+            ErrorId.DWELL_WITH_AXES,
+            ErrorId.LIFT_STEP_SLOPE,
+            # test_dialect: one test each
+            ErrorId.CALL_DEPTH,  # test_recursion_stops_at_the_nesting_depth_with_20360
+            ErrorId.FILE_NOT_FOUND,  # test_missing_file_is_one_error_at_its_first_call
+            ErrorId.EXPANSION_LIMIT,  # test_expansion_is_bounded_and_streamed
+            ErrorId.PROGRAM_END_IN_SUBROUTINE,  # test_m30_in_a_subroutine_ends_...
+            ErrorId.NOT_EMULATED,  # test_smoothing_runs_unsmoothed_with_one_warning_per_kind
+            ErrorId.SMOOTHING_IN_LIFT_RANGE,  # test_no_smoothing_selected_inside_a_lift_range
+            ErrorId.TRC_NO_RADIUS,  # test_no_radius_configured_runs_the_programmed_contour
+            ErrorId.TRC_LIFT_AXIS,  # test_lift_axis_in_the_compensation_plane_is_an_error
+            ErrorId.TRC_RADIUS_TOO_LARGE,  # test_arcs_get_the_offset_radius_and_...
+            ErrorId.TRC_RADIUS_CHANGE_ARC,  # test_side_change_and_radius_change
+            ErrorId.PERCENT_IN_SUBROUTINE,  # test_percent_line_inside_a_global_subroutine_...
+            # tests/fidelity/test_s3_programming.py: the vendor's own POS_LIMIT=300 example
+            ErrorId.LIFT_LIMIT_CLAMPED,
+        }
+    )
     assert tested == set(ErrorId)
 
 

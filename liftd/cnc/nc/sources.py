@@ -1,0 +1,141 @@
+"""The structure of one NC file: local subroutines (``%L name`` … ``M17``/``M29``) and the main
+program part (``%name``), split once into lines; the decoder runs sections of it.
+
+TF5200 programming manual:
+* local subroutines: "%L" + separator + name; all of them before the main program; ended by
+  M17/M29, or by the next "%" when M17/M29 is missing; called with ``LL name``
+  https://infosys.beckhoff.com/content/1033/tf5200_programming_manual/206828043.html
+* global subroutines: a file of their own, called with ``L <file name>``; the ``%name`` line
+  is only needed after local subroutines of that file
+  https://infosys.beckhoff.com/content/1033/tf5200_programming_manual/206834699.html
+* no NC commands are permitted before the definition of a program (same page as local)
+* at most P-STUP-00053 (default 50) local subroutine definitions, else ID 20365
+  https://infosys.beckhoff.com/content/1033/tf5200_diagnosis/251420299.html
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+
+from liftd.cnc.nc.blocks import ErrorId
+from liftd.cnc.nc.lexer import strip_comments
+
+MAX_LOCAL_SUBROUTINES = 50  # P-STUP-00053 default
+_LOCAL = re.compile(r"\s*%\s*L[ \t]+(\S+)", re.IGNORECASE)
+_N_WORD = re.compile(r"\s*N(\d+)", re.IGNORECASE)
+
+
+@dataclass(frozen=True, slots=True)
+class Section:
+    name: str  # local subroutine name as written, or the main program's name
+    start: int  # index of the first body line (after the % line)
+    end: int  # index after the last body line
+    local: bool
+
+
+@dataclass(frozen=True, slots=True)
+class SourceProblem:
+    line: int  # 1-based
+    error_id: ErrorId
+    message: str
+
+
+@dataclass(slots=True)
+class Source:
+    """One NC file, split into lines once. `cache` holds per line what the decoder may reuse
+    when the line runs again (subroutine bodies): bounded by the file, not by the calls."""
+
+    name: str  # for messages: the program path or the subroutine file's path
+    lines: list[str]
+    locals: dict[str, Section]  # upper-case name -> section
+    main: Section | None
+    problems: list[SourceProblem]
+    cache: dict[int, object] = field(default_factory=dict)
+
+    def block_number_line(self, number: int, start: int, end: int) -> int | None:
+        """Index of the first line in [start, end) whose block number is N<number>."""
+        for idx in range(start, end):
+            m = _N_WORD.match(self.lines[idx])
+            if m is not None and int(m.group(1)) == number:
+                return idx
+        return None
+
+    def section_of(self, idx: int) -> Section | None:
+        if self.main is not None and self.main.start <= idx < self.main.end:
+            return self.main
+        for sec in self.locals.values():
+            if sec.start <= idx < sec.end:
+                return sec
+        return None
+
+
+def _has_words(line: str) -> bool:
+    text = strip_comments(line).strip()
+    return bool(text) and not text.upper().startswith("#COMMENT")
+
+
+def parse_source(name: str, text: str, called: bool = False) -> Source:
+    """Split a file into its sections; structural problems are kept for the decoder to
+    report where the file is first run. `called`: a global subroutine file (L name), whose
+    misplaced % lines are ID 21313 instead of the main program's 20193."""
+    lines = text.splitlines()
+    headers = [i for i, line in enumerate(lines) if line.lstrip().startswith("%")]
+    problems: list[SourceProblem] = []
+    locals_: dict[str, Section] = {}
+    if not headers:
+        return Source(name, lines, locals_, Section("", 0, len(lines), False), problems)
+    # "The execution of a main program is also started if the first character found in the
+    # file outside comments is neither a space nor a %" -- then every % line is inside that
+    # program part: ID 20193 (main program) / 21313 (global subroutine) at the % line
+    # https://infosys.beckhoff.com/content/1033/tf5200_diagnosis/251054731.html
+    # https://infosys.beckhoff.com/content/1033/tf5200_diagnosis/254175115.html
+    percent = ErrorId.PERCENT_IN_SUBROUTINE if called else ErrorId.PERCENT_IN_MAIN
+    main: Section | None = None
+    after = ""
+    first_words = next((i for i in range(headers[0]) if _has_words(lines[i])), None)
+    if first_words is not None:
+        main = Section("", first_words, headers[0], False)
+        after = f" (the NC words in line {first_words + 1} began an unnamed program part)"
+    for k, h in enumerate(headers):
+        end = headers[k + 1] if k + 1 < len(headers) else len(lines)
+        m = _LOCAL.match(lines[h])
+        if m is None:
+            if main is not None:
+                problems.append(SourceProblem(h + 1, percent, "a second main program part" + after))
+                continue
+            title = lines[h].strip()[1:].strip()
+            main = Section(title, h + 1, end, False)
+            continue
+        sub = m.group(1)
+        if main is not None:
+            problems.append(
+                SourceProblem(
+                    h + 1,
+                    percent,
+                    f"local subroutine {sub} after the main program part: local subroutines "
+                    "are defined before it" + after,
+                )
+            )
+            continue
+        key = sub.upper()
+        if key in locals_:
+            problems.append(
+                SourceProblem(
+                    h + 1,
+                    ErrorId.DUPLICATE_SUBROUTINE,
+                    f"local subroutine {sub} is defined twice (first at line {locals_[key].start})",
+                )
+            )
+            continue
+        if len(locals_) >= MAX_LOCAL_SUBROUTINES:
+            problems.append(
+                SourceProblem(
+                    h + 1,
+                    ErrorId.TOO_MANY_LOCAL_SUBS,
+                    f"more than {MAX_LOCAL_SUBROUTINES} local subroutines (P-STUP-00053)",
+                )
+            )
+            continue
+        locals_[key] = Section(sub, h + 1, end, True)
+    return Source(name, lines, locals_, main, problems)
