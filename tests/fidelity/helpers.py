@@ -5,7 +5,7 @@ from __future__ import annotations
 from liftd.cnc.nc import DecoderContext, DecodeResult, Severity, decode
 from liftd.cnc.params import ChannelParams
 from liftd.cnc.snapshot import ChannelState, GeoSnapshot
-from tests.helpers import run_task
+from tests.support.closed_loop import run_task
 
 MM = 1e-3
 

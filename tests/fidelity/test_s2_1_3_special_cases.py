@@ -5,8 +5,8 @@ from __future__ import annotations
 import pytest
 
 from liftd.cnc.nc import Severity
-from tests.conftest import make_channel
 from tests.fidelity.helpers import MM, decoded, ids, run_z
+from tests.support.channel import make_channel
 
 
 def _first_at(z: list[float], value: float) -> int:

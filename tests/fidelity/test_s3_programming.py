@@ -6,8 +6,8 @@ import pytest
 
 from liftd.cnc.nc import ErrorId, Severity
 from liftd.cnc.params import LiftMethod
-from tests.conftest import make_channel
 from tests.fidelity.helpers import MM, decoded, ids, run_z
+from tests.support.channel import make_channel
 
 # §3 "Lifting/lowering in an NC block", the vendor's single-row example (Y values filled in):
 # POS_LIMIT=300 mm on a machine whose Z ends at 150 mm (issue 15 item 3)

@@ -12,8 +12,8 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import GOLDEN, REPO
 from tests.integration.test_cli_check import liftd as run_liftd
+from tests.support.paths import GOLDEN, REPO
 
 pytestmark = pytest.mark.integration
 CAM = GOLDEN / "nc" / "cam"

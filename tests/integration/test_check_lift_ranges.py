@@ -6,9 +6,9 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import REPO
 from tests.fidelity.test_s3_programming import SINGLE_ROW
 from tests.integration.test_cli_check import liftd
+from tests.support.paths import REPO
 
 pytestmark = pytest.mark.integration
 

@@ -17,7 +17,7 @@ from liftd.cnc.nc.expr import ExprError, compile_text
 from liftd.cnc.nc.lexer import LexError, tokenize
 from liftd.cnc.nc.words import VALUE_LETTERS, Template, collect, collect_plain, template
 from liftd.cnc.params import ChannelParams, LiftMethod, NcFile, NcSources
-from tests.conftest import make_channel
+from tests.support.channel import make_channel
 
 MM = 1e-3
 

@@ -9,7 +9,7 @@ import pytest
 from liftd.cnc.nc import DecoderContext, decode
 from liftd.cnc.nc.lift_summary import LiftRangeSummary, LiftRangeTracker, describe
 from liftd.cnc.params import LiftMethod
-from tests.conftest import make_channel
+from tests.support.channel import make_channel
 
 PROGRAM = """%L hop
 Z[LIFT_START POS=1 POS_LIMIT=30]
