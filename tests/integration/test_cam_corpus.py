@@ -118,12 +118,8 @@ def test_recursion_and_huge_repetitions_are_errors_not_crashes(tmp_path: Path) -
     assert sim.returncode == 1 and json.loads(sim.stdout)["errors"][0]["id"] == 990025
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="GEO task (lead's interpolator rewrite): a lift range whose POS equals POS_LIMIT "
-    "over a short G00 travel divides by zero in GeoTask._limit_override; reported, not ours",
-)
 def test_lift_to_pos_limit_over_a_short_rapid_travel(tmp_path: Path) -> None:
+    """The old interpolator divided by zero in the override limit here (found by this test)."""
     program = tmp_path / "park.nc"
     program.write_text("G01 X10 Y10 F6000\nZ[LIFT_START POS=60 POS_LIMIT=60]\nG00 X0 Y0\n"
                        "Z[LIFT_END]\nM30\n")  # fmt: skip
