@@ -103,8 +103,8 @@ PROGRAMS = {
 def clearance(ch: ChannelParams) -> None:
     for name, text in PROGRAMS.items():
         res = compare(ch, text, Schedule(), 0.02, program=name)
-        pairs = [p for p in res.summary["lifts"] if p["clearance_ratio"] is not None]
-        ratios = [p["clearance_ratio"] for p in pairs]
+        pairs = [p for p in res.summary.lifts if p.clearance_ratio is not None]
+        ratios = [p.clearance_ratio for p in pairs if p.clearance_ratio is not None]
         print(
             json.dumps(
                 {
@@ -114,9 +114,12 @@ def clearance(ch: ChannelParams) -> None:
                     "min_ratio": min(ratios),
                     "mean_ratio": round(sum(ratios) / len(ratios), 4),
                     "all_advanced_at_least_lifting": min(ratios) >= 1.0,
-                    "premature_lifts": sum(bool(p["lifting"]["premature"]) for p in pairs),
-                    "duration_s": res.summary["totals"]["duration_s"],
-                    "errors": res.summary["advanced"]["errors"] + res.summary["lifting"]["errors"],
+                    "premature_lifts": sum(bool(p.lifting and p.lifting.premature) for p in pairs),
+                    "duration_s": res.summary.totals.duration_s.to_json(),
+                    "errors": [
+                        e.to_json()
+                        for e in res.summary.advanced.errors + res.summary.lifting.errors
+                    ],
                 }
             ),
             flush=True,
@@ -128,22 +131,20 @@ def override_step(ch: ChannelParams) -> None:
     # whole demo at 150 % (every lift at 1.5 × its planned path velocity)
     for spec, lift in (("0:100,5.5:150", 0), ("0:150", None)):
         res = compare(ch, PROGRAMS["demo"], Schedule(tuple(parse_override_spec(spec))), 0.02)
-        pairs = res.summary["lifts"] if lift is None else [res.summary["lifts"][lift]]
+        pairs = res.summary.lifts if lift is None else (res.summary.lifts[lift],)
         print(
             json.dumps(
                 {
                     "bench": "override_150",
                     "override": spec,
-                    "lift_lines": [[p["start_line"], p["end_line"]] for p in pairs],
-                    "advanced_z_a_max_ratio": max(p["advanced"]["z_a_max_ratio"] for p in pairs),
-                    "lifting_z_a_max_ratio": [p["lifting"]["z_a_max_ratio"] for p in pairs],
-                    "lifting_warning_cycles": res.summary["lifting"]["z_overload"][
-                        "warning_cycles"
-                    ],
-                    "lifting_error_cycles": res.summary["lifting"]["z_overload"]["error_cycles"],
-                    "advanced_overload_cycles": res.summary["totals"]["z_overload_cycles"][
-                        "advanced"
-                    ],
+                    "lift_lines": [[p.start_line, p.end_line] for p in pairs],
+                    "advanced_z_a_max_ratio": max(
+                        p.advanced.z_a_max_ratio for p in pairs if p.advanced
+                    ),
+                    "lifting_z_a_max_ratio": [p.lifting.z_a_max_ratio for p in pairs if p.lifting],
+                    "lifting_warning_cycles": res.summary.lifting.z_overload.warning_cycles,
+                    "lifting_error_cycles": res.summary.lifting.z_overload.error_cycles,
+                    "advanced_overload_cycles": res.summary.totals.z_overload_cycles.advanced,
                 }
             ),
             flush=True,

@@ -55,16 +55,16 @@ def run(
                 "program": name,
                 "blocks": count_blocks(text),
                 "trace": trace,
-                "cycles": s["cycles"],
-                "simulated_s": s["duration_s"],
+                "cycles": s.cycles,
+                "simulated_s": s.duration_s,
                 "wall_s": round(wall, 3),
-                "x_real_time": round(s["duration_s"] / wall, 1),
-                "x_real_time_median": round(s["duration_s"] / sorted(walls)[len(walls) // 2], 1),
-                "us_per_cycle": round(wall / s["cycles"] * 1e6, 2),
-                "lifts": len(s["lifts"]),
+                "x_real_time": round(s.duration_s / wall, 1),
+                "x_real_time_median": round(s.duration_s / sorted(walls)[len(walls) // 2], 1),
+                "us_per_cycle": round(wall / s.cycles * 1e6, 2),
+                "lifts": len(s.lifts),
                 "trace_mb": round(sink.chars / 1e6, 1) if sink else 0,
                 "max_rss_growth_mb": round((rss1 - rss0) / 1024, 1),
-                "limits_max": round(max(s["limits"].values()), 9),
+                "limits_max": round(s.limits.worst(), 9),
             }
         )
     )

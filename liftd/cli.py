@@ -8,9 +8,9 @@ import argparse
 import contextlib
 import json
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, TextIO
+from typing import TYPE_CHECKING, TextIO
 
 from liftd import __version__
 from liftd.cnc.nc import DecoderContext, Severity
@@ -141,10 +141,8 @@ def _report_run(program: Path, result: SimResult, max_time: float, tag: str = ""
             f"liftd simulate: the program did not end within {max_time} s simulated (--max-time)",
             file=sys.stderr,
         )
-    for item in result.summary["errors"]:
-        print(
-            f"{program}:{item['line']}: error {item['id']}: {item['message']}{tag}", file=sys.stderr
-        )
+    for item in result.summary.errors:
+        print(f"{program}:{item.line}: error {item.error_id}: {item.message}{tag}", file=sys.stderr)
 
 
 def _simulate(
@@ -157,32 +155,23 @@ def _simulate(
 ) -> int:
     from liftd.sim import plot  # noqa: PLC0415
     from liftd.sim.simulate import channel_for, simulate  # noqa: PLC0415
+    from liftd.sim.summary import describe  # noqa: PLC0415
 
     ch = channel_for(settings.channel, args.method)
     delay = settings.config.plc.m_ack_delay_ms * 1e-3
     result = simulate(ch, text, schedule, delay, trace, args.max_time)
     _report_run(program, result, args.max_time)
+    summary = result.summary
     if args.plot:
-        title = f"{program.name}: {plot.describe(result.summary)}"
-        plot.plot_run(
-            Path(args.plot),
-            result.series.rows,
-            ch.axis_names,
-            ch.lift_axis_index,
-            result.records,
-            title,
-        )
-    return _output(args, result.summary, plot.describe, result.program_error, result.finished)
+        title = f"{program.name}: {describe(summary)}"
+        rows, z = result.series.rows, ch.lift_axis_index
+        plot.plot_run(Path(args.plot), rows, ch.axis_names, z, summary.lifts, title)
+    text_out = json.dumps(summary.to_json()) if args.json else describe(summary)
+    return _output(text_out, result.program_error, result.finished)
 
 
-def _output(
-    args: argparse.Namespace,
-    summary: dict[str, Any],
-    describe: Callable[[dict[str, Any]], str],
-    program_error: bool,
-    finished: bool,
-) -> int:
-    print(json.dumps(summary, indent=None) if args.json else describe(summary))
+def _output(text: str, program_error: bool, finished: bool) -> int:
+    print(text)
     if program_error:
         return EXIT_PROGRAM
     return EXIT_OK if finished else EXIT_RUNTIME
@@ -203,12 +192,14 @@ def _compare(
     result = compare.compare(ch, text, schedule, delay, traces, args.max_time, program.name)
     for method, run in result.results.items():
         _report_run(program, run, args.max_time, f" ({method} run)")
+    summary = result.summary
     if args.plot:
         z = ch.axis(ch.lift_axis)
-        warn = result.summary["lifting"]["z_overload"]["warning_ratio"]
+        warn = summary.lifting.z_overload.warning_ratio
         title = f"{program.name}: Advanced Lifting (red) vs path-based Lifting (blue)"
         plot.plot_compare(Path(args.plot), result, z.a_max, warn, title)
-    return _output(args, result.summary, compare.describe, result.program_error, result.finished)
+    text_out = json.dumps(summary.to_json()) if args.json else compare.describe(summary)
+    return _output(text_out, result.program_error, result.finished)
 
 
 def cmd_run(args: argparse.Namespace) -> int:

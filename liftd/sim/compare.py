@@ -1,10 +1,11 @@
 """`liftd simulate PROGRAM --compare`: the same program and PLC schedule run with Advanced
 Lifting and with path-based Lifting, paired lift by lift.
 
-The JSON holds both full summaries (DESIGN.md §3.3) and, per lift, both lift entries with the
-ratios advanced / lifting of mean clearance and peak. The figure (plot.plot_compare) overlays
-each lift's Z over time and over path distance, needing per-lift samples: `LiftSampler` keeps
-them for the first MAX_PLOTTED lifts only, so memory stays bounded on any program.
+The summary (ComparisonSummary, its JSON) holds both full summaries (DESIGN.md §3.3) and, per
+lift, both lift entries with the ratios advanced / lifting of mean clearance and peak. The
+figure (plot.plot_compare) overlays each lift's Z over time and over path distance, needing
+per-lift samples: `LiftSampler` keeps them for the first MAX_PLOTTED lifts only, so memory
+stays bounded on any program.
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ from __future__ import annotations
 from collections import deque
 from collections.abc import Iterable
 from dataclasses import dataclass, field
-from typing import Any, TextIO
+from typing import Generic, TextIO, TypeVar
 
 import numpy as np
 
@@ -20,6 +21,7 @@ from liftd.cnc.params import ChannelParams
 from liftd.cnc.plc import Schedule
 from liftd.cnc.snapshot import GeoSnapshot
 from liftd.sim.simulate import SimResult, channel_for, simulate
+from liftd.sim.summary import JsonObject, LiftSummary, SimSummary
 
 METHODS = ("advanced", "lifting")
 MAX_PLOTTED = 12
@@ -81,11 +83,102 @@ class LiftSampler:
                 self.open = None
 
 
+T = TypeVar("T", int, float)
+
+
+@dataclass(frozen=True, slots=True)
+class PerMethod(Generic[T]):
+    """One figure of both runs."""
+
+    advanced: T
+    lifting: T
+
+    def to_json(self) -> dict[str, T]:
+        return {"advanced": self.advanced, "lifting": self.lifting}
+
+
+@dataclass(frozen=True, slots=True)
+class LiftPair:
+    """The same lift range in both runs (None where that run never started it: stopped by an
+    error before), with the ratios advanced / lifting of mean clearance and of the height Z
+    rose (None where either is missing or nothing was lifted)."""
+
+    start_line: int
+    end_line: int
+    advanced: LiftSummary | None
+    lifting: LiftSummary | None
+    clearance_ratio: float | None
+    peak_ratio: float | None
+
+    @property
+    def ref(self) -> LiftSummary:
+        """Either run's entry (for what both share: lines, POS, POS_LIMIT, suppressed)."""
+        ref = self.advanced or self.lifting
+        assert ref is not None  # a pair has at least one side
+        return ref
+
+    def of(self, method: str) -> LiftSummary | None:
+        return self.advanced if method == "advanced" else self.lifting
+
+    def to_json(self) -> JsonObject:
+        return {
+            "start_line": self.start_line,
+            "end_line": self.end_line,
+            "advanced": self.advanced.to_json() if self.advanced else None,
+            "lifting": self.lifting.to_json() if self.lifting else None,
+            "clearance_ratio": self.clearance_ratio,
+            "peak_ratio": self.peak_ratio,
+        }
+
+
+@dataclass(frozen=True, slots=True)
+class CompareTotals:
+    duration_s: PerMethod[float]
+    min_clearance_ratio: float | None
+    mean_clearance_ratio: float | None
+    z_a_max_ratio: PerMethod[float]  # the largest of the lifts
+    z_overload_cycles: PerMethod[int]  # above the P-AXIS-00441 warning level
+
+    def to_json(self) -> JsonObject:
+        return {
+            "duration_s": self.duration_s.to_json(),
+            "min_clearance_ratio": self.min_clearance_ratio,
+            "mean_clearance_ratio": self.mean_clearance_ratio,
+            "z_a_max_ratio": self.z_a_max_ratio.to_json(),
+            "z_overload_cycles": self.z_overload_cycles.to_json(),
+        }
+
+
+@dataclass(frozen=True, slots=True)
+class ComparisonSummary:
+    """`simulate --compare --json`: both runs' summaries, their lifts paired, and totals."""
+
+    program: str
+    cycle_time_s: float
+    lifts: tuple[LiftPair, ...]
+    totals: CompareTotals
+    advanced: SimSummary
+    lifting: SimSummary
+
+    def run(self, method: str) -> SimSummary:
+        return self.advanced if method == "advanced" else self.lifting
+
+    def to_json(self) -> JsonObject:
+        return {
+            "program": self.program,
+            "cycle_time_s": self.cycle_time_s,
+            "lifts": [p.to_json() for p in self.lifts],
+            "totals": self.totals.to_json(),
+            "advanced": self.advanced.to_json(),
+            "lifting": self.lifting.to_json(),
+        }
+
+
 @dataclass
 class Comparison:
     results: dict[str, SimResult]
     samples: dict[str, LiftSampler]
-    summary: dict[str, Any]
+    summary: ComparisonSummary
 
     @property
     def program_error(self) -> bool:
@@ -112,59 +205,53 @@ def occurrence_keys(lines: Iterable[int]) -> list[tuple[int, int]]:
     return keys
 
 
-def pair_lifts(adv: list[dict[str, Any]], lift: list[dict[str, Any]]) -> list[dict[str, Any]]:
+def pair_lifts(adv: tuple[LiftSummary, ...], lift: tuple[LiftSummary, ...]) -> tuple[LiftPair, ...]:
     """Pair the lifts of both runs by start line and occurrence (a run stopped by an error has
     fewer lifts)."""
 
-    def keyed(lifts: list[dict[str, Any]]) -> dict[tuple[int, int], dict[str, Any]]:
-        return dict(zip(occurrence_keys(x["start_line"] for x in lifts), lifts, strict=True))
+    def keyed(lifts: tuple[LiftSummary, ...]) -> dict[tuple[int, int], LiftSummary]:
+        return dict(zip(occurrence_keys(x.start_line for x in lifts), lifts, strict=True))
 
     a, b = keyed(adv), keyed(lift)
     pairs = []
-    for key in sorted(set(a) | set(b), key=lambda k: (a.get(k) or b[k])["t_start"]):
+    for key in sorted(set(a) | set(b), key=lambda k: (a.get(k) or b[k]).t_start):
         x, y = a.get(key), b.get(key)
         ref = x or y
         assert ref is not None
         pairs.append(
-            {
-                "start_line": ref["start_line"],
-                "end_line": ref["end_line"],
-                "advanced": x,
-                "lifting": y,
-                "clearance_ratio": _ratio(x["mean_clearance"], y["mean_clearance"])
-                if x and y
-                else None,
-                "peak_ratio": _ratio(x["peak"] - x["z_start"], y["peak"] - y["z_start"])
-                if x and y
-                else None,
-            }
+            LiftPair(
+                ref.start_line,
+                ref.end_line,
+                x,
+                y,
+                _ratio(x.mean_clearance_mm, y.mean_clearance_mm) if x and y else None,
+                _ratio(x.peak_mm - x.z_start_mm, y.peak_mm - y.z_start_mm) if x and y else None,
+            )
         )
-    return pairs
+    return tuple(pairs)
 
 
-def compare_summary(adv: dict[str, Any], lift: dict[str, Any], program: str) -> dict[str, Any]:
-    pairs = pair_lifts(adv["lifts"], lift["lifts"])
-    ratios = [p["clearance_ratio"] for p in pairs if p["clearance_ratio"] is not None]
-    return {
-        "program": program,
-        "cycle_time_s": adv["cycle_time_s"],
-        "lifts": pairs,
-        "totals": {
-            "duration_s": {"advanced": adv["duration_s"], "lifting": lift["duration_s"]},
-            "min_clearance_ratio": min(ratios, default=None),
-            "mean_clearance_ratio": round(sum(ratios) / len(ratios), 6) if ratios else None,
-            "z_a_max_ratio": {
-                m: max((x["z_a_max_ratio"] for x in s["lifts"]), default=0.0)
-                for m, s in (("advanced", adv), ("lifting", lift))
-            },
-            "z_overload_cycles": {
-                m: s["z_overload"]["warning_cycles"] + s["z_overload"]["error_cycles"]
-                for m, s in (("advanced", adv), ("lifting", lift))
-            },
-        },
-        "advanced": adv,
-        "lifting": lift,
-    }
+def _largest_z_a(run: SimSummary) -> float:
+    return max((x.z_a_max_ratio for x in run.lifts), default=0.0)
+
+
+def compare_summary(adv: SimSummary, lift: SimSummary, program: str) -> ComparisonSummary:
+    pairs = pair_lifts(adv.lifts, lift.lifts)
+    ratios = [p.clearance_ratio for p in pairs if p.clearance_ratio is not None]
+    return ComparisonSummary(
+        program=program,
+        cycle_time_s=adv.cycle_time_s,
+        lifts=pairs,
+        totals=CompareTotals(
+            duration_s=PerMethod(adv.duration_s, lift.duration_s),
+            min_clearance_ratio=min(ratios, default=None),
+            mean_clearance_ratio=round(sum(ratios) / len(ratios), 6) if ratios else None,
+            z_a_max_ratio=PerMethod(_largest_z_a(adv), _largest_z_a(lift)),
+            z_overload_cycles=PerMethod(adv.z_overload.cycles, lift.z_overload.cycles),
+        ),
+        advanced=adv,
+        lifting=lift,
+    )
 
 
 def compare(
@@ -190,27 +277,27 @@ def compare(
     return Comparison(results, samplers, summary)
 
 
-def describe(summary: dict[str, Any]) -> str:
+def describe(summary: ComparisonSummary) -> str:
     """A table for the terminal."""
     lines = [
         f"{'lines':>12}  {'clearance adv':>13}  {'lifting':>8}  {'ratio':>6}  "
         f"{'Z a/a_max adv':>13}  {'lifting':>8}"
     ]
-    for p in summary["lifts"]:
-        x, y = p["advanced"], p["lifting"]
-        name = f"{p['start_line']}-{p['end_line']}"
-        ca = f"{x['mean_clearance']:.2f}" if x else "-"
-        cb = f"{y['mean_clearance']:.2f}" if y else "-"
-        ratio = f"{p['clearance_ratio']:.3f}" if p["clearance_ratio"] is not None else "-"
-        aa = f"{x['z_a_max_ratio']:.3f}" if x else "-"
-        ab = f"{y['z_a_max_ratio']:.3f}" if y else "-"
+    for p in summary.lifts:
+        x, y = p.advanced, p.lifting
+        name = f"{p.start_line}-{p.end_line}"
+        ca = f"{x.mean_clearance_mm:.2f}" if x else "-"
+        cb = f"{y.mean_clearance_mm:.2f}" if y else "-"
+        ratio = f"{p.clearance_ratio:.3f}" if p.clearance_ratio is not None else "-"
+        aa = f"{x.z_a_max_ratio:.3f}" if x else "-"
+        ab = f"{y.z_a_max_ratio:.3f}" if y else "-"
         lines.append(f"{name:>12}  {ca:>13}  {cb:>8}  {ratio:>6}  {aa:>13}  {ab:>8}")
-    tot = summary["totals"]
+    tot = summary.totals
     lines.append(
-        f"duration advanced {tot['duration_s']['advanced']:.3f} s, lifting "
-        f"{tot['duration_s']['lifting']:.3f} s; Z overload cycles (above the P-AXIS-00441 "
-        f"level) advanced {tot['z_overload_cycles']['advanced']}, lifting "
-        f"{tot['z_overload_cycles']['lifting']}"
+        f"duration advanced {tot.duration_s.advanced:.3f} s, lifting "
+        f"{tot.duration_s.lifting:.3f} s; Z overload cycles (above the P-AXIS-00441 "
+        f"level) advanced {tot.z_overload_cycles.advanced}, lifting "
+        f"{tot.z_overload_cycles.lifting}"
     )
     return "\n".join(lines)
 

@@ -3,15 +3,15 @@
 from __future__ import annotations
 
 import importlib.util
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
-from liftd.cnc.lift.controller import LiftRecord
 from liftd.sim.compare import MAX_PLOTTED, Comparison, as_arrays, occurrence_keys
+from liftd.sim.summary import LiftSummary
+from liftd.sim.trace import MM
 
-MM = 1e3
 HINT = "plotting needs matplotlib: pip install 'liftd[plot]' (or: .venv/bin/pip install matplotlib)"
 
 
@@ -36,7 +36,7 @@ def plot_run(
     rows: np.ndarray,
     axis_names: tuple[str, ...],
     z_index: int,
-    records: list[LiftRecord],
+    lifts: Sequence[LiftSummary],
     title: str,
 ) -> None:
     """rows: t, positions…, v_path, override, lift_active, lift_suppressed, line."""
@@ -72,10 +72,10 @@ def plot_run(
     ax_xy.set_title(
         "path: blue = cutting and travel, red = lift active, orange = lift suppressed", fontsize=10
     )
-    for rec in records:
-        k = min(int(np.searchsorted(t, rec.t_start)), len(t) - 1)
+    for lift in lifts:
+        k = min(int(np.searchsorted(t, lift.t_start)), len(t) - 1)
         ax_xy.annotate(
-            f"N{rec.range.start.line}",
+            f"N{lift.start_line}",
             (pos[k, 0], pos[k, 1]),
             fontsize=8,
             xytext=(4, 4),
@@ -87,15 +87,14 @@ def plot_run(
     for t0, t1 in _spans(t, active):
         ax_z.axvspan(t0, t1, color="tab:red", alpha=0.08, lw=0)
     ax_z.plot(t, z, color="tab:red", lw=1.3, label=f"{zn} command")
-    for i, rec in enumerate(records):
-        spec = rec.range.start
-        span = [rec.t_start, rec.t_end]
+    for i, lift in enumerate(lifts):
+        span = [lift.t_start, lift.t_end]
         ax_z.plot(
-            span, [spec.pos_limit * MM] * 2, "k--", lw=0.9, label="POS_LIMIT" if i == 0 else None
+            span, [lift.pos_limit_mm] * 2, "k--", lw=0.9, label="POS_LIMIT" if i == 0 else None
         )
         ax_z.plot(
             span,
-            [spec.target * MM] * 2,
+            [lift.z_target_mm] * 2,
             color="tab:green",
             lw=1.2,
             label="POS (target)" if i == 0 else None,
@@ -124,28 +123,27 @@ def plot_run(
 
     # 5. zoom on the longest lift: Z against the time the path needs to LIFT_END
     best = max(
-        (r for r in records if not r.range.suppressed),
-        key=lambda r: r.t_end - r.t_start,
+        (x for x in lifts if not x.suppressed),
+        key=lambda x: x.t_end - x.t_start,
         default=None,
     )
     if best is not None:
         m = (t >= best.t_start - 0.02) & (t <= best.t_end + 0.02)
-        spec = best.range.start
         ax_zoom.plot(t[m] - best.t_end, z[m], color="tab:red", lw=1.5, label=zn)
-        ax_zoom.axhline(spec.pos_limit * MM, color="k", ls="--", lw=0.9, label="POS_LIMIT")
-        ax_zoom.axhline(spec.target * MM, color="tab:green", lw=1.2, label="POS")
+        ax_zoom.axhline(best.pos_limit_mm, color="k", ls="--", lw=0.9, label="POS_LIMIT")
+        ax_zoom.axhline(best.z_target_mm, color="tab:green", lw=1.2, label="POS")
         ax_zoom.axvline(0.0, color="tab:gray", lw=0.8, ls=":")
         ax_zoom.annotate(
             "path reaches LIFT_END",
-            (0.0, spec.target * MM),
+            (0.0, best.z_target_mm),
             fontsize=8,
             xytext=(-120, 20),
             textcoords="offset points",
             arrowprops={"arrowstyle": "->", "lw": 0.7},
         )
         ax_zoom.set_title(
-            f"lift N{spec.line}: peak {best.peak * MM:.1f} mm, mean clearance "
-            f"{best.area / max(best.t_end - best.t_start, 1e-9) * MM:.1f} mm",
+            f"lift N{best.start_line}: peak {best.peak_mm:.1f} mm, mean clearance "
+            f"{best.mean_clearance_mm:.1f} mm",
             fontsize=9,
         )
         ax_zoom.set_xlabel("t − t(LIFT_END) [s]")
@@ -155,15 +153,6 @@ def plot_run(
     fig.suptitle(title, fontsize=12)
     fig.savefig(path, dpi=100)
     plt.close(fig)
-
-
-def describe(summary: dict[str, Any]) -> str:
-    lifts = summary["lifts"]
-    clear = [f"{x['mean_clearance']:.1f}" for x in lifts if not x["suppressed"]]
-    return (
-        f"method {summary['method']}, {len(lifts)} lifts, mean clearance [mm]: "
-        f"{', '.join(clear) or '-'}, duration {summary['duration_s']:.2f} s"
-    )
 
 
 COLOURS = {"advanced": "tab:red", "lifting": "tab:blue"}
@@ -180,17 +169,17 @@ def plot_compare(
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt  # noqa: PLC0415
 
-    pairs = comparison.summary["lifts"][:MAX_PLOTTED]
+    pairs = comparison.summary.lifts[:MAX_PLOTTED]
     runs = {
         m: dict(zip(occurrence_keys(x.start_line for x in s.lifts), s.lifts, strict=True))
         for m, s in comparison.samples.items()
     }
-    keys = occurrence_keys(p["start_line"] for p in pairs)
+    keys = occurrence_keys(p.start_line for p in pairs)
     rows = max(1, len(keys))
     fig, axes = plt.subplots(rows, 2, figsize=(13, 2.5 * rows + 0.8), squeeze=False)
     for i, (key, pair) in enumerate(zip(keys, pairs, strict=False)):
         ax_t, ax_s = axes[i]
-        ref = pair["advanced"] or pair["lifting"]
+        ref = pair.ref
         for method in ("advanced", "lifting"):
             lift = runs[method].get(key)
             if lift is None:
@@ -200,10 +189,10 @@ def plot_compare(
             s = (data[:, 1] - lift.s_start) * MM
             z = data[:, 2] * MM
             ratio = np.abs(data[:, 3]) / a_max
-            entry = pair[method]
+            entry = pair.of(method)
             label = (
-                f"{method}: clearance {entry['mean_clearance']:.1f} mm, "
-                f"Z a/a_max {entry['z_a_max_ratio']:.2f}"
+                f"{method}: clearance {entry.mean_clearance_mm:.1f} mm, "
+                f"Z a/a_max {entry.z_a_max_ratio:.2f}"
                 if entry
                 else method
             )
@@ -215,14 +204,14 @@ def plot_compare(
                 ax.scatter(x[over & ~warn], z[over & ~warn], s=7, color="black", zorder=3)
                 ax.scatter(x[warn], z[warn], s=28, marker="x", color="black", zorder=3)
         for ax in (ax_t, ax_s):
-            ax.axhline(ref["pos_limit"], color="k", ls="--", lw=0.8)
-            ax.axhline(ref["z_target"], color="tab:green", lw=1.0)
+            ax.axhline(ref.pos_limit_mm, color="k", ls="--", lw=0.8)
+            ax.axhline(ref.z_target_mm, color="tab:green", lw=1.0)
             ax.grid(alpha=0.3)
             ax.set_ylabel("Z [mm]")
-        ratio_text = f" (×{pair['clearance_ratio']:.2f})" if pair["clearance_ratio"] else ""
+        ratio_text = f" (×{pair.clearance_ratio:.2f})" if pair.clearance_ratio else ""
         ax_t.set_title(
-            f"lines {pair['start_line']}–{pair['end_line']}: mean clearance advanced / lifting"
-            f"{ratio_text}{' (suppressed)' if ref['suppressed'] else ''}",
+            f"lines {pair.start_line}–{pair.end_line}: mean clearance advanced / lifting"
+            f"{ratio_text}{' (suppressed)' if ref.suppressed else ''}",
             fontsize=9,
         )
         ax_t.legend(fontsize=7, loc="best")

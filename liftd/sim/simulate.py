@@ -2,29 +2,26 @@
 
 Drives GeoTask.step with t = k × cycle time, applies the override / feed-hold schedules, plays a
 simple PLC that acknowledges M functions (and continues after M00) after `plc.m_ack_delay_ms`,
-streams the trace CSV, keeps a decimated copy for the plot, and builds the JSON summary of
-DESIGN.md §3.3.
+streams the trace CSV, keeps a decimated copy for the plot, and builds the summary of DESIGN.md
+§3.3 (summary.SimSummary).
 """
 
 from __future__ import annotations
 
 import dataclasses
-import math
 import time
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass, field
-from typing import Any, TextIO
+from dataclasses import dataclass
+from typing import TextIO
 
 import numpy as np
 
 from liftd.cnc.geo_task import LIFT_LATE_ID, GeoTask
-from liftd.cnc.lift.controller import LiftRecord
 from liftd.cnc.params import ChannelParams, LiftMethod
 from liftd.cnc.plc import Schedule, SimPlc
 from liftd.cnc.snapshot import ChannelState, GeoSnapshot
+from liftd.sim.summary import ErrorEntry, LiftSummary, Limits, Overload, SimSummary, StepCpu
 from liftd.sim.trace import LimitMonitor, TraceWriter
-
-MM = 1e3
 
 
 class SeriesBuffer:
@@ -58,13 +55,15 @@ class SeriesBuffer:
         return self.data[: self.n]
 
 
-@dataclass
+@dataclass(frozen=True)
 class SimResult:
-    summary: dict[str, Any]
-    series: SeriesBuffer
-    records: list[LiftRecord] = field(default_factory=list)
-    program_error: bool = False
-    finished: bool = True
+    summary: SimSummary
+    series: SeriesBuffer  # decimated samples for the figure
+    finished: bool = True  # the program ended (READY or ERROR) within max_time
+
+    @property
+    def program_error(self) -> bool:
+        return self.summary.program_error
 
 
 def channel_for(ch: ChannelParams, method: str) -> ChannelParams:
@@ -103,13 +102,13 @@ class StepTimer:
                 return float(min(us + 1, self.max_ns / 1e3))
         return self.max_ns / 1e3
 
-    def summary(self) -> dict[str, float]:
-        return {
-            "p50": self.percentile(0.5),
-            "p99": self.percentile(0.99),
-            "p999": self.percentile(0.999),
-            "max": round(self.max_ns / 1e3, 1),
-        }
+    def summary(self) -> StepCpu:
+        return StepCpu(
+            self.percentile(0.5),
+            self.percentile(0.99),
+            self.percentile(0.999),
+            round(self.max_ns / 1e3, 1),
+        )
 
 
 def run_cycles(
@@ -155,7 +154,7 @@ def simulate(
     writer = TraceWriter(trace, ch.axis_names) if trace is not None else None
     monitor = LimitMonitor(len(ch.axes), dt)
     series = SeriesBuffer(len(ch.axes) + 6)
-    errors: list[dict[str, Any]] = []
+    errors: list[ErrorEntry] = []
     snap: GeoSnapshot | None = None
     cycles = 0
     timer = StepTimer()
@@ -180,39 +179,15 @@ def simulate(
             )
         for ev in snap.events:
             if ev.name == "geo.error":
-                errors.append({"id": int(ev.value), "line": ev.line, "message": ev.text})
+                errors.append(ErrorEntry(int(ev.value), ev.line, ev.text))
             elif ev.name == "lift.late":
-                errors.append({"id": LIFT_LATE_ID, "line": ev.line, "message": ev.text})
+                errors.append(ErrorEntry(LIFT_LATE_ID, ev.line, ev.text))
     if writer is not None:
         writer.flush()
     finished = snap is not None and snap.state in (ChannelState.READY, ChannelState.ERROR)
-    summary = build_summary(ch, task, monitor, cycles, snap.t if snap else 0.0, errors)
-    summary["step_cpu_us"] = timer.summary()
-    program_error = any(e["id"] != LIFT_LATE_ID for e in errors)
-    return SimResult(summary, series, list(task.lift.records), program_error, finished)
-
-
-def lift_summary(rec: LiftRecord, method: LiftMethod) -> dict[str, Any]:
-    spec = rec.range.start
-    duration = rec.t_end - rec.t_start
-    return {
-        "start_line": spec.line,
-        "end_line": rec.range.end_line,
-        "method": method.value,
-        "suppressed": rec.range.suppressed,
-        "z_start": round(rec.z_start * MM, 6),
-        "z_target": round(spec.target * MM, 6),
-        "pos_limit": round(spec.pos_limit * MM, 6),
-        "peak": round(rec.peak * MM, 6),
-        "mean_clearance": round(rec.area / duration * MM, 6) if duration > 0 else 0.0,
-        "t_start": round(rec.t_start, 6),
-        "t_end": round(rec.t_end, 6),
-        "arrival_error": round(rec.arrival_error * MM, 6),
-        "path_delay_s": round(rec.path_delay, 6),
-        "duration_s": round(duration, 6),
-        "z_a_max_ratio": round(rec.z_a_max_ratio, 6),
-        "premature": rec.premature,
-    }
+    duration = snap.t if snap else 0.0
+    summary = build_summary(ch, task, monitor, cycles, duration, tuple(errors), timer.summary())
+    return SimResult(summary, series, finished)
 
 
 def build_summary(
@@ -221,32 +196,18 @@ def build_summary(
     monitor: LimitMonitor,
     cycles: int,
     duration: float,
-    errors: list[dict[str, Any]],
-) -> dict[str, Any]:
-    max_v, max_a, max_j = monitor.result()
-    limits: dict[str, float] = {}
-    z = ch.lift_axis_index
-    order = [z] + [i for i in range(len(ch.axes)) if i != z]
-    for i in order:
-        ax = ch.axes[i]
-        prefix = "z" if i == z else ax.name.lower()
-        limits[f"{prefix}_v_max_ratio"] = float(max_v[i] / ax.v_max)
-        limits[f"{prefix}_a_max_ratio"] = float(max_a[i] / ax.a_max)
-        limits[f"{prefix}_j_max_ratio"] = (
-            float(max_j[i] / ax.j_max) if ax.j_max != math.inf else 0.0
-        )
-    return {
-        "cycle_time_s": ch.cycle_time,
-        "duration_s": round(duration, 6),
-        "cycles": cycles,
-        "method": ch.lift_method.value,
-        "lifts": [lift_summary(r, ch.lift_method) for r in task.lift.records],
-        "limits": limits,
-        "z_overload": {
-            "warning_ratio": task.z_monitor.warn_ratio,
-            "error_ratio": task.z_monitor.err_ratio,
-            "warning_cycles": task.z_monitor.warning_cycles,
-            "error_cycles": task.z_monitor.error_cycles,
-        },
-        "errors": errors,
-    }
+    errors: tuple[ErrorEntry, ...],
+    step_cpu: StepCpu,
+) -> SimSummary:
+    mon = task.z_monitor
+    return SimSummary(
+        cycle_time_s=ch.cycle_time,
+        duration_s=round(duration, 6),
+        cycles=cycles,
+        method=ch.lift_method.value,
+        lifts=tuple(LiftSummary.closed(r, ch.lift_method) for r in task.lift.records),
+        limits=Limits.of(ch, *monitor.result()),
+        z_overload=Overload(mon.warn_ratio, mon.err_ratio, mon.warning_cycles, mon.error_cycles),
+        errors=errors,
+        step_cpu_us=step_cpu,
+    )

@@ -13,7 +13,7 @@ import numpy as np
 
 from liftd.cnc.snapshot import GeoSnapshot
 
-MM = 1e3  # m → mm
+MM = 1e3  # mm per m (the sim package's one factor for its user-facing mm)
 CHUNK = 4096
 
 

@@ -279,11 +279,12 @@ def test_lift_statuses_appear_in_snapshot_and_summary() -> None:
         "Z[LIFT_START POS=3 POS_LIMIT=40]\nG01 X102\nZ[LIFT_END]\nM30\n"
     )
     res = simulate(ch, text, Schedule(), 0.02)
-    l1, l2 = res.summary["lifts"]
+    summary = res.summary.to_json()  # the JSON a user reads (DESIGN.md §3.3)
+    l1, l2 = summary["lifts"]
     assert (l1["suppressed"], l2["suppressed"]) == (False, True)
     assert l1["peak"] > 1.0 and l1["mean_clearance"] > 0 and l1["arrival_error"] <= 1e-3
-    assert l2["z_target"] == 3.0 and res.summary["method"] == "advanced"
-    assert res.summary["limits"]["z_j_max_ratio"] <= TOL
+    assert l2["z_target"] == 3.0 and summary["method"] == "advanced"
+    assert summary["limits"]["z_j_max_ratio"] <= TOL
 
 
 def test_lifting_disabled_makes_lift_commands_an_error() -> None:

@@ -1,0 +1,94 @@
+"""The typed summaries: the JSON they give is DESIGN.md §3.3 (keys, their order, units), and
+the comparison pairs lifts by start line and occurrence."""
+
+from __future__ import annotations
+
+import json
+
+from liftd.cnc.params import LiftMethod
+from liftd.cnc.plc import Schedule
+from liftd.sim.compare import compare, compare_summary
+from liftd.sim.simulate import simulate
+from tests.support.channel import make_channel
+
+START = "G90 G17 G94\nG00 X10 Y10 Z0.001\n"
+TWO_LIFTS = START + (
+    "Z[LIFT_START POS=1 POS_LIMIT=40]\nG01 X100 F24000\nZ[LIFT_END]\n"
+    "M04\nG01 Y20 F6000\nM05\n"
+    "Z[LIFT_START POS=1 POS_LIMIT=40]\nG01 X10 F24000\nZ[LIFT_END]\nM30\n"
+)
+SUMMARY_KEYS = [  # §3.3 first, then liftd's extensions
+    "cycle_time_s",
+    "duration_s",
+    "cycles",
+    "method",
+    "lifts",
+    "limits",
+    "z_overload",
+    "errors",
+    "step_cpu_us",
+]
+LIFT_KEYS = [
+    "start_line",
+    "end_line",
+    "method",
+    "suppressed",
+    "z_start",
+    "z_target",
+    "pos_limit",
+    "peak",
+    "mean_clearance",
+    "t_start",
+    "t_end",
+    "arrival_error",
+    "path_delay_s",
+    "duration_s",
+    "z_a_max_ratio",
+    "premature",
+]
+
+
+def test_json_keys_in_contract_order_and_units_in_mm() -> None:
+    res = simulate(make_channel(), TWO_LIFTS, Schedule(), 0.02)
+    out = json.loads(json.dumps(res.summary.to_json()))
+    assert list(out) == SUMMARY_KEYS
+    assert [list(x) for x in out["lifts"]] == [LIFT_KEYS, LIFT_KEYS]
+    first = res.summary.lifts[0]
+    assert out["lifts"][0]["peak"] == first.peak_mm and 1.0 < first.peak_mm <= 40.0  # mm, not m
+    assert first.height_mm == first.peak_mm - first.z_start_mm
+    assert list(out["limits"])[:3] == ["z_v_max_ratio", "z_a_max_ratio", "z_j_max_ratio"]
+    assert res.summary.limits.worst() == max(out["limits"].values())
+    assert list(out["step_cpu_us"]) == ["p50", "p99", "p999", "max"]
+    assert out["errors"] == [] and not res.program_error
+
+
+def test_comparison_pairs_both_runs_and_its_json_holds_both_summaries() -> None:
+    cmp = compare(make_channel(), TWO_LIFTS, Schedule(), 0.02, program="two.nc")
+    s = cmp.summary
+    assert [p.start_line for p in s.lifts] == [3, 9]
+    for p in s.lifts:
+        assert p.advanced is not None and p.lifting is not None
+        assert p.advanced.method == "advanced" and p.lifting.method == "lifting"
+        assert p.clearance_ratio == round(
+            p.advanced.mean_clearance_mm / p.lifting.mean_clearance_mm, 6
+        )
+    out = s.to_json()
+    assert list(out) == ["program", "cycle_time_s", "lifts", "totals", "advanced", "lifting"]
+    assert out["totals"]["z_overload_cycles"] == {
+        "advanced": s.advanced.z_overload.cycles,
+        "lifting": s.lifting.z_overload.cycles,
+    }
+    assert out["advanced"] == s.advanced.to_json()
+
+
+def test_a_run_stopped_early_leaves_its_partner_unpaired() -> None:
+    adv = simulate(make_channel(), TWO_LIFTS, Schedule(), 0.02).summary
+    lifting_ch = make_channel(method=LiftMethod.LIFTING)
+    cut = TWO_LIFTS.split("M04")[0] + "M30\n"  # only the first lift
+    lift = simulate(lifting_ch, cut, Schedule(), 0.02).summary
+    s = compare_summary(adv, lift, "x.nc")
+    assert [(p.advanced is not None, p.lifting is not None) for p in s.lifts] == [
+        (True, True),
+        (True, False),
+    ]
+    assert s.lifts[1].clearance_ratio is None and s.lifts[1].ref is s.lifts[1].advanced
