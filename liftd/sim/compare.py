@@ -101,7 +101,7 @@ class PerMethod(Generic[T]):
 class LiftPair:
     """The same lift range in both runs (None where that run never started it: stopped by an
     error before), with the ratios advanced / lifting of mean clearance and of the height Z
-    rose (None where either is missing or nothing was lifted)."""
+    rose (None where either is missing, open at a stop, or nothing was lifted)."""
 
     start_line: int
     end_line: int
@@ -218,14 +218,17 @@ def pair_lifts(adv: tuple[LiftSummary, ...], lift: tuple[LiftSummary, ...]) -> t
         x, y = a.get(key), b.get(key)
         ref = x or y
         assert ref is not None
+        if x is None or y is None or x.open or y.open:  # nothing to compare it with
+            pairs.append(LiftPair(ref.start_line, ref.end_line, x, y, None, None))
+            continue
         pairs.append(
             LiftPair(
                 ref.start_line,
                 ref.end_line,
                 x,
                 y,
-                _ratio(x.mean_clearance_mm, y.mean_clearance_mm) if x and y else None,
-                _ratio(x.peak_mm - x.z_start_mm, y.peak_mm - y.z_start_mm) if x and y else None,
+                _ratio(x.mean_clearance_mm, y.mean_clearance_mm),
+                _ratio(x.peak_mm - x.z_start_mm, y.peak_mm - y.z_start_mm),
             )
         )
     return tuple(pairs)

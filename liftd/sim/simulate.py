@@ -185,8 +185,7 @@ def simulate(
     if writer is not None:
         writer.flush()
     finished = snap is not None and snap.state in (ChannelState.READY, ChannelState.ERROR)
-    duration = snap.t if snap else 0.0
-    summary = build_summary(ch, task, monitor, cycles, duration, tuple(errors), timer.summary())
+    summary = build_summary(ch, task, monitor, cycles, snap, tuple(errors), timer.summary())
     return SimResult(summary, series, finished)
 
 
@@ -195,17 +194,27 @@ def build_summary(
     task: GeoTask,
     monitor: LimitMonitor,
     cycles: int,
-    duration: float,
+    last: GeoSnapshot | None,
     errors: tuple[ErrorEntry, ...],
     step_cpu: StepCpu,
 ) -> SimSummary:
+    """The run's summary (`last`: its last cycle). A lift range still open at the end of the
+    run (the program stopped inside it) is listed last, as it was at the stop."""
     mon = task.z_monitor
+    method = ch.lift_method
+    duration = last.t if last is not None else 0.0
+    lifts = [LiftSummary.closed(r, method) for r in task.lift.records]
+    rec = task.lift.record
+    if rec is not None:
+        stops = [e.line for e in errors if e.stops_program]
+        line = stops[0] if stops else last.line if last is not None else 0
+        lifts.append(LiftSummary.at_stop(rec, method, duration, task.lift.z, line))
     return SimSummary(
         cycle_time_s=ch.cycle_time,
         duration_s=round(duration, 6),
         cycles=cycles,
-        method=ch.lift_method.value,
-        lifts=tuple(LiftSummary.closed(r, ch.lift_method) for r in task.lift.records),
+        method=method.value,
+        lifts=tuple(lifts),
         limits=Limits.of(ch, *monitor.result()),
         z_overload=Overload(mon.warn_ratio, mon.err_ratio, mon.warning_cycles, mon.error_cycles),
         errors=errors,

@@ -8,6 +8,7 @@ contract's order. Pure: built from the core's `LiftRecord`s after a run, no IO.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -24,7 +25,13 @@ JsonObject = dict[str, Any]
 
 @dataclass(frozen=True, slots=True)
 class LiftSummary:
-    """One lift range as the summary reports it."""
+    """One lift range as the summary reports it.
+
+    `open`: the program stopped (an NC error, or --max-time) inside the range (issue 15 item 6).
+    Then `t_end` is the time of the cycle it stopped in (the run's `duration_s`), `peak_mm`
+    and `mean_clearance_mm` are what Z did until then, `arrival_error_mm` is |Z − POS| at the
+    stop, `path_delay_s` is 0 (the path never reached LIFT_END), and `end_line` is the line
+    the program stopped at when the range's LIFT_END was never decoded."""
 
     start_line: int
     end_line: int
@@ -42,11 +49,24 @@ class LiftSummary:
     duration_s: float
     z_a_max_ratio: float
     premature: bool
+    open: bool = False
 
     @classmethod
     def closed(cls, rec: LiftRecord, method: LiftMethod) -> LiftSummary:
         """A range the path left through LIFT_END (the core's `lift.records`)."""
         return cls._of(rec, method, rec.t_end, rec.arrival_error, rec.path_delay)
+
+    @classmethod
+    def at_stop(
+        cls, rec: LiftRecord, method: LiftMethod, t_stop: float, z: float, stop_line: int
+    ) -> LiftSummary:
+        """The range still open (the core's `lift.record`) when the program stopped at t_stop
+        in `stop_line`, Z at z [m]."""
+        error = abs(z - rec.range.start.target)
+        lift = cls._of(rec, method, t_stop, error, 0.0, open=True)
+        if rec.range.end_line > 0:
+            return lift
+        return dataclasses.replace(lift, end_line=stop_line)
 
     @classmethod
     def _of(
@@ -56,6 +76,7 @@ class LiftSummary:
         t_end: float,
         arrival_error: float,
         path_delay: float,
+        open: bool = False,
     ) -> LiftSummary:
         spec = rec.range.start
         duration = t_end - rec.t_start
@@ -76,6 +97,7 @@ class LiftSummary:
             duration_s=round(duration, 6),
             z_a_max_ratio=round(rec.z_a_max_ratio, 6),
             premature=rec.premature,
+            open=open,
         )
 
     @property
@@ -101,6 +123,7 @@ class LiftSummary:
             "duration_s": self.duration_s,
             "z_a_max_ratio": self.z_a_max_ratio,
             "premature": self.premature,
+            "open": self.open,
         }
 
 
@@ -218,7 +241,7 @@ class SimSummary:
     duration_s: float
     cycles: int
     method: str
-    lifts: tuple[LiftSummary, ...]  # in the order they started
+    lifts: tuple[LiftSummary, ...]  # in the order they started; an open one last
     limits: Limits
     z_overload: Overload
     errors: tuple[ErrorEntry, ...]

@@ -45,6 +45,7 @@ LIFT_KEYS = {
     "duration_s",
     "z_a_max_ratio",
     "premature",
+    "open",  # the program stopped inside the range (issue 15 item 6)
 }
 
 
@@ -144,6 +145,38 @@ def test_program_error_exit_1_with_partial_trace(tmp_path: Path) -> None:
     assert summary["errors"][0]["line"] == 3 and summary["errors"][0]["id"] == 990018
     rows = trace.read_text().splitlines()
     assert float(rows[-1].split(",")[2]) == pytest.approx(50.0)  # ran up to the last good block
+
+
+def test_a_range_open_when_an_error_stops_the_program_is_listed(tmp_path: Path) -> None:
+    """Issue 15 item 6: the lift the error interrupts is in `lifts`, as it was at the stop."""
+    prog = tmp_path / "open.nc"
+    prog.write_text(
+        "G90 G17 G94\nG01 X10 Y10 Z1 F6000\n"
+        "Z[LIFT_START POS=1 POS_LIMIT=40]\nG01 X60 F24000\nZ[LIFT_END]\n"  # closed, lines 3-5
+        "Z[LIFT_START POS=1 POS_LIMIT=40]\nG01 X150 F24000\nQ3\nX200\nZ[LIFT_END]\nM30\n"
+    )
+    r = simulate(str(prog), "--json")
+    assert r.returncode == 1 and f"{prog}:8: error 990018:" in r.stderr
+    summary = json.loads(r.stdout)
+    closed, stopped = summary["lifts"]
+    assert (closed["start_line"], closed["end_line"], closed["open"]) == (3, 5, False)
+    assert stopped["start_line"] == 6 and stopped["open"] is True
+    assert stopped["end_line"] == 8  # LIFT_END was never read: where the program stopped
+    assert stopped["t_end"] == summary["duration_s"]  # the cycle the program stopped in
+    assert stopped["t_start"] >= closed["t_end"]  # back to back
+    assert 1.0 < stopped["peak"] <= 40.0 and stopped["mean_clearance"] > 0.0  # Z rose so far
+    assert stopped["arrival_error"] == pytest.approx(stopped["peak"] - 1.0, abs=1e-3)
+    assert stopped["path_delay_s"] == 0.0
+
+    r = simulate(str(prog), "--compare", "--json")
+    assert r.returncode == 1
+    both = json.loads(r.stdout)
+    assert [x["open"] for x in both["advanced"]["lifts"]] == [False, True]
+    assert [x["open"] for x in both["lifting"]["lifts"]] == [False, True]
+    pair = both["lifts"][1]
+    assert pair["advanced"]["open"] and pair["lifting"]["open"]
+    assert pair["clearance_ratio"] is None and pair["peak_ratio"] is None  # cut short
+    assert both["totals"]["min_clearance_ratio"] == both["lifts"][0]["clearance_ratio"]
 
 
 @pytest.mark.parametrize(

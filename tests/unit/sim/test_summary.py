@@ -45,6 +45,7 @@ LIFT_KEYS = [
     "duration_s",
     "z_a_max_ratio",
     "premature",
+    "open",
 ]
 
 
