@@ -6,8 +6,11 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import functools
 import json
+import os
 import sys
+import time
 from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, TextIO
@@ -200,6 +203,71 @@ def _compare(
         plot.plot_compare(Path(args.plot), result, z.a_max, warn, title)
     text_out = json.dumps(summary.to_json()) if args.json else compare.describe(summary)
     return _output(text_out, result.program_error, result.finished)
+
+
+def _study_programs(paths: Sequence[str]) -> list[str]:
+    """The programs named: a directory stands for the *.nc files in it (not in its
+    subdirectories, where CAM libraries keep the subroutine files their jobs call)."""
+    out: list[str] = []
+    for name in paths:
+        path = Path(name)
+        if path.is_dir():
+            files = (f for f in path.iterdir() if f.suffix.lower() == ".nc" and f.is_file())
+            out.extend(sorted(str(f) for f in files))
+        else:
+            out.append(name)  # unreadable ones are reported as such, with the others
+    return list(dict.fromkeys(out))
+
+
+def cmd_study(args: argparse.Namespace) -> int:
+    """`simulate --compare` over a library of programs in parallel, into a report."""
+    from liftd.sim import plot, report, study  # noqa: PLC0415
+    from liftd.sim.progress import ProgressBar  # noqa: PLC0415
+
+    settings = _load(args)
+    programs = _study_programs(args.paths)
+    if not programs:
+        print(f"liftd study: no NC programs (*.nc) in {' '.join(args.paths)}", file=sys.stderr)
+        return EXIT_CONFIG
+    if (args.jobs is not None and args.jobs < 1) or args.max_time <= 0:
+        print("liftd study: --jobs must be >= 1 and --max-time > 0", file=sys.stderr)
+        return EXIT_CONFIG
+    jobs = min(args.jobs or len(os.sched_getaffinity(0)), len(programs))
+    cfg = study.StudyConfig(
+        functools.partial(program_channel, settings),  # subroutine files, read in the worker
+        settings.config.plc.m_ack_delay_ms * 1e-3,
+        args.max_time,
+    )
+    meta = {"liftd": __version__, "config": str(settings.path),
+            "method": settings.channel.lift_method.value, "programs": len(programs)}  # fmt: skip
+    out = Path(args.out)
+    bar = ProgressBar(len(programs), sys.stderr)
+
+    def done(result: study.ProgramResult) -> None:
+        bar.advance(failed=result.row.status is not study.Status.OK)
+
+    t0 = time.perf_counter()
+    try:
+        with report.ReportWriter(out, meta) as writer:
+            for result in study.run_programs(programs, cfg, jobs, done):
+                writer.add(result)
+            bar.close()
+            run = {
+                "jobs": jobs,
+                "wall_s": round(time.perf_counter() - t0, 3),
+                "max_rss_mib": {"parent": round(study.max_rss_kib() / 1024, 1),
+                                "worker": round(writer.aggregate.max_rss_kib / 1024, 1)},
+            }  # fmt: skip
+            figures = plot.study_figures(writer.aggregate) if plot.available() else None
+            summary = writer.finish(run, figures)
+    except OSError as exc:
+        bar.close()
+        print(f"{exc.filename}: error: cannot write the report: {exc.strerror}", file=sys.stderr)
+        return EXIT_RUNTIME
+    for row in writer.aggregate.not_run:
+        print(f"{row.program}: {row.status.value}: {row.why}", file=sys.stderr)
+    print(report.describe(summary, run, out))
+    return EXIT_OK if summary["status"]["ok"] == summary["programs"] else EXIT_PROGRAM
 
 
 def cmd_run(args: argparse.Namespace) -> int:
@@ -413,6 +481,23 @@ def build_parser() -> argparse.ArgumentParser:
         help="stop after S simulated seconds (default 3600)",
     )
     sim.set_defaults(func=cmd_simulate)
+
+    st = sub.add_parser(
+        "study",
+        help="simulate --compare over a library of NC programs in parallel; a report in --out",
+    )
+    st.add_argument("paths", nargs="+", metavar="DIR|FILE", help="directories of *.nc, or programs")
+    st.add_argument("-c", "--config", help="liftd.toml")
+    st.add_argument("--jobs", type=int, metavar="N", help="worker processes (default: all cores)")
+    st.add_argument(
+        "--out", default="study", metavar="DIR",
+        help="where report.csv, report.json and report.html go (default: ./study)",
+    )  # fmt: skip
+    st.add_argument(
+        "--max-time", type=float, default=3600.0, metavar="S",
+        help="stop a run after S simulated seconds (default 3600)",
+    )  # fmt: skip
+    st.set_defaults(func=cmd_study)
     return parser
 
 

@@ -1,6 +1,8 @@
-"""`liftd simulate` and what it shows: the GEO core on a virtual clock (`simulate`), the two lift
-methods side by side (`compare`), the trace CSV (`trace`) and the figures (`plot`).
+"""`liftd simulate` and `liftd study` and what they show: the GEO core on a virtual clock
+(`simulate`), its summary as typed values and their JSON (`summary`), the two lift methods side
+by side (`compare`), the trace CSV (`trace`), the figures (`plot`), and the study of a program
+library in a process pool (`study`) with its report (`report`) and progress bar (`progress`).
 
 May import the core (`liftd.cnc`), numpy and, lazily, matplotlib; nothing of the service,
-the runtime or ADS.
+the runtime, the settings or ADS (the study gets the settings as a callable from the CLI).
 """

@@ -1,14 +1,19 @@
-"""Figures of a simulated run (optional extra: pip install 'liftd[plot]', i.e. matplotlib)."""
+"""Figures of a simulated run, a comparison and a study (optional extra: pip install
+'liftd[plot]', i.e. matplotlib)."""
 
 from __future__ import annotations
 
 import importlib.util
+import io
+import itertools
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from liftd.sim.compare import MAX_PLOTTED, Comparison, as_arrays, occurrence_keys
+from liftd.sim.report import OVERLOAD_CLASSES, RATIO_EDGES, Aggregate
 from liftd.sim.summary import LiftSummary
 from liftd.sim.trace import MM
 
@@ -226,3 +231,68 @@ def plot_compare(
     fig.tight_layout()
     fig.savefig(path, dpi=90)
     plt.close(fig)
+
+
+def study_figures(agg: Aggregate) -> list[tuple[str, bytes]]:
+    """The figures of `liftd study` as (caption, PNG): per lift, Advanced against path-based
+    mean clearance (a sample) and the histogram of their ratio; per program, the time
+    path-based Lifting costs, and its Z overload cycles."""
+    import matplotlib  # noqa: PLC0415
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt  # noqa: PLC0415
+
+    out: list[tuple[str, bytes]] = []
+
+    def save(fig: Any, caption: str) -> None:
+        buf = io.BytesIO()
+        fig.tight_layout()
+        fig.savefig(buf, format="png", dpi=90)
+        plt.close(fig)
+        out.append((caption, buf.getvalue()))
+
+    pts = np.asarray(agg.lift_points.items, dtype=float).reshape(-1, 2)
+    fig, ax = plt.subplots(figsize=(5.5, 5))
+    ax.scatter(pts[:, 0], pts[:, 1], s=10, alpha=0.6, color=COLOURS["advanced"], linewidths=0)
+    top = float(pts.max()) * 1.05 if len(pts) else 1.0
+    ax.plot([0.0, top], [0.0, top], color="k", lw=0.8, ls="--", label="equal clearance")
+    ax.set_xlim(0.0, top)
+    ax.set_ylim(0.0, top)
+    ax.set_xlabel("mean clearance, path-based Lifting [mm]")
+    ax.set_ylabel("mean clearance, Advanced Lifting [mm]")
+    ax.legend(loc="upper left", fontsize=8)
+    ax.grid(alpha=0.3)
+    shown = f"{len(pts)} of {agg.lift_points.seen}" if agg.lift_points.seen > len(pts) else "all"
+    save(fig, f"Mean clearance per lift ({shown} compared lifts): above the line Advanced "
+              "Lifting keeps Z higher over the sheet.")  # fmt: skip
+
+    fig, ax = plt.subplots(figsize=(6.5, 4))
+    edges = RATIO_EDGES
+    labels = [f"< {edges[0]:g}"] + [f"{a:g}–{b:g}" for a, b in itertools.pairwise(edges)]
+    labels.append(f"≥ {edges[-1]:g}")
+    ax.bar(range(len(labels)), agg.ratio_counts, color=COLOURS["advanced"])
+    ax.set_xticks(range(len(labels)), labels, rotation=45, ha="right", fontsize=8)
+    ax.set_xlabel("clearance ratio Advanced / path-based")
+    ax.set_ylabel("lifts")
+    ax.grid(alpha=0.3, axis="y")
+    save(fig, "Clearance ratio per compared lift (all of them): 1 means no gain, 2 twice "
+              "the clearance with Advanced Lifting.")  # fmt: skip
+
+    prog = np.asarray(agg.program_points.items, dtype=float).reshape(-1, 2)
+    fig, ax = plt.subplots(figsize=(6.5, 4))
+    ax.scatter(prog[:, 0], prog[:, 1], s=10, alpha=0.6, color=COLOURS["lifting"], linewidths=0)
+    ax.axhline(0.0, color="k", lw=0.8)
+    ax.set_xlabel("program time, Advanced Lifting [s]")
+    ax.set_ylabel("path-based − Advanced [% of the time]")
+    ax.grid(alpha=0.3)
+    save(fig, "Program time with path-based Lifting, per program that ran to the end: what its "
+              "slower ranges cost (above 0) against Advanced Lifting.")  # fmt: skip
+
+    fig, ax = plt.subplots(figsize=(5.5, 4))
+    ax.bar([name for _, name in OVERLOAD_CLASSES], agg.overload_counts, color=COLOURS["lifting"])
+    ax.set_xlabel("Z overload cycles of path-based Lifting (above P-AXIS-00441)")
+    ax.set_ylabel("programs")
+    ax.grid(alpha=0.3, axis="y")
+    save(fig, "Programs by the cycles in which path-based Lifting's Z acceleration exceeds the "
+              "P-AXIS-00441 warning level (Advanced Lifting stays within a_max).")  # fmt: skip
+    return out
