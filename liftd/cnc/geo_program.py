@@ -61,25 +61,28 @@ class GeoProgram:
             return segs[k].geom.start
         return self.path.end_position
 
-    def z_direction_into(self, k: int) -> float:
-        """Direction cosine of the lift axis at the end of the segment before boundary k."""
+    def direction_into(self, k: int, axis: int) -> float:
+        """Direction cosine of an axis at the end of the segment before boundary k."""
         if k == 0 or not self.path.segments:
             return 0.0
         seg = self.path.segments[k - 1]
-        return seg.geom.tangent(seg.length)[self.z_index]
+        return seg.geom.tangent(seg.length)[axis]
 
 
 def _cap_for_lifts(
     path: PathProgram, ranges: tuple[LiftRange, ...], ch: ChannelParams
 ) -> PathProgram:
-    z = ch.axis(ch.lift_axis)
-    prof = LiftProfiles(z.v_max, z.a_max, z.j_max)
+    profiles: dict[str, LiftProfiles] = {}
     segs = list(path.segments)
     for rng in ranges:
         if rng.k_end <= rng.k_start or not rng.moves_z:
             continue
+        axis = rng.start.axis
+        if axis not in profiles:
+            z = ch.axis(axis)
+            profiles[axis] = LiftProfiles(z.v_max, z.a_max, z.j_max)
         try:
-            t_z = prof.to_rest(rng.start.z_start, 0.0, 0.0, rng.start.target).duration
+            t_z = profiles[axis].to_rest(rng.start.z_start, 0.0, 0.0, rng.start.target).duration
         except ProfileError:
             continue
         if t_z <= 0.0:
@@ -90,9 +93,9 @@ def _cap_for_lifts(
     return dataclasses.replace(path, segments=tuple(segs))
 
 
-def lifting_profiles(ch: ChannelParams) -> LiftProfiles:
+def lifting_profiles(ch: ChannelParams, axis: str | None = None) -> LiftProfiles:
     """Planning dynamics of path-based Lifting: a_max · P-AXIS-00442/1000 (vendor §4.2.2)."""
-    z = ch.axis(ch.lift_axis)
+    z = ch.axis(axis or ch.lift_axis)
     share = z.dyn_a_err if z.dyn_a_err > 0.0 else 1.0
     return LiftProfiles(z.v_max, z.a_max * share, z.j_max)
 
@@ -100,16 +103,19 @@ def lifting_profiles(ch: ChannelParams) -> LiftProfiles:
 def _couple_lifts(
     path: PathProgram, ranges: tuple[LiftRange, ...], ch: ChannelParams
 ) -> tuple[PathProgram, tuple[RangePlan | None, ...]]:
-    z = ch.axis(ch.lift_axis)
-    prof = lifting_profiles(ch)
     segs = list(path.segments)
     plans: list[RangePlan | None] = [None] * len(ranges)
+    profiles: dict[str, LiftProfiles] = {}
     for rng in ranges:
         k_last = rng.k_end if rng.k_end >= 0 else len(path.segments)
         if k_last <= rng.k_start:  # no path motion in the range: time-based, the path waits
             continue
+        axis = rng.start.axis
+        z = ch.axis(axis)
+        if axis not in profiles:
+            profiles[axis] = lifting_profiles(ch, axis)
         try:
-            plan, caps = plan_range(path, rng, prof)
+            plan, caps = plan_range(path, rng, profiles[axis])
         except ProfileError:
             continue
         plans[rng.index] = plan

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from liftd.cnc.geo_task import GeoTask
+from liftd.cnc.params import LiftMethod
 from liftd.cnc.path.velocity import reach_velocity
 from liftd.cnc.plc import Schedule, parse_feedhold_spec, parse_override_spec
 from liftd.cnc.snapshot import ChannelState, GeoSnapshot, LiftPhase
@@ -211,6 +212,32 @@ def test_back_to_back_single_block_lifts_do_not_stop_the_path() -> None:
     assert len(joints) >= 4 and min(s.v_path for s in joints) > 0.1  # no stop at the joints
     lifting = [s.lift_active for s in snaps if 1 <= s.segment <= 5]
     assert all(lifting[5:-5])  # TRUE through the joints (reset and set in one cycle)
+    # so a PLC can still count them: liftd's lift_count object (issue 15.1)
+    counts = [s.lift_counts[2] for s in snaps]
+    assert counts[-1] == 5 and counts == sorted(counts)
+
+
+@pytest.mark.parametrize("method", [LiftMethod.ADVANCED, LiftMethod.LIFTING])
+def test_any_axis_of_the_channel_lifts_with_its_own_dynamics(method: LiftMethod) -> None:
+    """Vendor §3: the lift command names its axis. Here Y lifts while X cuts, then Z: each axis
+    lands at its POS within its own limits, the flags and counters are that axis's, and the
+    other axes never move in a range."""
+    ch = make_channel(method)
+    text = ("G01 X10 Y10 Z1 F6000\nY[LIFT_START POS=40 POS_LIMIT=60]\nG01 X200 F20000\n"
+            "Y[LIFT_END]\nZ[LIFT_START POS=5 POS_LIMIT=50]\nG01 X300\nZ[LIFT_END]\nM30\n")  # fmt: skip
+    task, snaps = run_task(ch, text)
+    assert snaps[-1].state is ChannelState.READY and not events(snaps, "lift.late")
+    assert [r.range.start.axis for r in task.lift.records] == ["Y", "Z"]
+    assert all(r.arrival_error <= LANDED for r in task.lift.records)
+    # velocity within every axis's limit; path-based Lifting may overload the lift axis's
+    # acceleration (z(s) is followed at the path's acceleration), as on Z (monitor reports)
+    ratios = fd_ratios(ch, snaps)
+    assert (ratios if method is LiftMethod.ADVANCED else ratios[0]).max() <= TOL
+    y_range = [s for s in snaps if s.lift_active and s.lift_axis == 1]
+    assert y_range and max(s.positions[1] for s in y_range) > 0.040  # Y rose above its POS
+    assert all(abs(s.positions[2] - 0.001) < 1e-12 for s in y_range)  # Z stays
+    assert snaps[-1].lift_counts == (0, 1, 1)
+    assert snaps[-1].positions[1:] == pytest.approx((0.040, 0.005), abs=1e-9)
 
 
 def test_the_continuity_invariant_holds_through_a_wait_before_a_range_without_motion() -> None:
@@ -226,3 +253,31 @@ def test_the_continuity_invariant_holds_through_a_wait_before_a_range_without_mo
         assert (step <= limits * TOL).all(), step
         assert not events(snaps, "lift.z_acc_error")
         assert math.isclose(snaps[-1].positions[2], 0.05, abs_tol=1e-9)
+
+
+def test_a_late_lift_is_reported_with_its_error_id_and_the_distance(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Never expected, but never hidden: if Z is not at POS when the path passes LIFT_END (here
+    the generator is made to land 20 mm short on purpose), the summary's arrival_error is the
+    distance, the event lift.late is emitted and the errors list carries 990037 with the
+    LIFT_END line; the program still counts as run (not a program error)."""
+    from liftd.cnc.lift.advanced import AdvancedLift  # noqa: PLC0415
+    from liftd.cnc.nc.blocks import ErrorId  # noqa: PLC0415
+    from liftd.sim.simulate import simulate  # noqa: PLC0415
+
+    start = AdvancedLift.start
+
+    def short(self: AdvancedLift, t: float, z: float, vz: float, az: float, target: float,
+              *rest: object) -> None:  # fmt: skip
+        start(self, t, z, vz, az, target - 0.020, *rest)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(AdvancedLift, "start", short)
+    ch = make_channel()
+    text = ("G01 X10 Y10 Z1 F6000\nZ[LIFT_START POS=21 POS_LIMIT=60]\nG01 X100 F12000\n"
+            "Z[LIFT_END]\nM30\n")  # fmt: skip
+    res = simulate(ch, text, Schedule(), 0.02)
+    late = [e for e in res.summary["errors"] if e["id"] == ErrorId.LIFT_LATE]
+    assert len(late) == 1 and late[0]["line"] == 4
+    assert res.summary["lifts"][0]["arrival_error"] == pytest.approx(20.0, abs=1e-3)  # mm
+    assert not res.program_error and res.finished
