@@ -326,17 +326,23 @@ class Tracker:
         if force is not None and all(c[0] != force for c in cands):
             force = None  # not a constraint from here: the most binding one
         best_i = -1
+        top = ceiling
         for i, c in enumerate(cands):
             b, s_c, cap, gate = c
             if force is not None and b != force:
                 continue
             if not gate and v_p <= cap:
-                continue  # cannot bind from here
+                # cannot bind from here; a forced one (the step would have passed it too fast)
+                # is kept by not accelerating beyond it: it may be too near for zero
+                # acceleration there, which it does not need
+                if b == force:
+                    top = min(top, cap)
+                continue
             slack = s_c - s - self._need(v, a, cap, gate, a_max, j_max)
             if slack < best_slack:
                 best, best_slack, best_i = c, slack, i
         if best is None:
-            self._cruise(ceiling, a_max, j_max, w)
+            self._cruise(top, a_max, j_max, w)
             return
         b, s_c, _, gate = best
         cap = self._target_cap(cands, best_i)

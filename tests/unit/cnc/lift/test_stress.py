@@ -38,8 +38,13 @@ def test_random_path_based_run_keeps_every_promise(seed: int) -> None:
 # issue 14's input space: long ranges over short blocks, every look-ahead size, ranges back to
 # back, waits before and inside ranges, override steps 0–200 % at random moments, feed holds;
 # checked for the tracker's own errors too (a refused profile, a run boundary passed with
-# acceleration): seeds 0–299 all pass in the bench (bench/bench_lift_safety.py --wide)
-@pytest.mark.parametrize("seed", range(0, 300, 12))
+# acceleration): seeds 0–299 all pass in the bench (bench/bench_lift_safety.py --wide).
+# 388: a feed ceiling drop just ahead, too near for zero acceleration there (fixed in the commit
+# that added it: the path stops accelerating instead of planning a=0 at the boundary)
+WIDE_REGRESSIONS = [388]
+
+
+@pytest.mark.parametrize("seed", WIDE_REGRESSIONS + list(range(0, 300, 12)))
 def test_random_wide_run_keeps_every_promise(seed: int) -> None:
     sc = wide_scenario(seed)
     task, snaps = run_task(sc.channel, sc.text, sc.schedule, max_time=300)
