@@ -41,6 +41,10 @@ class GeoProgram:
     table: PathTable  # what the path tracker reads (with the lift ranges' limits)
     nominal: PathTable  # the same path without any lift's limits (for path_delay_s)
     conditional: dict[int, tuple[int, ...]]  # M number → boundaries where MVS_SNS waits for it
+    # per range: whether the lifts' limits change the path the tracker sees while it runs (the
+    # range and a look-ahead on either side); if not, its nominal run is the path itself until
+    # an override limit, a stop for Z or a wait makes them part
+    nominal_differs: tuple[bool, ...] = ()
 
     def range_at(self, action: Action) -> LiftRange:
         for rng in self.ranges:
@@ -154,10 +158,18 @@ def load_program(text: str, ch: ChannelParams, start: Vec) -> GeoProgram:
     nominal = build_table(path)
     ranges = find_ranges(path, ch)
     plans: tuple[RangePlan | None, ...] = (None,) * len(ranges)
+    original = path.segments
     if ch.lift_method is LiftMethod.ADVANCED:
         path = _cap_for_lifts(path, ranges, ch)
     elif ch.lift_method is LiftMethod.LIFTING:
         path, plans = _couple_lifts(path, ranges, ch)
+    changed = [k for k, (a, b) in enumerate(zip(original, path.segments, strict=True)) if a != b]
+    reach = max(1, ch.look_ahead_blocks) + 1
+    differs = tuple(
+        any(r.k_start - reach <= k <= (r.k_end if r.k_end >= 0 else len(original)) + reach
+            for k in changed)
+        for r in ranges
+    )  # fmt: skip
     first = result.blocks[0].line if result.blocks else 1
     warnings = tuple(e for e in result.errors if e.severity is Severity.WARNING)
     return GeoProgram(
@@ -172,6 +184,7 @@ def load_program(text: str, ch: ChannelParams, start: Vec) -> GeoProgram:
         table=build_table(path),
         nominal=nominal,
         conditional=_conditional(path),
+        nominal_differs=differs,
     )
 
 

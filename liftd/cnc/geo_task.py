@@ -404,7 +404,10 @@ class GeoTask:
         if rng.k_end > rng.k_start:
             b = self.prog.path.boundaries[rng.k_start]
             v, a = (crossing.v, crossing.a) if crossing is not None else (0.0, 0.0)
-            self.interp.nominal_start(self.prog.nominal, rng.k_end, t, b.s, v, a, rng.k_start)
+            differs = self.prog.nominal_differs[rng.index]
+            self.interp.nominal_start(
+                self.prog.nominal, rng.k_end, t, b.s, v, a, rng.k_start, differs
+            )
 
     def _lift_end(self, action: Action, t_at: float, crossing: Crossing | None, now: float) -> bool:
         lift = self.lift
