@@ -8,7 +8,13 @@ differences), no excursion beyond POS_LIMIT or the software limits (+0.1 µm), a
 Path-based Lifting (METHOD = lifting) is checked the same way except Z's acceleration, which
 may reach a_max·(1 + P442/1000·override²) by the method's design (lift/path_based.py).
 
-Run: .venv/bin/python bench/bench_lift_safety.py [RUNS [FIRST_SEED [advanced|lifting]]]
+With --wide (issue 14) the scenarios cover the whole input space: ranges of up to 400 short
+blocks (longer than every look-ahead), slightly bent polylines, ranges without path motion,
+ranges back to back, waits before and inside ranges, every look-ahead size, override steps of
+0–200 % at random moments and feed holds; a run also fails on any error of the path tracker
+(a refused profile, a run boundary passed with acceleration).
+
+Run: .venv/bin/python bench/bench_lift_safety.py [--wide] [RUNS [FIRST_SEED [advanced|lifting]]]
 """
 
 from __future__ import annotations
@@ -20,28 +26,35 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from bench.stress_cases import describe, scenario, violations
+from bench.stress_cases import describe, scenario, violations, wide_scenario
 from liftd.cnc.params import LiftMethod
 from tests.support.closed_loop import run_task
 
 
 def main() -> None:
-    runs = int(sys.argv[1]) if len(sys.argv) > 1 else 1000
-    first = int(sys.argv[2]) if len(sys.argv) > 2 else 0
-    method = LiftMethod(sys.argv[3]) if len(sys.argv) > 3 else LiftMethod.ADVANCED
+    wide = "--wide" in sys.argv
+    args = [a for a in sys.argv[1:] if a != "--wide"]
+    runs = int(args[0]) if args else 1000
+    first = int(args[1]) if len(args) > 1 else 0
+    method = LiftMethod(args[2]) if len(args) > 2 else LiftMethod.ADVANCED
+    make = wide_scenario if wide else scenario
     failures: list[dict[str, object]] = []
     cycles = lifts = 0
     t0 = time.perf_counter()
     for seed in range(first, first + runs):
-        sc = scenario(seed, method)
+        sc = make(seed, method)
         try:
-            task, snaps = run_task(sc.channel, sc.text, sc.schedule, max_time=120)
+            task, snaps = run_task(sc.channel, sc.text, sc.schedule, max_time=300)
         except Exception as exc:  # a crash is a failure to report, not the end of the bench
             bad = [f"exception {type(exc).__name__}: {exc}"]
         else:
             cycles += len(snaps)
             lifts += len(task.lift.records)
             bad = violations(sc, snaps, task.lift.records)
+            if wide and task.interp.plan_errors:
+                bad.append(
+                    f"{task.interp.plan_errors} tracker errors: {task.interp.last_plan_error}"
+                )
         if bad:
             failures.append({"seed": seed, "problems": bad})
             if len(failures) <= 3:
@@ -49,7 +62,7 @@ def main() -> None:
     print(
         json.dumps(
             {
-                "bench": "lift_safety",
+                "bench": "lift_safety_wide" if wide else "lift_safety",
                 "method": method.value,
                 "runs": runs,
                 "first_seed": first,

@@ -41,6 +41,10 @@ class GeoProgram:
     table: PathTable  # what the path tracker reads (with the lift ranges' limits)
     nominal: PathTable  # the same path without any lift's limits (for path_delay_s)
     conditional: dict[int, tuple[int, ...]]  # M number → boundaries where MVS_SNS waits for it
+    # per range: whether the lifts' limits change the path the tracker sees while it runs (the
+    # range and a look-ahead on either side); if not, its nominal run is the path itself until
+    # an override limit, a stop for Z or a wait makes them part
+    nominal_differs: tuple[bool, ...] = ()
 
     def range_at(self, action: Action) -> LiftRange:
         for rng in self.ranges:
@@ -61,25 +65,28 @@ class GeoProgram:
             return segs[k].geom.start
         return self.path.end_position
 
-    def z_direction_into(self, k: int) -> float:
-        """Direction cosine of the lift axis at the end of the segment before boundary k."""
+    def direction_into(self, k: int, axis: int) -> float:
+        """Direction cosine of an axis at the end of the segment before boundary k."""
         if k == 0 or not self.path.segments:
             return 0.0
         seg = self.path.segments[k - 1]
-        return seg.geom.tangent(seg.length)[self.z_index]
+        return seg.geom.tangent(seg.length)[axis]
 
 
 def _cap_for_lifts(
     path: PathProgram, ranges: tuple[LiftRange, ...], ch: ChannelParams
 ) -> PathProgram:
-    z = ch.axis(ch.lift_axis)
-    prof = LiftProfiles(z.v_max, z.a_max, z.j_max)
+    profiles: dict[str, LiftProfiles] = {}
     segs = list(path.segments)
     for rng in ranges:
         if rng.k_end <= rng.k_start or not rng.moves_z:
             continue
+        axis = rng.start.axis
+        if axis not in profiles:
+            z = ch.axis(axis)
+            profiles[axis] = LiftProfiles(z.v_max, z.a_max, z.j_max)
         try:
-            t_z = prof.to_rest(rng.start.z_start, 0.0, 0.0, rng.start.target).duration
+            t_z = profiles[axis].to_rest(rng.start.z_start, 0.0, 0.0, rng.start.target).duration
         except ProfileError:
             continue
         if t_z <= 0.0:
@@ -90,9 +97,9 @@ def _cap_for_lifts(
     return dataclasses.replace(path, segments=tuple(segs))
 
 
-def lifting_profiles(ch: ChannelParams) -> LiftProfiles:
+def lifting_profiles(ch: ChannelParams, axis: str | None = None) -> LiftProfiles:
     """Planning dynamics of path-based Lifting: a_max · P-AXIS-00442/1000 (vendor §4.2.2)."""
-    z = ch.axis(ch.lift_axis)
+    z = ch.axis(axis or ch.lift_axis)
     share = z.dyn_a_err if z.dyn_a_err > 0.0 else 1.0
     return LiftProfiles(z.v_max, z.a_max * share, z.j_max)
 
@@ -100,16 +107,19 @@ def lifting_profiles(ch: ChannelParams) -> LiftProfiles:
 def _couple_lifts(
     path: PathProgram, ranges: tuple[LiftRange, ...], ch: ChannelParams
 ) -> tuple[PathProgram, tuple[RangePlan | None, ...]]:
-    z = ch.axis(ch.lift_axis)
-    prof = lifting_profiles(ch)
     segs = list(path.segments)
     plans: list[RangePlan | None] = [None] * len(ranges)
+    profiles: dict[str, LiftProfiles] = {}
     for rng in ranges:
         k_last = rng.k_end if rng.k_end >= 0 else len(path.segments)
         if k_last <= rng.k_start:  # no path motion in the range: time-based, the path waits
             continue
+        axis = rng.start.axis
+        z = ch.axis(axis)
+        if axis not in profiles:
+            profiles[axis] = lifting_profiles(ch, axis)
         try:
-            plan, caps = plan_range(path, rng, prof)
+            plan, caps = plan_range(path, rng, profiles[axis])
         except ProfileError:
             continue
         plans[rng.index] = plan
@@ -148,10 +158,18 @@ def load_program(text: str, ch: ChannelParams, start: Vec) -> GeoProgram:
     nominal = build_table(path)
     ranges = find_ranges(path, ch)
     plans: tuple[RangePlan | None, ...] = (None,) * len(ranges)
+    original = path.segments
     if ch.lift_method is LiftMethod.ADVANCED:
         path = _cap_for_lifts(path, ranges, ch)
     elif ch.lift_method is LiftMethod.LIFTING:
         path, plans = _couple_lifts(path, ranges, ch)
+    changed = [k for k, (a, b) in enumerate(zip(original, path.segments, strict=True)) if a != b]
+    reach = max(1, ch.look_ahead_blocks) + 1
+    differs = tuple(
+        any(r.k_start - reach <= k <= (r.k_end if r.k_end >= 0 else len(original)) + reach
+            for k in changed)
+        for r in ranges
+    )  # fmt: skip
     first = result.blocks[0].line if result.blocks else 1
     warnings = tuple(e for e in result.errors if e.severity is Severity.WARNING)
     return GeoProgram(
@@ -166,6 +184,7 @@ def load_program(text: str, ch: ChannelParams, start: Vec) -> GeoProgram:
         table=build_table(path),
         nominal=nominal,
         conditional=_conditional(path),
+        nominal_differs=differs,
     )
 
 

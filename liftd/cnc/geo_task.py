@@ -18,7 +18,9 @@ from __future__ import annotations
 from liftd.cnc.geo_program import GeoProgram, PreparedPrograms
 from liftd.cnc.lift.controller import LiftController, LiftRecord
 from liftd.cnc.lift.monitor import AccelMonitor
+from liftd.cnc.lift.profile import LiftProfiles, ProfileError
 from liftd.cnc.lift.ranges import LiftRange
+from liftd.cnc.nc.blocks import ErrorId
 from liftd.cnc.params import ChannelParams, LiftMethod, MSync
 from liftd.cnc.path.interpolator import Crossing, Interpolator
 from liftd.cnc.path.program import Action, ActionKind
@@ -26,10 +28,8 @@ from liftd.cnc.plc import MAX_OVERRIDE
 from liftd.cnc.snapshot import ChannelState, Command, Event, GeoInputs, GeoSnapshot, LiftPhase
 
 INF = float("inf")
-MIN_LIFT_OVERRIDE = 0.01  # below this, the path waits for Z at the lift's horizon instead
-OVERRIDE_TRIALS = 6  # lower-bound evaluations to find the highest override Z still allows
 LANDING_TOL = 1e-6  # m: Z counts as at POS when the path passes LIFT_END (1 µm)
-LIFT_LATE_ID = 990030  # liftd's own: the path passed LIFT_END with Z not at POS (never expected)
+LIFT_LATE_ID = int(ErrorId.LIFT_LATE)  # the path passed LIFT_END with Z not at POS
 ACK_SYNCS = (MSync.MVS_SVS, MSync.MVS_SNS, MSync.MNS_SNS, MSync.MNE_SNS)
 
 
@@ -63,16 +63,20 @@ class GeoTask:
         self.error_line = 0
         self.events: list[Event] = []
         self.waiting: list[Action] = []  # actions left at the boundary where the path rests
-        self.z_rest: float | None = None  # Z after a lift ended where the path still rests
+        self.z_rest: tuple[int, float] | None = None  # (axis, Z) after a lift that ended here
         self.wait_since = 0.0  # time from which the current wait counts
         self.ack_time = 0.0
         self.runs = 0
         self.prog: GeoProgram
         self.interp: Interpolator
         self.lift: LiftController
-        self.z_monitor = AccelMonitor(channel.axis(channel.lift_axis), channel.cycle_time)
+        # the IPO acceleration monitor of every axis that lifts (the configured lift axis and
+        # any other a program lifts); `z_monitor` is the configured one's, for the summary
+        self.monitors: dict[int, AccelMonitor] = {}
+        self.z_monitor = self._monitor_of(self.z_index)
         self.programs = PreparedPrograms(program_text, channel)
-        self.lead = lead_cycles(channel)
+        # committed look-ahead per axis that may lift (computed here, outside the cycle)
+        self.leads = {name: lead_cycles(channel, name) for name in channel.axis_names}
         self._load(self.home)
 
     # -- program control ---------------------------------------------------------------------------
@@ -83,17 +87,20 @@ class GeoTask:
 
     def _load(self, start: tuple[float, ...]) -> None:
         self.prog = self.programs.from_start(start)
+        lifting = {self.ch.lift_axis} | {rng.start.axis for rng in self.prog.ranges}
         self.interp = Interpolator(
             self.prog.path, self.prog.table, self.ch.look_ahead_blocks, self.ch.cycle_time,
-            self.lead,
+            max(self.leads[name] for name in lifting),
         )  # fmt: skip
         self.lift = LiftController(
-            self.ch.axis(self.ch.lift_axis),
+            self.ch.axes,
             self.prog.ranges,
             self.ch.cycle_time,
             self.prog.plans,
             both_flags=self.ch.lift_method is not LiftMethod.LIFTING,
         )
+        for rng in self.prog.ranges:
+            self._monitor_of(self.ch.axis_names.index(rng.start.axis))
         self.waiting = []
         self.m_acked.clear()
         self.m_pending = -1
@@ -175,16 +182,17 @@ class GeoTask:
         on a boundary, it is where the path arrived (the end of the block before), not the start
         of the next block: the decoder puts a lift's POS there, which Z reaches only through the
         lift (a range without path motion after a wait made Z jump, issue 15)."""
-        z = self.z_index
         k = self.interp.stopped_at
         segs = self.prog.path.segments
         if k is not None and 0 < k <= len(segs):
             pos = segs[k - 1].geom.end
             if self.z_rest is not None:
-                pos = (*pos[:z], self.z_rest, *pos[z + 1 :])
+                z, value = self.z_rest
+                pos = (*pos[:z], value, *pos[z + 1 :])
         else:
             pos = self.interp.position()
         if self.lift.current is not None:
+            z = self.lift.axis_index
             pos = (*pos[:z], self.lift.z, *pos[z + 1 :])
         return pos
 
@@ -209,62 +217,21 @@ class GeoTask:
         return INF if k < 0 else self.interp.arrival(k)
 
     def _limit_override(self, ov_req: float, holding: bool) -> float:
-        """Advanced Lifting's override rules (vendor §2.5, DESIGN.md §4): while Z descends the
-        override is clamped to its value at descent start; while Z rises (or goes straight to
-        POS) an increase, or a restart after feed hold, is accepted only as far as Z still lands
-        on time; a decrease is always accepted.
-
-        "Lands on time" is decided against a lower bound of the path's arrival at the lift's
-        horizon at the candidate override (`Interpolator.lower_bound`, bounded work): granting
-        an override that passes it can never make Z late."""
-        lift = self.lift
+        """The lift's override rule (Advanced Lifting: vendor §2.5; path-based: none)."""
         self.ov_max = MAX_OVERRIDE
-        if lift.current is None or holding:
+        m = self.lift.motion
+        if m is None or holding:
             return ov_req
-        phase = lift.phase
-        if phase in (LiftPhase.NONE, LiftPhase.DONE, LiftPhase.HOLD_LIMIT, LiftPhase.COUPLED):
-            return ov_req
-        if phase is LiftPhase.DOWN and lift.ov_at_descent is not None:
-            self.ov_max = lift.ov_at_descent
-            return min(ov_req, self.ov_max)
         k = self._horizon()
-        if k < 0:
-            return ov_req
-        interp = self.interp
-        t0 = interp.t_state
-        need = lift.needed_time()
-        arrival = interp.arrival(k)
-        if arrival != INF and need > 0.0:  # the headroom, for the display (ov ∝ 1/time)
-            self.ov_max = min(MAX_OVERRIDE, self.ov_eff * (arrival - t0) / need)
-        changing = ov_req > self.ov_eff or self.was_holding
-        if not changing or interp.stopped_at is not None or need <= 0.0:
-            return ov_req
-        floor = 0.0 if self.was_holding else self.ov_eff
-        span = interp.lower_bound(k, ov_req) - t0
-        if span >= need:
-            return ov_req
-        # T(ov) falls about as 1/ov: aim at T = need, then step down until the bound holds
-        granted = -1.0
-        candidate = ov_req * span / need if span > 0.0 else floor
-        for _ in range(OVERRIDE_TRIALS):
-            if candidate <= floor:
-                break
-            if interp.lower_bound(k, candidate) - t0 >= need:
-                granted = candidate
-                break
-            candidate *= 0.9
-        if granted < 0.0:
-            granted = floor
-        if granted < MIN_LIFT_OVERRIDE:
-            # Crawling would not do (e.g. a feed hold ended just before LIFT_END): the path
-            # stops there and waits for Z, as it does for a lift without path motion.
-            interp.add_lift_stop(k)
+        verdict = m.limit_override(ov_req, self.ov_eff, self.was_holding, k, self.interp)
+        self.ov_max = verdict.override_max
+        t0 = self.interp.t_state
+        if verdict.path_waits:
+            self.interp.add_lift_stop(k)
             self._emit("lift.path_waits", t0, self.line, float(k))
-            return ov_req
-        self.ov_max = granted
-        if granted < ov_req:
-            self._emit("lift.override_limited", t0, self.line, granted)
-        return granted
+        elif verdict.limited:
+            self._emit("lift.override_limited", t0, self.line, verdict.override)
+        return verdict.override
 
     # -- cycle ------------------------------------------------------------------------------------
     def step(self, inputs: GeoInputs, t: float) -> GeoSnapshot:
@@ -289,11 +256,11 @@ class GeoTask:
         self.interp.nominal_step(t, self.ov_req, holding)
         if self.state is ChannelState.ACTIVE:
             self._run_path(t)
-        if self.lift.current is not None:
-            if self.lift.coupled is not None:
-                self.lift.couple(t, self.interp.s, self.interp.v, self.interp.a)
-            else:
-                self.lift.step(t, self._arrival() - self.lift.t, self.ov_eff)
+        m = self.lift.motion
+        if m is not None:
+            ip = self.interp
+            t_rem = self._arrival() - m.t if m.uses_time else 0.0
+            self.lift.step(t, ip.s, ip.v, ip.a, t_rem, self.ov_eff)
             for finding in self.lift.findings:
                 self._emit(finding.name, t, self.line, finding.value)
             self.lift.findings.clear()
@@ -301,19 +268,26 @@ class GeoTask:
                 self._close_lift(t, self.line)
         self._settle(t)
         positions = self._positions()
-        self._monitor(positions[self.z_index], t)
+        self._monitor(positions, t)
         return self._snapshot(t, inputs, positions)
 
-    def _monitor(self, z: float, t: float) -> None:
-        mon = self.z_monitor
-        entered = mon.sample(z)
+    def _monitor_of(self, axis: int) -> AccelMonitor:
+        mon = self.monitors.get(axis)
+        if mon is None:
+            mon = self.monitors[axis] = AccelMonitor(self.ch.axes[axis], self.ch.cycle_time)
+        return mon
+
+    def _monitor(self, positions: tuple[float, ...], t: float) -> None:
         rec = self.lift.record
-        if rec is not None and mon.ratio > rec.z_a_max_ratio:
-            rec.z_a_max_ratio = mon.ratio
-        if entered == mon.ERROR:
-            self._emit("lift.z_acc_error", t, self.line, mon.ratio)
-        elif entered == mon.WARNING:
-            self._emit("lift.z_acc_warning", t, self.line, mon.ratio)
+        lifting = self.lift.axis_index if rec is not None else -1
+        for axis, mon in self.monitors.items():
+            entered = mon.sample(positions[axis])
+            if axis == lifting and mon.ratio > rec.z_a_max_ratio:  # type: ignore[union-attr]
+                rec.z_a_max_ratio = mon.ratio  # type: ignore[union-attr]
+            if entered == mon.ERROR:
+                self._emit("lift.z_acc_error", t, self.line, mon.ratio)
+            elif entered == mon.WARNING:
+                self._emit("lift.z_acc_warning", t, self.line, mon.ratio)
 
     def _acknowledge(self, number: int, t: float) -> None:
         self.m_pending = -1
@@ -403,14 +377,15 @@ class GeoTask:
             z, vz, az = self.lift.z, self.lift.vz, self.lift.az
             self._close_lift(t_at, rng.start.line)
         else:  # the programmed Z at the start (the decoder tracked every earlier lift's POS)
-            u_z = self.prog.z_direction_into(rng.k_start)  # Z moves with the path until here
+            u_z = self.prog.direction_into(rng.k_start, self.ch.axis_names.index(rng.start.axis))
             z = rng.start.z_start
             vz = crossing.v * u_z if crossing else 0.0
             az = crossing.a * u_z if crossing else 0.0
         self.lift.start(rng, t_at, z, vz, az)
-        if self.lift.coupled is not None:
+        m = self.lift.motion
+        if m is not None and not m.uses_time:  # coupled: Z at z(s) from the range's start
             s = self.prog.path.boundaries[rng.k_start].s
-            self.lift.couple(t_at, s, crossing.v if crossing else 0.0, 0.0)
+            self.lift.step(t_at, s, crossing.v if crossing else 0.0, 0.0, 0.0, self.ov_eff)
         rec = self.lift.record
         if rec is not None and crossing is not None:  # passing: the path leaves at once
             self._departure(rec, t_at, crossing)
@@ -429,19 +404,23 @@ class GeoTask:
         if rng.k_end > rng.k_start:
             b = self.prog.path.boundaries[rng.k_start]
             v, a = (crossing.v, crossing.a) if crossing is not None else (0.0, 0.0)
-            self.interp.nominal_start(self.prog.nominal, rng.k_end, t, b.s, v, a, rng.k_start)
+            differs = self.prog.nominal_differs[rng.index]
+            self.interp.nominal_start(
+                self.prog.nominal, rng.k_end, t, b.s, v, a, rng.k_start, differs
+            )
 
     def _lift_end(self, action: Action, t_at: float, crossing: Crossing | None, now: float) -> bool:
         lift = self.lift
-        if lift.current is None:
+        m = lift.motion
+        if lift.current is None or m is None:
             return True
-        if lift.coupled is not None:  # Z to where the path got
-            k = lift.current.k_end
-            lift.couple(t_at, self.prog.path.boundaries[k].s, crossing.v if crossing else 0.0, 0.0)
-        elif lift.t < t_at:
-            lift.step(t_at, t_at - lift.t, self.ov_eff)  # Z to the time the path got here
+        s_end = self.prog.path.boundaries[lift.current.k_end].s
+        if not m.uses_time:  # Z to where the path got
+            lift.step(t_at, s_end, crossing.v if crossing else 0.0, 0.0, 0.0, self.ov_eff)
+        elif lift.t < t_at:  # Z to the time the path got here
+            lift.step(t_at, s_end, 0.0, 0.0, t_at - lift.t, self.ov_eff)
         if crossing is None and not lift.z_done:
-            lift.step(now, 0.0, self.ov_eff)  # the path waits here for Z
+            lift.step(now, s_end, 0.0, 0.0, 0.0, self.ov_eff)  # the path waits here for Z
             if not self._z_landed():  # (a call: mypy keeps the narrowing of lift.z_done)
                 return False
             t_at = self.wait_since = max(t_at, lift.landed)
@@ -466,7 +445,7 @@ class GeoTask:
         rng = self.lift.current
         if rng is not None:
             self.interp.drop_lift_stop(rng.k_end)
-        self.z_rest = self.lift.z  # where Z stays while the path still rests here
+        self.z_rest = (self.lift.axis_index, self.lift.z)  # Z while the path rests here
         rec = self.lift.finish(t)
         if rec is not None:
             nominal = self.interp.nominal_arrival
@@ -508,16 +487,16 @@ class GeoTask:
             self.error_line,
             tuple(self.events),
             *self.prog.path.block_velocities(self.interp.segment, self.ov_eff),
+            lift.axis_index,
+            lift.counts,
         )
 
 
-def lead_cycles(ch: ChannelParams) -> int:
-    """How far ahead the path's future is committed: the lift axis's slowest descent (a
-    time-optimal move over its whole travel) plus a margin, so that a lift always decides its
-    descent against an exact remaining time."""
-    from liftd.cnc.lift.profile import LiftProfiles, ProfileError  # noqa: PLC0415
-
-    z = ch.axis(ch.lift_axis)
+def lead_cycles(ch: ChannelParams, axis: str) -> int:
+    """How far ahead the path's future is committed for a lift on `axis`: its slowest descent
+    (a time-optimal move over its whole travel, at most 2 s) plus a margin, so that a lift
+    always decides its descent against an exact remaining time."""
+    z = ch.axis(axis)
     travel = z.sw_limit_pos - z.sw_limit_neg
     try:
         t_full = LiftProfiles(z.v_max, z.a_max, z.j_max).to_rest(0.0, 0.0, 0.0, travel).duration

@@ -78,6 +78,8 @@ class GeoSnapshot(NamedTuple):
     events: tuple[Event, ...]
     v_block_max: float = 0.0  # highest path velocity of the active block (m/s), with override
     v_block_end: float = 0.0  # path velocity allowed at the end of the active block (m/s)
+    lift_axis: int = -1  # channel axis index of the current (or last) lift range, -1 none yet
+    lift_counts: tuple[int, ...] = ()  # lifts started per channel axis since program start
 
 
 class LoopStats(NamedTuple):

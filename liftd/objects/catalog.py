@@ -75,12 +75,18 @@ def normalise(name: str) -> str:
     return name.replace("^", "").strip().lower()
 
 
-def _flag(name: str) -> Getter:
-    return lambda v: bool(getattr(v.snapshot, name))
+def _flag(name: str, axis: int) -> Getter:
+    """A lift flag of channel axis `axis`: the channel's flag while this axis lifts (any axis of
+    the channel may lift, vendor §3; one range at a time per channel)."""
+    return lambda v: bool(getattr(v.snapshot, name)) and v.snapshot.lift_axis == axis
 
 
-def _false(view: GeoView) -> bool:
-    return False
+def _phase(axis: int) -> Getter:
+    return lambda v: int(v.snapshot.lift_phase) if v.snapshot.lift_axis == axis else 0
+
+
+def _count(axis: int) -> Getter:
+    return lambda v: v.snapshot.lift_counts[axis] if v.snapshot.lift_counts else 0
 
 
 def _axis(i: int) -> Getter:
@@ -91,15 +97,13 @@ def _objects(ch: ChannelParams) -> list[CncObject]:
     cid = ch.channel_id
     geo = f"GEO.ch{cid}"
     um_s = units.m_s_to_isg_vel
-    z = ch.lift_axis
     out: list[CncObject] = []
     for pos, ax in enumerate(ch.axes, start=1):
-        lift = ax.name == z
         for element, name, flag in (
             (ELEMENT_LIFT_ACTIVE, "lift_active", "lift_active"),
             (ELEMENT_LIFT_SUPPRESSED, "lift_suppressed", "lift_suppressed"),
         ):
-            getter = _flag(flag) if lift else _false
+            getter = _flag(flag, pos - 1)
             out.append(
                 CncObject(
                     name,
@@ -113,6 +117,14 @@ def _objects(ch: ChannelParams) -> list[CncObject]:
                     pos * 0x10000 + element,
                 )
             )
+        out += [
+            CncObject("lift_phase", f"{geo}.{ax.name}.lift_phase", UNS16, "-", _phase(pos - 1),
+                      f"lift phase of {ax.name}: 0 none, 1 up, 2 down, 3 done, 4 direct, "
+                      "5 hold at POS_LIMIT, 6 coupled"),
+            CncObject("lift_count", f"{geo}.{ax.name}.lift_count", UNS32, "-", _count(pos - 1),
+                      f"lift ranges started on {ax.name} since the program started (liftd "
+                      "extension: counts lifts whose flags overlap in one GEO cycle)"),
+        ]  # fmt: skip
         out.append(
             CncObject(
                 "command_position",
@@ -155,9 +167,6 @@ def _objects(ch: ChannelParams) -> list[CncObject]:
                   lambda v: v.snapshot.error_line, "NC line of the channel error"),
         CncObject("m_pending", f"{geo}.m_pending", SGN32, "-", lambda v: v.snapshot.m_pending,
                   "M function waiting for its acknowledge, -1 for none"),
-        CncObject("lift_phase", f"{geo}.{z}.lift_phase", UNS16, "-",
-                  lambda v: int(v.snapshot.lift_phase),
-                  "0 none, 1 up, 2 down, 3 done, 4 direct, 5 hold at POS_LIMIT, 6 coupled"),
         CncObject("cycle", "GEO.cycle", UNS64, "-", lambda v: v.snapshot.cycle,
                   "GEO cycles since start"),
         CncObject("exceeded", "GEO.timing.exceeded", UNS32, "-", lambda v: v.stats.exceeded,

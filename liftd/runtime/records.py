@@ -57,7 +57,7 @@ class SnapshotCodec:
 
     def __init__(self, n_axes: int) -> None:
         self.n = n_axes
-        self.fmt = struct.Struct(f"<qdiii{n_axes}ddddd???iddiiidd" + "qqddddq")
+        self.fmt = struct.Struct(f"<qdiii{n_axes}ddddd???iddiiiddi{n_axes}I" + "qqddddq")
         self.size = self.fmt.size
 
     def pack(self, s: GeoSnapshot, st: LoopStats) -> bytes:
@@ -65,7 +65,7 @@ class SnapshotCodec:
             s.cycle, s.t, s.state, s.line, s.segment, *s.positions, s.v_path, s.override,
             s.override_requested, s.override_max, s.feed_hold, s.lift_active, s.lift_suppressed,
             s.lift_phase, s.lift_vz, s.lift_az, s.m_pending, s.error_id, s.error_line,
-            s.v_block_max, s.v_block_end, *st,
+            s.v_block_max, s.v_block_end, s.lift_axis, *(s.lift_counts or (0,) * self.n), *st,
         )  # fmt: skip
 
     def unpack(self, raw: bytes) -> tuple[GeoSnapshot, LoopStats]:
@@ -76,8 +76,9 @@ class SnapshotCodec:
         snap = GeoSnapshot(
             v[0], v[1], ChannelState(v[2]), v[3], v[4], pos, r[0], r[1], r[2], r[3], r[4],
             r[5], r[6], LiftPhase(r[7]), r[8], r[9], r[10], r[11], r[12], (), r[13], r[14],
+            r[15], tuple(r[16 : 16 + n]),
         )  # fmt: skip
-        return snap, LoopStats(*r[15:])
+        return snap, LoopStats(*r[16 + n :])
 
 
 def pack_input(w: PlcWrite) -> bytes:

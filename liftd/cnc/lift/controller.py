@@ -23,8 +23,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from liftd.cnc.lift.advanced import AdvancedLift, Phase
+from liftd.cnc.lift.advanced import AdvancedLift
 from liftd.cnc.lift.guard import GuardFinding, LiftGuard
+from liftd.cnc.lift.motion import CoupledLift, LiftMotion, TimeBasedLift
 from liftd.cnc.lift.path_based import RangePlan
 from liftd.cnc.lift.profile import LiftProfiles, ProfileError
 from liftd.cnc.lift.ranges import LiftRange
@@ -55,83 +56,107 @@ class LiftRecord:
 
 
 class LiftController:
+    """The lift ranges of one program run: which range is open, the flags, the records; the
+    lift axis's motion inside a range is a `LiftMotion` (time-based or coupled)."""
+
     def __init__(
         self,
-        axis: AxisParams,
+        axes: tuple[AxisParams, ...],
         ranges: tuple[LiftRange, ...],
         cycle: float,
         plans: tuple[RangePlan | None, ...] = (),
         both_flags: bool = True,
     ) -> None:
-        self.axis = axis
+        self.axes = axes
+        self.names = tuple(ax.name for ax in axes)
         self.ranges = ranges
         self.plans = plans or (None,) * len(ranges)
         self.both_flags = both_flags  # suppressed with a Z move: lift_active too (Advanced)
-        self.coupled: RangePlan | None = None
-        self._cz = self._cvz = self._caz = self._ct = 0.0
-        self.by_start = {r.k_start: r for r in ranges}
         self.cycle = cycle
-        self.gen = AdvancedLift(LiftProfiles(axis.v_max, axis.a_max, axis.j_max), cycle)
+        self._gens: dict[str, AdvancedLift] = {}
+        self._guards: dict[str, LiftGuard] = {}
+        self.motion: LiftMotion | None = None
         self.current: LiftRange | None = None
+        self.axis_index = -1  # the axis of the current (or last) range
         self.record: LiftRecord | None = None
         self.records: list[LiftRecord] = []
         self.active = False
         self.suppressed = False
-        self.ov_at_descent: float | None = None
         self.ending = False  # LIFT_END passed while Z still moved: close when Z is there
-        self.guard = LiftGuard(axis)
+        self.counts = (0,) * len(axes)  # lifts started per axis since the program started
         self.findings: list[GuardFinding] = []  # consumed by the GEO task each cycle
+        for rng in ranges:  # built here, not at the range's start in a GEO cycle
+            self.generator(rng.start.axis)
+            self.guard(rng.start.axis)
+
+    def _axis(self, name: str) -> AxisParams:
+        return self.axes[self.names.index(name)]
+
+    def generator(self, axis: str) -> AdvancedLift:
+        gen = self._gens.get(axis)
+        if gen is None:
+            ax = self._axis(axis)
+            gen = self._gens[axis] = AdvancedLift(
+                LiftProfiles(ax.v_max, ax.a_max, ax.j_max), self.cycle
+            )
+        return gen
+
+    def guard(self, axis: str) -> LiftGuard:
+        guard = self._guards.get(axis)
+        if guard is None:
+            guard = self._guards[axis] = LiftGuard(self._axis(axis))
+        return guard
 
     # -- path-side limits -------------------------------------------------------------------------
-    def z_time(self, z0: float, target: float) -> float:
-        """Time-optimal rest-to-rest Z move: the least path time a lift range may take."""
+    def z_time(self, z0: float, target: float, axis: str | None = None) -> float:
+        """Time-optimal rest-to-rest move of the lift axis: the least path time a range takes."""
         if abs(target - z0) <= 1e-12:
             return 0.0
+        gen = self.generator(axis or (self.current.start.axis if self.current else self.names[-1]))
         try:
-            return float(self.gen.prof.to_rest(z0, 0.0, 0.0, target).duration)
+            return float(gen.prof.to_rest(z0, 0.0, 0.0, target).duration)
         except ProfileError:
             return INF
 
     # -- events -----------------------------------------------------------------------------------
     def start(self, rng: LiftRange, t: float, z: float, vz: float, az: float) -> None:
         spec = rng.start
-        beyond = rng.beyond_limit or ((z < spec.pos_limit) if spec.down else (z > spec.pos_limit))
-        direct = rng.suppressed or beyond
-        self.gen.start(t, z, vz, az, spec.target, spec.pos_limit, spec.down, direct)
-        a, j = self.axis.a_max, self.axis.j_max
-        margin = vz * vz / (2.0 * a) + (abs(vz) * a / j if j != INF else 0.0)
-        self.guard.arm(z, spec.target, spec.pos_limit, spec.down, direct, margin)
+        axis = spec.axis
+        plan = self.plans[rng.index]
+        guard = self.guard(axis)
+        self.motion = (
+            CoupledLift(plan, guard, rng, t, z, vz, az)
+            if plan is not None
+            else TimeBasedLift(self.generator(axis), guard, rng, t, z, vz, az)
+        )
         self.current = rng
+        self.axis_index = self.names.index(axis)
+        i = self.axis_index
+        self.counts = (*self.counts[:i], self.counts[i] + 1, *self.counts[i + 1 :])
         self.suppressed = rng.suppressed
         moves = rng.moves_z or abs(z - spec.target) > 1e-12
         self.active = not rng.suppressed or (self.both_flags and moves)
-        self.ov_at_descent = None
-        self.coupled = self.plans[rng.index]
         self.record = LiftRecord(rng, t, z)
         self.record.peak = z
-        if self.coupled is not None:
-            self.record.premature = self.coupled.premature
-            self._cz, self._cvz, self._caz, self._ct = z, vz, az, t
+        if plan is not None:
+            self.record.premature = plan.premature
 
     def resume_in_range(self, t: float) -> None:
         """The path leaves a waiting point inside the range: lift again for the rest of it."""
-        if self.current is None or self.current.direct or self.coupled is not None:
-            return
-        spec = self.current.start
-        t = self.gen.t  # the state (z, vz, az) belongs to this time; never rewind it
-        self.gen.start(
-            t, self.gen.z, self.gen.vz, self.gen.az, spec.target, spec.pos_limit, spec.down, False
-        )
+        if self.motion is not None:
+            self.motion.resume_in_range(t)
 
     def error_in_range(self, t: float) -> None:
-        if self.current is None:
+        """Program error inside the range: Z rises to POS_LIMIT and stays (vendor §2.1.3 case 2,
+        §2.4); a coupled range leaves the path and rises time-based from where Z is."""
+        m, rng = self.motion, self.current
+        if m is None or rng is None:
             return
-        if self.coupled is not None:  # leave the path: rise time-based from where Z is
-            spec = self.current.start
-            self.gen.start(t, self._cz, self._cvz, self._caz, spec.target, spec.pos_limit,
-                           spec.down, False)  # fmt: skip
-            self.coupled = None
-        self.gen.rise_and_hold(t)
+        if not m.uses_time:
+            m = self.motion = TimeBasedLift(self.generator(rng.start.axis),
+                                            self.guard(rng.start.axis), rng, t, m.z, m.vz,
+                                            m.az)  # fmt: skip
+        m.error_in_range(t)
 
     def finish(self, t: float) -> LiftRecord | None:
         """LIFT_END reached with Z at POS: close the range and the record."""
@@ -142,106 +167,63 @@ class LiftController:
                 rec.arrival_error = abs(self.z - rec.range.start.target)
             self.records.append(rec)
         self.current = None
+        self.motion = None
         self.record = None
         self.active = False
         self.suppressed = False
-        self.ov_at_descent = None
         self.ending = False
-        self.coupled = None
         return rec
 
     # -- cycle ------------------------------------------------------------------------------------
-    def step(self, t_new: float, t_rem: float, override: float) -> None:
-        """Time-based: move Z to t_new, the path reaching the horizon t_rem later."""
-        if self.current is None or self.coupled is not None:
+    def step(self, t_new: float, s: float, v: float, a: float, t_rem: float,
+             override: float) -> None:  # fmt: skip
+        """Move the lift axis to t_new: against the remaining path time t_rem (time-based) or
+        to the path position s (coupled, path velocity v and acceleration a)."""
+        m = self.motion
+        if m is None:
             return
-        was_down = self.gen.phase is Phase.DOWN
-        t_old = self.gen.t
-        z_old = self.gen.z
-        self.gen.step(t_new, t_rem)
-        self._guard(t_new)
-        if self.gen.phase is Phase.DOWN and not was_down:
-            self.ov_at_descent = override
-        elif self.gen.phase is Phase.UP:
-            self.ov_at_descent = None
-        self._account(t_old, z_old)
-
-    def couple(self, t_new: float, s: float, v: float, a: float) -> None:
-        """Path-based: Z at the path position s (path velocity v, acceleration a) at t_new."""
-        plan = self.coupled
-        if self.current is None or plan is None:
-            return
-        t_old, z_old = self._ct, self._cz
-        z, dz, ddz = plan.state(s)
-        self._ct, self._cvz, self._caz = t_new, dz * v, ddz * v * v + dz * a
-        self._cz, findings = self.guard.check(z, 0)
-        self.findings.extend(findings)
-        self._account(t_old, z_old)
-
-    def _account(self, t_old: float, z_old: float) -> None:
+        t_old, z_old = m.t, m.z
+        m.step(t_new, s, v, a, t_rem, override)
+        self.findings.extend(m.take_findings())
         rec = self.record
         if rec is not None:
-            z = self.z
+            z = m.z
             spec = rec.range.start
             base = min(rec.z_start, spec.target) if not spec.down else max(rec.z_start, spec.target)
             sign = -1.0 if spec.down else 1.0
-            rec.area += 0.5 * sign * ((z_old - base) + (z - base)) * (self.t - t_old)
+            rec.area += 0.5 * sign * ((z_old - base) + (z - base)) * (m.t - t_old)
             rec.peak = max(rec.peak, z) if not spec.down else min(rec.peak, z)
-
-    def _guard(self, t: float) -> None:
-        z, findings = self.guard.check(self.gen.z, self.gen.fallbacks)
-        if not findings:
-            return
-        self.findings.extend(findings)
-        if z != self.gen.z and self.current is not None:
-            # never expected: stop at the bound and go straight (time-optimally) to POS
-            spec = self.current.start
-            self.gen.start(t, z, 0.0, 0.0, spec.target, spec.pos_limit, spec.down, True)
 
     # -- state of the lift axis ------------------------------------------------------------------
     @property
     def z(self) -> float:
-        return self._cz if self.coupled is not None else self.gen.z
+        return self.motion.z if self.motion is not None else 0.0
 
     @property
     def vz(self) -> float:
-        return self._cvz if self.coupled is not None else self.gen.vz
+        return self.motion.vz if self.motion is not None else 0.0
 
     @property
     def az(self) -> float:
-        return self._caz if self.coupled is not None else self.gen.az
+        return self.motion.az if self.motion is not None else 0.0
 
     @property
     def t(self) -> float:
-        """Time the lift axis state belongs to."""
-        return self._ct if self.coupled is not None else self.gen.t
+        return self.motion.t if self.motion is not None else 0.0
 
     @property
     def landed(self) -> float:
-        """Exact time Z reached POS (time-based ranges)."""
-        return self._ct if self.coupled is not None else self.gen.landed
+        """Exact time Z reached POS."""
+        return self.motion.landed if self.motion is not None else 0.0
 
     @property
     def z_done(self) -> bool:
-        if self.current is None:
-            return True
-        if self.coupled is not None:
-            return abs(self._cz - self.current.start.target) <= 1e-12 and self._cvz == 0.0
-        return self.gen.done
+        return self.motion is None or self.motion.done
 
     @property
     def phase(self) -> LiftPhase:
-        if self.current is None:
-            return LiftPhase.NONE
-        if self.coupled is not None:
-            return LiftPhase.COUPLED
-        return LiftPhase(int(self.gen.phase))
+        return LiftPhase.NONE if self.motion is None else self.motion.phase
 
     def needed_time(self) -> float:
         """Time Z still needs to reach POS from its current state (time-optimal)."""
-        if self.current is None or self.coupled is not None or self.gen.done:
-            return 0.0
-        if self.gen.phase is Phase.UP:
-            return self.gen.t_need
-        plan = self.gen.plan
-        return 0.0 if plan is None else max(0.0, self.gen.plan_t0 + plan.duration - self.gen.t)
+        return 0.0 if self.motion is None else self.motion.needed_time()

@@ -23,6 +23,7 @@ class GuardFinding:
 
 class LiftGuard:
     def __init__(self, axis: AxisParams) -> None:
+        self.axis = axis
         self.lo_sw = axis.sw_limit_neg
         self.hi_sw = axis.sw_limit_pos
         self.lo = self.lo_sw

@@ -78,7 +78,7 @@ class ErrorId(enum.IntEnum):
     M_NOT_CONFIGURED = 990014  # M function without m_synch entry
     # 990015 retired: DOWN with POS_LIMIT above start and target is special case 1 (issue 15)
     DWELL_MISSING = 990016  # G04 without a time
-    LIFT_WRONG_AXIS = 990017  # lift command on an axis that is not the configured lift axis
+    # 990017 retired: any axis of the channel may lift (issue 18); others are UNKNOWN_AXIS
     UNKNOWN_AXIS = 990018  # address letter that is not an axis of the channel
     LIFT_STEP_SLOPE = 990019  # warning: STEP slope with path-based Lifting (Z overload)
     SUBROUTINE_NOT_FOUND = 990020  # LL name: no %L name in the file
@@ -98,6 +98,7 @@ class ErrorId(enum.IntEnum):
     SEQUENCE_NOT_FOUND = 990034  # L SEQUENCE: block number not found
     DUPLICATE_SUBROUTINE = 990035  # %L name defined twice in a file
     LIFT_LIMIT_CLAMPED = 990036  # warning: POS_LIMIT beyond the software limit, held there
+    LIFT_LATE = 990037  # the path passed LIFT_END with the lift axis not at POS (never expected)
 
 
 class Severity(enum.Enum):

@@ -362,7 +362,7 @@ class _Decoder:
         assert self.open_lift is not None
         start = self.open_lift
         pos = list(self.pos)
-        pos[self.z] = start.target
+        pos[self.axis_index[start.axis]] = start.target
         self.pos = tuple(pos)
         self.open_lift = None
         return LiftEnd(start.axis, cause, start.line)
@@ -612,11 +612,15 @@ class _Decoder:
             self._count(NO_RADIUS, column, "G41/G42: no tool radius configured for the selected "
                         "D (liftd.toml [nc.tools] or the ISG tool list): the programmed "
                         "contour runs uncompensated", ErrorId.TRC_NO_RADIUS)  # fmt: skip
-        if side != 0 and self.open_lift is not None and self.z in (0, 1):
+        if (
+            side != 0
+            and self.open_lift is not None
+            and self.axis_index.get(self.open_lift.axis, self.z) in (0, 1)
+        ):
             return NcFault(
                 ErrorId.TRC_LIFT_AXIS,
                 column,
-                f"tool radius compensation in the plane of the lift axis {self.ctx.lift_axis} "
+                f"tool radius compensation in the plane of the lift axis {self.open_lift.axis} "
                 f"inside the lift range started in line {self.open_lift.line} (vendor §2.4)",
             )
         self.trc.set_side(side)
@@ -715,12 +719,13 @@ class _Decoder:
             if not (is_arc and ("I" in values or "J" in values)):
                 return None
             column = min(col for _, col in values.values())
-        lift_word = values.get(self.lift_axis) if self.open_lift is not None else None
+        lift_word = values.get(self.open_lift.axis) if self.open_lift is not None else None
         if lift_word is not None:
+            assert self.open_lift is not None
             raise NcFault(
                 ErrorId.LIFT_AXIS_PROGRAMMED,
                 lift_word[1],
-                f"the lift axis {self.ctx.lift_axis} must not be programmed inside a lift range",
+                f"the lift axis {self.open_lift.axis} must not be programmed inside a lift range",
             )
         feed = INF
         if kind is not MotionKind.RAPID:
@@ -791,14 +796,15 @@ class _Decoder:
     # -- lift commands -------------------------------------------------------------------------
     def _lift_start(self, lineno: int, axis: str, words: LiftWords, column: int) -> LiftStart:
         warnings: list[NcError] = []
+        zi = self.axis_index.get(axis, self.z)  # any axis of the channel may lift (issue 18)
         self.open_lift = lift_rules.open_range(
-            self.ctx, words, axis=axis, z0=self.pos[self.z], slope=self.slope,
+            self.ctx, words, axis=axis, z0=self.pos[zi], slope=self.slope,
             open_lift=self.open_lift, lineno=lineno, column=column, warnings=warnings,
-            unit=self.unit, offset=self.offset[self.z],
+            unit=self.unit, offset=self.offset[zi],
         )  # fmt: skip
         for warning in warnings:
             self._warn(ErrorId(warning.id), warning.column, warning.message)
-        if self.trc.side != 0 and self.z in (0, 1):
+        if self.trc.side != 0 and zi in (0, 1):
             raise NcFault(
                 ErrorId.TRC_LIFT_AXIS,
                 column,

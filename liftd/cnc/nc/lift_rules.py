@@ -54,11 +54,11 @@ def open_range(
             column,
             f"LIFT already active (started in line {open_lift.line}), LIFT_END expected",
         )
-    if axis != ctx.lift_axis:
+    if axis not in ctx.axis_names:  # any axis of the channel may lift (vendor §3, issue 18)
         raise NcFault(
-            ErrorId.LIFT_WRONG_AXIS,
+            ErrorId.UNKNOWN_AXIS,
             column,
-            f"{axis} is not the lift axis {ctx.lift_axis} (liftd.toml cnc.lift_axis)",
+            f"{axis} is not an axis of the channel ({', '.join(ctx.axis_names)})",
         )
     if words.pos_limit_mm is None:
         raise NcFault(ErrorId.LIFT_POS_LIMIT_MISSING, column, "POS_LIMIT= is mandatory")
@@ -88,7 +88,7 @@ def open_range(
     base = z0 if words.incremental else offset
     target = z0 if words.pos_mm is None else base + words.pos_mm * unit
     limit = base + words.pos_limit_mm * unit
-    z = ctx.axis_names.index(ctx.lift_axis)
+    z = ctx.axis_names.index(axis)
     ctx.check_position(z, target, column)  # POS beyond the software limits: 50041 / 50042
     # A lift height (or DOWN depth) beyond the software limit cannot be reached anyway: the
     # limit is the software limit, with a warning (issue 15 item 3; the vendor's own §3

@@ -84,6 +84,8 @@ class Interpolator:
         self.nominal_table = table
         self._shadow: Tracker | None = None
         self._shadow_target = -1
+        self._shadow_table = table
+        self._virtual = False  # the nominal run is the path itself (not parted yet)
         self.nominal_arrival: float | None = None
         self.nominal_override = 1.0
 
@@ -194,6 +196,9 @@ class Interpolator:
         for c in e.crossings:
             if self.arrivals.get(c.boundary) == c.t:
                 del self.arrivals[c.boundary]
+            if self._virtual and c.boundary >= self._shadow_target >= 0:
+                self.nominal_arrival = c.t  # the nominal run is the path: it arrives with it
+                self._virtual = False
 
     def fill(self, quota: int | None = None) -> None:
         """Produce ahead: at most `quota` (default `fill_per_cycle`) entries, up to the lead."""
@@ -203,23 +208,50 @@ class Interpolator:
 
     # -- the nominal run of a lift range (path_delay_s) ------------------------------------------
     def nominal_start(
-        self, table: PathTable, target: int, t: float, s: float, v: float, a: float, seg: int
-    ) -> None:
+        self, table: PathTable, target: int, t: float, s: float, v: float, a: float, seg: int,
+        differs: bool = True,
+    ) -> None:  # fmt: skip
         """Start the nominal run toward boundary `target` from the given state (the path
-        leaving the range's start)."""
+        leaving the range's start). Unless the lifts' limits change the path (`differs`), it
+        is the path itself until they part (`nominal_step`): no second tracker meanwhile."""
+        self._shadow_target = target
+        self._shadow_table = table
+        self.nominal_arrival = t if seg >= target else None
+        self._virtual = not differs
+        if differs:
+            self._shadow_from(t, s, v, a, seg)
+
+    def _shadow_from(self, t: float, s: float, v: float, a: float, seg: int) -> None:
         sh = self._shadow
+        table = self._shadow_table
         if sh is None or sh.tb is not table:
             sh = self._shadow = Tracker(table, self.prod.look_ahead, set(), self.acked_conditional)
         sh.set_inputs(self.nominal_override, self.hold)
         sh.set_state(t, s, v, a, seg, None)
-        self._shadow_target = target
-        self.nominal_arrival = t if seg >= target else None
+
+    def _parts(self, override: float) -> bool:
+        """Whether the path leaves its nominal run from this cycle on: the lift limits the
+        override, makes the path stop for Z, or the path waits inside the range (the nominal
+        run goes on at once)."""
+        if override != self.override:
+            return True
+        target = self._shadow_target
+        if any(self.segment < k <= target for k in self.lift_stops):
+            return True
+        return self.stopped_at is not None and self.stopped_at < target
 
     def nominal_step(self, t: float, override: float, hold: bool) -> None:
         """Advance the nominal run to t with the requested override and feed hold."""
-        sh = self._shadow
         self.nominal_override = override
-        if sh is None or self.nominal_arrival is not None or self._shadow_target < 0:
+        if self.nominal_arrival is not None or self._shadow_target < 0:
+            return
+        if self._virtual:
+            if not self._parts(override):
+                return  # it arrives when the path does (`_consume`)
+            self._virtual = False
+            self._shadow_from(self.t_state, self.s, self.v, self.a, self.segment)
+        sh = self._shadow
+        if sh is None:
             return
         sh.set_inputs(override, hold)
         for _ in range(1000):  # bounded: every pass ends at t or at a stop it passes at once
@@ -234,6 +266,7 @@ class Interpolator:
     def nominal_stop(self) -> None:
         self._shadow_target = -1
         self.nominal_arrival = None
+        self._virtual = False
 
     # -- queries ---------------------------------------------------------------------------------
     def arrival(self, k: int) -> float:

@@ -119,7 +119,7 @@ class _Builder:
         self.pos = start
         self.s = 0.0
         self.slope = ch.slope
-        self.lift_target: float | None = None
+        self.lift_target: tuple[int, float] | None = None  # (axis, POS) of the open range
 
     def act(self, action: Action) -> None:
         self.actions[-1].append(action)
@@ -180,7 +180,8 @@ class _Builder:
             self.slope = block.slope
         if block.lift_start is not None:
             self.act(Action(ActionKind.LIFT_START, block.line, lift_start=block.lift_start))
-            self.lift_target = block.lift_start.target
+            start = block.lift_start
+            self.lift_target = (self.ch.axis_names.index(start.axis), start.target)
         self.m_before(block)
         if block.motion is not None:
             self.motion(block)
@@ -191,9 +192,9 @@ class _Builder:
             self.act(Action(ActionKind.FLUSH, block.line))
         if block.lift_end is not None:
             self.act(Action(ActionKind.LIFT_END, block.line, lift_end=block.lift_end))
-            if self.lift_target is not None:  # Z is at POS after the range
-                z = self.ch.lift_axis_index
-                self.pos = (*self.pos[:z], self.lift_target, *self.pos[z + 1 :])
+            if self.lift_target is not None:  # the lift axis is at POS after the range
+                z, target = self.lift_target
+                self.pos = (*self.pos[:z], target, *self.pos[z + 1 :])
         if block.program_end:
             self.act(Action(ActionKind.PROGRAM_END, block.line))
 

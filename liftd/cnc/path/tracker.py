@@ -122,7 +122,10 @@ class Tracker:
         acked: set[int] | None = None,
     ) -> None:
         self.tb = table
+        self.n = table.n
         self.look_ahead = max(1, look_ahead)
+        # up to this path position no constraint can bind within a step (no checks needed)
+        self._clear_s = -INF
         self.calc = Ruckig1()
         self.t = 0.0
         self.s = table.s[0] if table.s else 0.0
@@ -148,6 +151,7 @@ class Tracker:
         self.t, self.s, self.v, self.a, self.seg = t, s, v, a, seg
         self.stopped_at = stopped_at
         self._beyond_key = None  # the stop sets may have changed
+        self._clear_s = -INF
         self.parked = stopped_at is None and self.hold and v == 0.0 and a == 0.0
         self.plan = None
 
@@ -159,6 +163,7 @@ class Tracker:
         if cap_ov != self.ov or hold != self.hold:
             self.ov, self.hold = cap_ov, hold
             self.plan = None
+            self._clear_s = -INF
             if not hold:
                 self.parked = False
 
@@ -181,7 +186,8 @@ class Tracker:
 
     @property
     def window_end(self) -> int:
-        return min(self.seg + self.look_ahead, self.tb.n)
+        w = self.seg + self.look_ahead
+        return w if w < self.n else self.n
 
     # -- constraints ----------------------------------------------------------------------------
     def _limits(self, seg: int) -> tuple[float, float]:
@@ -306,6 +312,7 @@ class Tracker:
 
     # -- planning -------------------------------------------------------------------------------
     def _replan(self, dt: float, force: int | None = None) -> None:
+        self._clear_s = -INF
         tb = self.tb
         s, v, a, seg = self.s, self.v, self.a, self.seg
         a_max, j_max = self._limits(seg)
@@ -319,17 +326,23 @@ class Tracker:
         if force is not None and all(c[0] != force for c in cands):
             force = None  # not a constraint from here: the most binding one
         best_i = -1
+        top = ceiling
         for i, c in enumerate(cands):
             b, s_c, cap, gate = c
             if force is not None and b != force:
                 continue
             if not gate and v_p <= cap:
-                continue  # cannot bind from here
+                # cannot bind from here; a forced one (the step would have passed it too fast)
+                # is kept by not accelerating beyond it: it may be too near for zero
+                # acceleration there, which it does not need
+                if b == force:
+                    top = min(top, cap)
+                continue
             slack = s_c - s - self._need(v, a, cap, gate, a_max, j_max)
             if slack < best_slack:
                 best, best_slack, best_i = c, slack, i
         if best is None:
-            self._cruise(ceiling, a_max, j_max, w)
+            self._cruise(top, a_max, j_max, w)
             return
         b, s_c, _, gate = best
         cap = self._target_cap(cands, best_i)
@@ -425,7 +438,7 @@ class Tracker:
         path stops, with their exact times."""
         out: list[Crossing] = []
         tb = self.tb
-        n = tb.n
+        n = self.n
         forced = 0
         for _ in range(100_000):  # bounded: each pass ends the step, or at a boundary / plan end
             if self.stopped_at is not None or self.t >= t_new:
@@ -504,16 +517,52 @@ class Tracker:
 
     def _violated(self, s: float, v: float, a: float, seg: int, dt: float, goal: int) -> int | None:
         """The first constraint that could no longer be kept from (s, v, a), if any."""
+        if s <= self._clear_s:
+            return None
+        if goal >= 0:
+            # the profile keeps `goal`; if it is the first constraint ahead and a run boundary,
+            # everything after it is kept through its cap (no other constraint to check)
+            tb = self.tb
+            n = self.n
+            nxt = tb.next_constraint[seg + 1] if seg + 1 <= n else n
+            w = min(seg + self.look_ahead, n)
+            nxt = min(nxt, w)
+            if (
+                nxt == goal
+                and (tb.gate[goal] or goal == w or self.is_stop(goal))
+                and not (self.lift_stops and any(seg < k < goal for k in self.lift_stops))
+            ):
+                return None
         a_max, j_max = self._limits(seg)
         if v == 0.0 and a <= 0.0:
             return None
-        for b, s_c, cap, gate in self._collect(s, seg, self._horizon(v, a, a_max, j_max, dt)):
+        cands = self._collect(s, seg, self._horizon(v, a, a_max, j_max, dt))
+        if not cands:
+            self._clear(s, projected_velocity(v, max(a, 0.0), j_max), seg, a_max, j_max, dt)
+            return None
+        for b, s_c, cap, gate in cands:
             if b == goal:
                 continue
             slack = s_c - s - self._need(v, a, cap, gate, a_max, j_max)
             if slack < SLACK_MARGIN:
                 return b
         return None
+
+    def _clear(self, s: float, v: float, seg: int, a_max: float, j_max: float, dt: float) -> None:
+        """No constraint within the horizon: up to where none can be, whatever the step (the
+        velocity stays below max(v, ceiling) and the acceleration below a_max until the next
+        re-plan, which resets this)."""
+        tb = self.tb
+        n = self.n
+        w = min(seg + self.look_ahead, n)
+        nxt = w
+        if seg + 1 <= n:
+            nxt = min(nxt, tb.next_constraint[seg + 1])
+        for k in self.lift_stops:
+            if seg < k < nxt:
+                nxt = k
+        top = max(v, 0.0 if self.hold else tb.ceiling(seg if seg < n else n - 1, self.ov))
+        self._clear_s = tb.s[nxt] - self._horizon(top, a_max, a_max, j_max, dt)
 
     def _commit(
         self, t: float, s: float, v: float, a: float, seg: int, cut: int, plan: _Plan,

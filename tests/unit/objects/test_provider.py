@@ -10,7 +10,7 @@ import pytest
 from liftd.ads.constants import AdsErr, AdsState, IndexGroup
 from liftd.ads.errors import AdsError
 from liftd.ads.service import STATIC_HANDLE_BIT
-from liftd.cnc.snapshot import LoopStats, PlcSignal, PlcWrite
+from liftd.cnc.snapshot import LiftPhase, LoopStats, PlcSignal, PlcWrite
 from liftd.objects.catalog import Catalog, GeoView
 from liftd.objects.provider import CncProvider
 from tests.support.ads_harness import snapshot
@@ -44,6 +44,21 @@ def test_lift_objects_at_their_vendor_addresses(w: World) -> None:
     assert w.p.read(0x021301, 0x00030095, 1) == b"\x01"  # index based: channel index 1, 3rd axis
     assert w.p.read(0x121301, 0x00010095, 1) == b"\x00"  # X does not lift
     assert w.p.read(0x121301, 0x00030095, 1024) == b"\x01"  # longer buffer: object length
+
+
+def test_the_flags_belong_to_the_axis_that_lifts(w: World) -> None:
+    """Any axis of the channel may lift (vendor §3): the flags, the phase and liftd's lift
+    counter are the lifting axis's; the other axes read 0."""
+    snap = w.view.snapshot._replace(lift_active=True, lift_axis=0,  # type: ignore[union-attr]
+                                    lift_phase=LiftPhase.UP, lift_counts=(3, 0, 2))  # fmt: skip
+    w.view = w.view._replace(snapshot=snap)  # type: ignore[union-attr]
+    assert w.p.read(0x121301, 0x00010095, 1) == b"\x01"  # X lifts
+    assert w.p.read(0x121301, 0x00030095, 1) == b"\x00"  # Z does not, now
+    for name, value in (("X.lift_phase", b"\x01\x00"), ("Z.lift_phase", b"\x00\x00"),
+                        ("X.lift_count", struct.pack("<I", 3)),
+                        ("Z.lift_count", struct.pack("<I", 2))):  # fmt: skip
+        sym = w.p.find_symbol(f"GEO.ch1.{name}")
+        assert w.p.read(sym.index_group, sym.index_offset, 8) == value
 
 
 def test_path_velocity_objects(w: World) -> None:

@@ -6,10 +6,16 @@ override drop, Zeno creep of the override limit, float rounding at LIFT_END."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import pytest
 
-from bench.stress_cases import describe, scenario, violations
+import liftd.cnc.geo_program as geo_program
+from bench.gen import nesting_program
+from bench.stress_cases import describe, scenario, violations, wide_scenario
 from liftd.cnc.params import LiftMethod
+from liftd.cnc.plc import Schedule
+from tests.support.channel import make_channel
 from tests.support.closed_loop import run_task
 
 REGRESSIONS = [7, 8, 25, 26, 39, 145, 158, 159, 174, 254, 312, 432, 499, 666, 673, 730, 875]
@@ -33,3 +39,58 @@ def test_random_path_based_run_keeps_every_promise(seed: int) -> None:
     sc = scenario(seed, LiftMethod.LIFTING)
     task, snaps = run_task(sc.channel, sc.text, sc.schedule, max_time=120)
     assert violations(sc, snaps, task.lift.records) == [], describe(sc)
+
+
+# issue 14's input space: long ranges over short blocks, every look-ahead size, ranges back to
+# back, waits before and inside ranges, override steps 0–200 % at random moments, feed holds;
+# checked for the tracker's own errors too (a refused profile, a run boundary passed with
+# acceleration): seeds 0–299 all pass in the bench (bench/bench_lift_safety.py --wide).
+# 388: a feed ceiling drop just ahead, too near for zero acceleration there (fixed in the commit
+# that added it: the path stops accelerating instead of planning a=0 at the boundary)
+WIDE_REGRESSIONS = [388]
+
+
+@pytest.mark.parametrize("seed", WIDE_REGRESSIONS + list(range(0, 300, 12)))
+def test_random_wide_run_keeps_every_promise(seed: int) -> None:
+    sc = wide_scenario(seed)
+    task, snaps = run_task(sc.channel, sc.text, sc.schedule, max_time=300)
+    bad = violations(sc, snaps, task.lift.records)
+    assert bad == [] and task.interp.plan_errors == 0, (bad, task.interp.last_plan_error,
+                                                        describe(sc))  # fmt: skip
+
+
+def _nesting(wait: bool) -> str:
+    text = nesting_program(12)
+    # a dwell inside every range: the path waits, its nominal run does not
+    return text.replace("Z[LIFT_END]", "G04 X0.05\nZ[LIFT_END]") if wait else text
+
+
+@pytest.mark.parametrize(
+    ("wait", "steps"),
+    [(False, (0.6, 1.5, 2.0, 0.8, 1.0)), (True, ()), (True, (2.0, 0.6, 1.0))],
+)
+def test_lazy_nominal_run_reports_what_a_full_shadow_run_reports(
+    wait: bool, steps: tuple[float, ...], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """path_delay_s runs the nominal path only once the path parts from it (an override limit,
+    a stop for Z, a wait inside the range); before, the nominal run is the path itself. Each
+    lift's nominal time and path delay equal those of a shadow tracker run from LIFT_START."""
+    ch = make_channel()
+    text = _nesting(wait)
+    # override steps every 0.13 s through the job, in every phase of the lifts
+    schedule = Schedule(override=tuple((0.13 * (k + 1), steps[k % len(steps)])
+                                       for k in range(60)) if steps else ())  # fmt: skip
+    lazy, _ = run_task(ch, text, schedule, max_time=300)
+    assert any(not d for d in lazy.prog.nominal_differs)  # the lazy case is exercised
+    load = geo_program.load_program
+
+    def forced(*args: object, **kwargs: object) -> geo_program.GeoProgram:
+        prog = load(*args, **kwargs)  # type: ignore[arg-type]
+        return dataclasses.replace(prog, nominal_differs=(True,) * len(prog.ranges))
+
+    monkeypatch.setattr(geo_program, "load_program", forced)
+    full, _ = run_task(ch, text, schedule, max_time=300)
+    assert len(lazy.lift.records) == len(full.lift.records) == 11
+    for a, b in zip(lazy.lift.records, full.lift.records, strict=True):
+        assert a.nominal_time == pytest.approx(b.nominal_time, abs=1e-9)
+        assert a.path_delay == pytest.approx(b.path_delay, abs=1e-9)

@@ -268,8 +268,9 @@ CASES = [
     ("G02 X10 Y0 Z5 I5 F100\n", ErrorId.HELIX, 1, {}),
     ("M77\n", ErrorId.M_NOT_CONFIGURED, 1, {}),
     ("G04\n", ErrorId.DWELL_MISSING, 1, {}),
-    ("Y[LIFT_START POS_LIMIT=9]\n", ErrorId.LIFT_WRONG_AXIS, 1, {}),
+    ("Y[LIFT_START POS_LIMIT=9]\nX5 F100\nZ[LIFT_END]\n", ErrorId.LIFT_AXIS_MISMATCH, 3, {}),
     ("A10\n", ErrorId.UNKNOWN_AXIS, 1, {}),
+    ("Q[LIFT_START POS_LIMIT=9]\n", ErrorId.UNKNOWN_AXIS, 1, {}),
 ]
 
 
@@ -312,6 +313,8 @@ def test_every_error_id_is_tested() -> None:
             ErrorId.PERCENT_IN_SUBROUTINE,  # test_percent_line_inside_a_global_subroutine_...
             # tests/fidelity/test_s3_programming.py: the vendor's own POS_LIMIT=300 example
             ErrorId.LIFT_LIMIT_CLAMPED,
+            # tests/unit/cnc/test_geo_core.py: a lift made late on purpose is reported
+            ErrorId.LIFT_LATE,
         }
     )
     assert tested == set(ErrorId)

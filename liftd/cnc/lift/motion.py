@@ -1,0 +1,286 @@
+"""How the lift axis moves inside one lift range: two methods behind one protocol.
+
+* `TimeBasedLift` (Advanced Lifting, and every range without path motion): the set-point
+  generator of `advanced.py` planned against the path's remaining time, checked by the guard,
+  with Advanced Lifting's override rules (vendor §2.5).
+* `CoupledLift` (path-based Lifting): z = f(s) planned in path preparation (`path_based.py`),
+  following the path position; no override rule of its own (the method's weakness: Z is
+  overloaded instead, which the acceleration monitor reports).
+
+The GEO task holds the active one; it never asks which kind it is.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+from liftd.cnc.lift.advanced import AdvancedLift, Phase
+from liftd.cnc.lift.guard import GuardFinding, LiftGuard
+from liftd.cnc.lift.path_based import RangePlan
+from liftd.cnc.lift.ranges import LiftRange
+from liftd.cnc.plc import MAX_OVERRIDE
+from liftd.cnc.snapshot import LiftPhase
+
+INF = float("inf")
+MIN_LIFT_OVERRIDE = 0.01  # below this, the path waits for Z at the lift's horizon instead
+OVERRIDE_TRIALS = 6  # lower-bound evaluations to find the highest override Z still allows
+
+
+class PathTimes(Protocol):
+    """What a lift asks of the path (the interpolator)."""
+
+    t_state: float
+    stopped_at: int | None
+
+    def arrival(self, k: int) -> float: ...
+
+    def lower_bound(self, k: int, override: float) -> float: ...
+
+
+@dataclass(slots=True)
+class OverrideVerdict:
+    """What the lift makes of a requested override."""
+
+    override: float  # in effect
+    override_max: float  # the highest the lift accepts now (for the display)
+    limited: bool = False  # an increase was cut (event lift.override_limited)
+    path_waits: bool = False  # not even a crawl gives Z the time: the path waits at k
+
+
+class LiftMotion(Protocol):
+    """The lift axis inside one range (positions of the lift axis in m, times absolute)."""
+
+    @property
+    def z(self) -> float: ...
+
+    @property
+    def vz(self) -> float: ...
+
+    @property
+    def az(self) -> float: ...
+
+    @property
+    def t(self) -> float: ...
+
+    @property
+    def landed(self) -> float: ...
+
+    @property
+    def done(self) -> bool: ...
+
+    @property
+    def phase(self) -> LiftPhase: ...
+
+    @property
+    def uses_time(self) -> bool:
+        """Whether `step` needs the remaining path time (else the path position)."""
+        ...
+
+    def step(
+        self, t_new: float, s: float, v: float, a: float, t_rem: float, override: float
+    ) -> None:
+        """Move to t_new (`t_rem`: the path's remaining time to the horizon, time-based;
+        s, v, a: the path's state, coupled; `override`: in effect)."""
+        ...
+
+    def needed_time(self) -> float: ...
+
+    def resume_in_range(self, t: float) -> None: ...
+
+    def error_in_range(self, t: float) -> None: ...
+
+    def limit_override(
+        self, ov_req: float, ov_eff: float, was_holding: bool, k: int, path: PathTimes
+    ) -> OverrideVerdict: ...
+
+    def take_findings(self) -> list[GuardFinding]: ...
+
+
+class TimeBasedLift:
+    """Advanced Lifting's generator for one range (DESIGN.md §4, lift-algorithm.md §3)."""
+
+    def __init__(self, gen: AdvancedLift, guard: LiftGuard, rng: LiftRange,
+                 t: float, z: float, vz: float, az: float) -> None:  # fmt: skip
+        self.gen = gen
+        self.guard = guard
+        self.rng = rng
+        spec = rng.start
+        beyond = rng.beyond_limit or ((z < spec.pos_limit) if spec.down else (z > spec.pos_limit))
+        direct = rng.suppressed or beyond
+        gen.start(t, z, vz, az, spec.target, spec.pos_limit, spec.down, direct)
+        axis = guard.axis
+        a, j = axis.a_max, axis.j_max
+        margin = vz * vz / (2.0 * a) + (abs(vz) * a / j if j != INF else 0.0)
+        guard.arm(z, spec.target, spec.pos_limit, spec.down, direct, margin)
+        self.ov_at_descent: float | None = None
+        self.findings: list[GuardFinding] = []
+
+    uses_time = True
+
+    @property
+    def z(self) -> float:
+        return self.gen.z
+
+    @property
+    def vz(self) -> float:
+        return self.gen.vz
+
+    @property
+    def az(self) -> float:
+        return self.gen.az
+
+    @property
+    def t(self) -> float:
+        return self.gen.t
+
+    @property
+    def landed(self) -> float:
+        return self.gen.landed
+
+    @property
+    def done(self) -> bool:
+        return self.gen.done
+
+    @property
+    def phase(self) -> LiftPhase:
+        return LiftPhase(int(self.gen.phase))
+
+    def step(
+        self, t_new: float, s: float, v: float, a: float, t_rem: float, override: float
+    ) -> None:
+        gen = self.gen
+        was_down = gen.phase is Phase.DOWN
+        gen.step(t_new, t_rem)
+        z, findings = self.guard.check(gen.z, gen.fallbacks)
+        if findings:
+            self.findings.extend(findings)
+            if z != gen.z:
+                # never expected: stop at the bound and go straight (time-optimally) to POS
+                spec = self.rng.start
+                gen.start(t_new, z, 0.0, 0.0, spec.target, spec.pos_limit, spec.down, True)
+        if gen.phase is Phase.DOWN and not was_down:
+            self.ov_at_descent = override  # the descent clamps the override to this
+        elif gen.phase is Phase.UP:
+            self.ov_at_descent = None
+
+    def needed_time(self) -> float:
+        gen = self.gen
+        if gen.done:
+            return 0.0
+        if gen.phase is Phase.UP:
+            return gen.t_need
+        plan = gen.plan
+        return 0.0 if plan is None else max(0.0, gen.plan_t0 + plan.duration - gen.t)
+
+    def resume_in_range(self, t: float) -> None:
+        """The path leaves a waiting point inside the range: lift again for the rest of it."""
+        if self.rng.direct:
+            return
+        spec = self.rng.start
+        gen = self.gen  # its state (z, vz, az) belongs to gen.t: never rewind it
+        gen.start(gen.t, gen.z, gen.vz, gen.az, spec.target, spec.pos_limit, spec.down, False)
+
+    def error_in_range(self, t: float) -> None:
+        self.gen.rise_and_hold(t)
+
+    def take_findings(self) -> list[GuardFinding]:
+        out, self.findings = self.findings, []
+        return out
+
+    def limit_override(
+        self, ov_req: float, ov_eff: float, was_holding: bool, k: int, path: PathTimes
+    ) -> OverrideVerdict:
+        """Advanced Lifting's override rules (vendor §2.5, DESIGN.md §4): while Z descends the
+        override is clamped to its value at descent start; while Z rises (or goes straight to
+        POS) an increase, or a restart after feed hold, is accepted only as far as Z still lands
+        on time; a decrease is always accepted. "Lands on time" is decided against a lower bound
+        of the path's arrival at the horizon k at the candidate override (bounded work):
+        granting an override that passes it can never make Z late."""
+        phase = self.gen.phase
+        if phase in (Phase.DONE, Phase.HOLD_LIMIT, Phase.IDLE):
+            return OverrideVerdict(ov_req, MAX_OVERRIDE)
+        if phase is Phase.DOWN and self.ov_at_descent is not None:
+            return OverrideVerdict(min(ov_req, self.ov_at_descent), self.ov_at_descent)
+        if k < 0:
+            return OverrideVerdict(ov_req, MAX_OVERRIDE)
+        t0 = path.t_state
+        need = self.needed_time()
+        ov_max = MAX_OVERRIDE
+        arrival = path.arrival(k)
+        if arrival != INF and need > 0.0:  # the headroom, for the display (ov ∝ 1/time)
+            ov_max = min(MAX_OVERRIDE, ov_eff * (arrival - t0) / need)
+        changing = ov_req > ov_eff or was_holding
+        if not changing or path.stopped_at is not None or need <= 0.0:
+            return OverrideVerdict(ov_req, ov_max)
+        floor = 0.0 if was_holding else ov_eff
+        span = path.lower_bound(k, ov_req) - t0
+        if span >= need:
+            return OverrideVerdict(ov_req, ov_max)
+        # T(ov) falls about as 1/ov: aim at T = need, then step down until the bound holds
+        granted = -1.0
+        candidate = ov_req * span / need if span > 0.0 else floor
+        for _ in range(OVERRIDE_TRIALS):
+            if candidate <= floor:
+                break
+            if path.lower_bound(k, candidate) - t0 >= need:
+                granted = candidate
+                break
+            candidate *= 0.9
+        if granted < 0.0:
+            granted = floor
+        if granted < MIN_LIFT_OVERRIDE:
+            # crawling would not do (e.g. a feed hold ended just before LIFT_END): the path
+            # stops there and waits for Z, as it does for a lift without path motion
+            return OverrideVerdict(ov_req, MAX_OVERRIDE, path_waits=True)
+        return OverrideVerdict(granted, granted, limited=granted < ov_req)
+
+
+class CoupledLift:
+    """Path-based Lifting for one range: Z at z(s) of the path position."""
+
+    def __init__(self, plan: RangePlan, guard: LiftGuard, rng: LiftRange,
+                 t: float, z: float, vz: float, az: float) -> None:  # fmt: skip
+        self.plan = plan
+        self.guard = guard
+        self.rng = rng
+        spec = rng.start
+        guard.arm(z, spec.target, spec.pos_limit, spec.down, rng.direct, 0.0)
+        self.z, self.vz, self.az, self.t = z, vz, az, t
+        self.landed = t
+        self.findings: list[GuardFinding] = []
+
+    uses_time = False
+    phase = LiftPhase.COUPLED
+
+    @property
+    def done(self) -> bool:
+        return abs(self.z - self.rng.start.target) <= 1e-12 and self.vz == 0.0
+
+    def step(
+        self, t_new: float, s: float, v: float, a: float, t_rem: float, override: float
+    ) -> None:
+        z, dz, ddz = self.plan.state(s)
+        self.t, self.vz, self.az = t_new, dz * v, ddz * v * v + dz * a
+        self.z, findings = self.guard.check(z, 0)
+        self.findings.extend(findings)
+        if self.done:
+            self.landed = t_new
+
+    def needed_time(self) -> float:
+        return 0.0
+
+    def resume_in_range(self, t: float) -> None:
+        return  # waiting conditions stop path and Z together
+
+    def error_in_range(self, t: float) -> None:
+        return  # replaced by a time-based motion (the controller does it)
+
+    def take_findings(self) -> list[GuardFinding]:
+        out, self.findings = self.findings, []
+        return out
+
+    def limit_override(
+        self, ov_req: float, ov_eff: float, was_holding: bool, k: int, path: PathTimes
+    ) -> OverrideVerdict:
+        return OverrideVerdict(ov_req, MAX_OVERRIDE)  # Z follows the path, overloaded or not
