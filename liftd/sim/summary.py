@@ -218,7 +218,7 @@ class StepCpu:
 
 @dataclass(frozen=True, slots=True)
 class ErrorEntry:
-    """An NC error that stopped the program (ISG id), or LIFT_LATE_ID (990030): a lift whose Z
+    """An NC error that stopped the program (ISG id), or LIFT_LATE_ID (990037): a lift whose Z
     was not at POS when the path passed LIFT_END (never expected; the program goes on)."""
 
     error_id: int

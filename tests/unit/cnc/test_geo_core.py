@@ -277,7 +277,8 @@ def test_a_late_lift_is_reported_with_its_error_id_and_the_distance(
     text = ("G01 X10 Y10 Z1 F6000\nZ[LIFT_START POS=21 POS_LIMIT=60]\nG01 X100 F12000\n"
             "Z[LIFT_END]\nM30\n")  # fmt: skip
     res = simulate(ch, text, Schedule(), 0.02)
-    late = [e for e in res.summary["errors"] if e["id"] == ErrorId.LIFT_LATE]
-    assert len(late) == 1 and late[0]["line"] == 4
-    assert res.summary["lifts"][0]["arrival_error"] == pytest.approx(20.0, abs=1e-3)  # mm
+    late = [e for e in res.summary.errors if e.error_id == ErrorId.LIFT_LATE]
+    assert len(late) == 1 and late[0].line == 4 and not late[0].stops_program
+    assert res.summary.lifts[0].arrival_error_mm == pytest.approx(20.0, abs=1e-3)
+    assert res.summary.to_json()["lifts"][0]["arrival_error"] == pytest.approx(20.0, abs=1e-3)
     assert not res.program_error and res.finished
