@@ -16,11 +16,14 @@ from pathlib import Path
 from typing import TYPE_CHECKING, TextIO
 
 from liftd import __version__
-from liftd.cnc.nc import DecoderContext, Severity
+from liftd.cnc.nc import DecoderContext
+from liftd.cnc.nc import Severity as NcSeverity
 from liftd.cnc.nc.decoder import iter_decode
 from liftd.cnc.nc.lift_summary import LiftRangeTracker
 from liftd.cnc.nc.lift_summary import describe as describe_lift
-from liftd.settings import ConfigError, Settings, load_settings
+from liftd.cnc.params import ChannelParams
+from liftd.settings import ConfigError, Problem, Settings, Severity, load_settings
+from liftd.settings.load import ChannelSettings
 from liftd.settings.programs import program_channel, with_program
 
 if TYPE_CHECKING:
@@ -51,15 +54,16 @@ def _schedule(args: argparse.Namespace) -> Schedule:
     )
 
 
-def check_program(settings: Settings, path: Path) -> int:
-    """Decode one program (streamed: its expansion is never held) and print its problems,
-    then one line saying what liftd runs approximated; returns the number of errors."""
+def check_program(settings: Settings, path: Path, channel: ChannelParams | None = None) -> int:
+    """Decode one program (streamed: its expansion is never held) for `channel` (default: the
+    [cnc] channel) and print its problems, then one line saying what liftd runs approximated;
+    returns the number of errors."""
     try:
         text = path.read_text(encoding="utf-8", errors="replace")
     except OSError as exc:
         print(f"{path}: error: cannot read program: {exc.strerror or exc}", file=sys.stderr)
         return 1
-    ch = program_channel(settings, path, text)
+    ch = program_channel(settings, path, text, channel)
     stream, decoder = iter_decode(text, DecoderContext.from_channel(ch))
     blocks = lifts = 0
     ranges = LiftRangeTracker(ch.lift_min_dist)
@@ -71,7 +75,7 @@ def check_program(settings: Settings, path: Path) -> int:
     errors = 0
     for problem in result.errors:
         print(problem.located(str(path)), file=sys.stderr)
-        errors += problem.severity is Severity.ERROR
+        errors += problem.severity is NcSeverity.ERROR
     for summary in ranges.finish():  # one line per lift range (issue 15)
         print(f"{path}: {describe_lift(summary, ch.lift_method)}")
     if not errors:
@@ -83,18 +87,35 @@ def check_program(settings: Settings, path: Path) -> int:
 
 def cmd_check(args: argparse.Namespace) -> int:
     settings = _load(args)
-    ch = settings.channel
-    axes = " ".join(ax.name for ax in ch.axes)
-    print(
-        f"{settings.path}: ok (channel {ch.channel_id}: axes {axes}, lift axis {ch.lift_axis}, "
-        f"method {ch.lift_method.value}, cycle {round(ch.cycle_time * 1e6)} µs, "
-        f"look-ahead {ch.look_ahead_blocks} blocks)"
-    )
-    programs = [Path(p) for p in args.programs] or (
-        [settings.program] if settings.program is not None else []
-    )
-    failed = sum(check_program(settings, path) > 0 for path in programs)
+    for c in settings.machine:
+        ch = c.params
+        axes = " ".join(ax.name for ax in ch.axes)
+        print(
+            f"{settings.path}: ok (channel {ch.channel_id}: axes {axes}, lift axis "
+            f"{ch.lift_axis}, method {ch.lift_method.value}, cycle "
+            f"{round(ch.cycle_time * 1e6)} µs, look-ahead {ch.look_ahead_blocks} blocks)"
+        )
+    if args.programs:  # against the channel asked for (default: [cnc] channel)
+        chosen = _channel_arg(settings, args.channel)
+        runs = [(Path(p), chosen.params) for p in args.programs]
+    else:  # every channel's configured program against its channel
+        runs = [(c.program, c.params) for c in settings.machine if c.program is not None]
+    failed = sum(check_program(settings, path, ch) > 0 for path, ch in runs)
     return EXIT_PROGRAM if failed else EXIT_OK
+
+
+def _channel_arg(settings: Settings, channel: int | None) -> ChannelSettings:
+    """--channel N: a channel of the start-up list (default: [cnc] channel); else exit 2."""
+    if channel is None:
+        return settings.machine[settings.primary_index]
+    chosen = settings.channel_by_id(channel)
+    if chosen is None:
+        ids = ", ".join(str(c.params.channel_id) for c in settings.machine)
+        message = f"no such channel (channels: {ids})"
+        raise ConfigError(
+            [Problem(Severity.ERROR, str(settings.path), None, "--channel", str(channel), message)]
+        )
+    return chosen
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
@@ -389,7 +410,12 @@ def build_parser() -> argparse.ArgumentParser:
         "--config",
         help="liftd.toml (default: $LIFTD_CONFIG, ./config/liftd.toml, the packaged default)",
     )
-    check.add_argument("programs", nargs="*", help="NC programs (default: the configured one)")
+    check.add_argument(
+        "programs", nargs="*", help="NC programs (default: every channel's configured one)"
+    )
+    check.add_argument(
+        "--channel", type=int, metavar="N", help="check PROGRAMs in channel N (default: [cnc])"
+    )
     check.set_defaults(func=cmd_check)
 
     run = sub.add_parser("run", help="run the GEO task in real time and serve it over ADS")

@@ -58,6 +58,8 @@ class ChannelLists:
     zero_offsets: tuple[tuple[int, tuple[float, ...]], ...] = ()  # group 0..6 -> m per axis
     zero_offset_default: int = 0
     g53_offsets: bool = False
+    # where each path axis's log_achs_nr is written (file, line), for messages about the axis
+    axis_refs: tuple[tuple[str, int | None], ...] = ()
 
 
 class _Reader:
@@ -179,8 +181,47 @@ def read_channel_lists(
         zero_offsets=zero[0],
         zero_offset_default=zero[1],
         g53_offsets=zero[2],
+        axis_refs=tuple(_axis_ref(channel_values, j) for j in range(len(axes))),
     )
     return lists, rd.problems
+
+
+def _axis_ref(chan: TypedList, j: int) -> tuple[str, int | None]:
+    value = chan[f"gruppe[0].achse[{j}].log_achs_nr"]
+    return value.entry.file, value.entry.line
+
+
+def startup_channels(
+    startup: Path, configured: int
+) -> tuple[tuple[int, ...] | None, list[Problem]]:
+    """The logical channels the start-up list describes: 1 … `kanal_anzahl` (P-STUP-00001),
+    each with its channel list `sda_mds[i]` (P-STUP-00009, i = channel − 1). A start-up list
+    without `kanal_anzahl` describes only the channel liftd.toml names (`configured`), as
+    before liftd ran several channels. Returns the ids, or None with the errors: a channel
+    without its list, a list for a channel beyond `kanal_anzahl`. (Reading and typing the list
+    itself is reported by `read_channel_lists`, once.)"""
+    try:
+        parsed = read_list(startup)
+    except OSError:
+        return None, []  # read_channel_lists says why
+    stup, _ = type_list(parsed, STARTUP_KEYS)
+    count = stup.get("kanal_anzahl")
+    if count is None or not isinstance(count.value, int):
+        return (configured,), []
+    n = count.value
+    rd = _Reader()
+    for i in range(n):
+        if f"sda_mds[{i}]" not in stup:
+            rd.error(count, f"{n} channels but no channel list sda_mds[{i}] for channel {i + 1}")
+    for key, value in stup.items():
+        if key.startswith("sda_mds[") and int(key[len("sda_mds[") : -1]) >= n:
+            index = int(key[len("sda_mds[") : -1])
+            rd.error(
+                value,
+                f"a channel list for channel {index + 1}, but kanal_anzahl is {n} "
+                f"(channels 1 … {n}, sda_mds[0] … sda_mds[{n - 1}])",
+            )
+    return (None, rd.problems) if rd.problems else (tuple(range(1, n + 1)), [])
 
 
 def _list_path(

@@ -18,9 +18,9 @@ from pydantic import ValidationError
 
 from liftd.cnc import units
 from liftd.cnc.params import AxisParams, ChannelParams
-from liftd.settings.cnc_lists import read_channel_lists
+from liftd.settings.cnc_lists import ChannelLists, read_channel_lists, startup_channels
 from liftd.settings.isg_list import Problem, Severity
-from liftd.settings.model import LiftdConfig
+from liftd.settings.model import ChannelSection, LiftdConfig
 
 
 class ConfigError(Exception):
@@ -33,8 +33,22 @@ class ConfigError(Exception):
 
 
 @dataclass(frozen=True, slots=True)
+class ChannelSettings:
+    """One channel of the machine: its parameters and what it runs."""
+
+    params: ChannelParams
+    program: Path | None  # None: the channel idles in READY
+    autostart: bool = True
+    repeat: bool = False
+
+
+@dataclass(frozen=True, slots=True)
 class Settings:
-    """Everything liftd needs from its configuration files."""
+    """Everything liftd needs from its configuration files.
+
+    `channel` and `program` are the channel `[cnc] channel` names (its trace is OUT.csv, its
+    summary the top level of simulate's JSON, the PLC's default); `channels` are all channels
+    of the start-up list in channel order, that one included (at `primary`)."""
 
     path: Path  # the liftd.toml that was used
     config: LiftdConfig
@@ -43,6 +57,23 @@ class Settings:
     warnings: tuple[Problem, ...]
     files: tuple[str, ...]  # every file read, for messages and reloads
     subroutine_dirs: tuple[Path, ...] = ()  # [nc] subroutine_dirs, resolved
+    channels: tuple[ChannelSettings, ...] = ()  # empty: only `channel`
+    primary: int = 0  # index of `channel` in `channels`
+
+    @property
+    def machine(self) -> tuple[ChannelSettings, ...]:
+        """Every channel in channel order (the primary one with `[program]`)."""
+        if self.channels:
+            return self.channels
+        prog = self.config.program
+        return (ChannelSettings(self.channel, self.program, prog.autostart, prog.repeat),)
+
+    @property
+    def primary_index(self) -> int:
+        return self.primary if self.channels else 0
+
+    def channel_by_id(self, channel_id: int) -> ChannelSettings | None:
+        return next((c for c in self.machine if c.params.channel_id == channel_id), None)
 
 
 def default_config_path() -> Path:
@@ -73,24 +104,38 @@ def toml_line(text: str, loc: tuple[str | int, ...]) -> int | None:
     keys = [part for part in loc if isinstance(part, str) and part != "[key]"]
     if not keys:
         return None
+    # the n-th table of an array of tables ([[channel]]): loc ("channel", n, "id")
+    nth = loc[1] if len(loc) > 1 and isinstance(loc[1], int) else None
     lines = text.splitlines()
-    header = re.compile(r"^\s*\[\s*([A-Za-z0-9_.]+)\s*\]")
+    header = re.compile(r"^\s*\[(\[?)\s*([A-Za-z0-9_.]+)\s*\]")
     assign = re.compile(r"^\s*([A-Za-z0-9_]+)\s*=")
-    for depth in range(len(keys) - 1, 0, -1):
-        section, key = ".".join(keys[:depth]), keys[depth]
-        current = ""
+
+    def headers() -> list[tuple[int, str, int | None]]:
+        seen: dict[str, int] = {}
+        out = []
         for lineno, line in enumerate(lines, start=1):
             m = header.match(line)
             if m:
-                current = m.group(1)
+                name = m.group(2)
+                index = seen[name] = seen.get(name, -1) + 1
+                out.append((lineno, name, index if m.group(1) else None))
+        return out
+
+    tables = headers()
+    for depth in range(len(keys) - 1, 0, -1):
+        section, key = ".".join(keys[:depth]), keys[depth]
+        current, index, starts = "", None, {n for n, _, _ in tables}
+        at = {n: (name, i) for n, name, i in tables}
+        for lineno, line in enumerate(lines, start=1):
+            if lineno in starts:
+                current, index = at[lineno]
                 continue
             m = assign.match(line)
-            if m and m.group(1) == key and current == section:
+            if m and m.group(1) == key and current == section and (nth is None or index == nth):
                 return lineno
     wanted = ".".join(keys)
-    for lineno, line in enumerate(lines, start=1):
-        m = header.match(line)
-        if m and m.group(1) == wanted:
+    for lineno, name, index in tables:
+        if name == wanted and (nth is None or index is None or index == nth):
             return lineno
     return None
 
@@ -153,37 +198,98 @@ def load_settings(explicit: str | None = None, program: str | None = None) -> Se
         program_path = base / config.program.file
     startup = base / config.cnc.startup_list
     nc = config.nc
-    lists, problems = read_channel_lists(
+    ids, problems = startup_channels(startup, config.cnc.channel)
+    lists, more = read_channel_lists(
         startup,
         config.cnc.channel,
         base / nc.tool_list if nc.tool_list else None,
         base / nc.zero_offset_list if nc.zero_offset_list else None,
     )
+    problems += more
+    where = _Where(str(path), text, problems)
     if lists is not None:
         names = [ax.name for ax in lists.axes]
         if config.cnc.lift_axis not in names:
-            problems.append(
-                Problem(
-                    Severity.ERROR,
-                    str(path),
-                    toml_line(text, ("cnc", "lift_axis")),
-                    "cnc.lift_axis",
-                    config.cnc.lift_axis,
-                    f"not an axis of channel {config.cnc.channel} (axes: {', '.join(names)})",
-                )
+            where.error(
+                ("cnc", "lift_axis"),
+                config.cnc.lift_axis,
+                f"not an axis of channel {config.cnc.channel} (axes: {', '.join(names)})",
             )
     zero_offsets = lists.zero_offsets if lists is not None else ()
     if lists is not None:
         zero_offsets = _zero_offsets(config, text, str(path), lists.axes, zero_offsets, problems)
-    if lists is None or any(p.severity is Severity.ERROR for p in problems):
+    others = _other_channels(config, base, startup, ids, where)
+    if lists is not None and others is not None:
+        _shared_axes(config.cnc.channel, lists, others, problems)
+    problems = list(dict.fromkeys(problems))  # the start-up list is read once per channel
+    if lists is None or others is None or any(p.severity is Severity.ERROR for p in problems):
         raise ConfigError(problems)
     tools = dict(lists.tool_radii)
     for key, radius_mm in nc.tools.items():
         tools[int(key[1:])] = units.mm_to_m(radius_mm)
-    channel = ChannelParams(
+    channel = _params(
+        config,
+        lists,
+        config.cnc.lift_axis,
+        tuple(sorted(tools.items())),
+        zero_offsets,
+        "G53" in nc.zero_offsets,
+    )
+    prog = config.program
+    machine = [ChannelSettings(channel, program_path, prog.autostart, prog.repeat)]
+    files = [str(path), *lists.files]
+    for table, other, lift_axis in others:
+        params = _params(config, other, lift_axis, other.tool_radii, other.zero_offsets, False)
+        program_file = base / table.program if table is not None and table.program else None
+        machine.append(
+            ChannelSettings(
+                params,
+                program_file,
+                table.autostart if table else True,
+                table.repeat if table else False,
+            )
+        )
+        files += [f for f in other.files if f not in files]
+    machine.sort(key=lambda c: c.params.channel_id)
+    return Settings(
+        path=path,
+        config=config,
+        channel=channel,
+        program=program_path,
+        warnings=tuple(p for p in problems if p.severity is Severity.WARNING),
+        files=tuple(files),
+        subroutine_dirs=tuple(base / d for d in nc.subroutine_dirs),
+        channels=tuple(machine),
+        primary=[c.params.channel_id for c in machine].index(channel.channel_id),
+    )
+
+
+class _Where:
+    """Problems located in liftd.toml."""
+
+    def __init__(self, file: str, text: str, problems: list[Problem]) -> None:
+        self.file, self.text, self.problems = file, text, problems
+
+    def error(self, loc: tuple[str | int, ...], value: object, message: str) -> None:
+        key = ".".join(str(p) for p in loc)
+        shown = None if value is None else str(value)
+        self.problems.append(
+            Problem(Severity.ERROR, self.file, toml_line(self.text, loc), key, shown, message)
+        )
+
+
+def _params(
+    config: LiftdConfig,
+    lists: ChannelLists,
+    lift_axis: str,
+    tools: tuple[tuple[int, float], ...],
+    zero_offsets: tuple[tuple[int, tuple[float, ...]], ...],
+    g53_configured: bool,
+) -> ChannelParams:
+    return ChannelParams(
         channel_id=lists.channel_id,
         axes=lists.axes,
-        lift_axis=config.cnc.lift_axis,
+        lift_axis=lift_axis,
         lift_method=lists.lift_method,
         cycle_time=config.cnc.cycle_time_us * 1e-6,
         lift_min_dist=lists.lift_min_dist,
@@ -193,21 +299,106 @@ def load_settings(explicit: str | None = None, program: str | None = None) -> Se
         m_synch=lists.m_synch,
         path_prep_flags=lists.path_prep_flags,
         ipo_flags=lists.ipo_flags,
-        tool_radii=tuple(sorted(tools.items())),
+        tool_radii=tools,
         zero_offsets=zero_offsets,
         zero_offset_default=lists.zero_offset_default,
-        g53_offsets=lists.g53_offsets or "G53" in nc.zero_offsets,
-        max_executed_blocks=nc.max_executed_blocks,
+        g53_offsets=lists.g53_offsets or g53_configured,
+        max_executed_blocks=config.nc.max_executed_blocks,
     )
-    return Settings(
-        path=path,
-        config=config,
-        channel=channel,
-        program=program_path,
-        warnings=tuple(p for p in problems if p.severity is Severity.WARNING),
-        files=(str(path), *lists.files),
-        subroutine_dirs=tuple(base / d for d in nc.subroutine_dirs),
-    )
+
+
+_Other = tuple[
+    ChannelSection | None, ChannelLists, str
+]  # ([[channel]] table or None, its lists, lift axis)
+
+
+def _other_channels(
+    config: LiftdConfig, base: Path, startup: Path, ids: tuple[int, ...] | None, where: _Where
+) -> list[_Other] | None:
+    """The channels of the start-up list besides `[cnc] channel`, with their `[[channel]]`
+    tables; None when any of them has an error (reported in `where`)."""
+    if ids is None:
+        return None
+    ok = True
+    primary = config.cnc.channel
+    if primary not in ids:
+        where.error(
+            ("cnc", "channel"),
+            primary,
+            f"the start-up list {startup} describes channels "
+            f"{', '.join(map(str, ids))} (kanal_anzahl)",
+        )
+        ok = False
+    tables: dict[int, ChannelSection] = {}
+    for k, entry in enumerate(config.channel):
+        if entry.id not in ids:
+            where.error(
+                ("channel", k, "id"),
+                entry.id,
+                f"a [[channel]] table for channel {entry.id}, which the start-up list "
+                f"{startup} does not have (channels {', '.join(map(str, ids))})",
+            )
+            ok = False
+        elif entry.id == primary:
+            where.error(
+                ("channel", k, "id"),
+                entry.id,
+                f"channel {primary} is [cnc] channel: its program is [program] file, "
+                "its lift axis [cnc] lift_axis",
+            )
+            ok = False
+        elif entry.id in tables:
+            where.error(("channel", k, "id"), entry.id, "two [[channel]] tables for one channel")
+            ok = False
+        tables[entry.id] = entry
+    out: list[_Other] = []
+    for cid in ids:
+        if cid == primary:
+            continue
+        lists, problems = read_channel_lists(startup, cid)
+        where.problems.extend(problems)
+        if lists is None:
+            ok = False
+            continue
+        table = tables.get(cid)
+        names = [ax.name for ax in lists.axes]
+        if table is not None and table.lift_axis is not None:
+            lift_axis = table.lift_axis
+            if lift_axis not in names:
+                k = config.channel.index(table)
+                where.error(
+                    ("channel", k, "lift_axis"),
+                    lift_axis,
+                    f"not an axis of channel {cid} (axes: {', '.join(names)})",
+                )
+                ok = False
+        else:
+            lift_axis = config.cnc.lift_axis if config.cnc.lift_axis in names else names[-1]
+        out.append((table, lists, lift_axis))
+    return out if ok else None
+
+
+def _shared_axes(
+    primary: int, lists: ChannelLists, others: list[_Other], problems: list[Problem]
+) -> None:
+    """Two channels cannot share an axis (one logical axis, `log_achs_nr`, in one channel)."""
+    owner: dict[int, int] = {ax.log_axis_nr: primary for ax in lists.axes}
+    for _, other, _ in sorted(others, key=lambda o: o[1].channel_id):
+        for ax, (file, line) in zip(other.axes, other.axis_refs, strict=True):
+            first = owner.setdefault(ax.log_axis_nr, other.channel_id)
+            if first != other.channel_id:
+                problems.append(
+                    Problem(
+                        Severity.ERROR,
+                        file,
+                        line,
+                        "log_achs_nr",
+                        str(ax.log_axis_nr),
+                        f"axis {ax.name} of channel {other.channel_id} is logical axis "
+                        f"{ax.log_axis_nr}, which is already in channel {first}: two "
+                        "channels cannot share an axis",
+                    )
+                )
 
 
 def program_problem(settings: Settings, explicit: str | None = None) -> Problem | None:

@@ -39,6 +39,19 @@ class ProgramSection(_Section):
     repeat: StrictBool = False
 
 
+class ChannelSection(_Section):
+    """A `[[channel]]` table: what liftd runs in a further channel of the start-up list (the
+    channel `[cnc] channel` names keeps `[cnc] lift_axis` and `[program]`). Channels of the
+    lists without a table idle in READY, serving their objects."""
+
+    id: int = Field(ge=1, le=12)  # logical channel id (list index id − 1)
+    lift_axis: str | None = Field(None, min_length=1, max_length=1)  # default: [cnc] lift_axis
+    # if the channel has it, else the channel's last path axis
+    program: str | None = None  # relative to liftd.toml; none: the channel idles
+    autostart: StrictBool = True
+    repeat: StrictBool = False
+
+
 class AdsSection(_Section):
     host: str = "127.0.0.1"
     port: int = Field(48898, ge=0, le=65535)  # 0 = any free port (the real one is logged)
@@ -160,3 +173,4 @@ class LiftdConfig(_Section):
     log: LogSection = LogSection()
     metrics: MetricsSection = MetricsSection()
     nc: NcSection = NcSection()
+    channel: tuple[ChannelSection, ...] = ()  # [[channel]] tables

@@ -95,12 +95,35 @@ def read_sources(program: Path | None, text: str, dirs: Sequence[Path]) -> NcSou
     return NcSources(str(program) if program is not None else "", tuple(files))
 
 
-def program_channel(settings: Settings, program: Path | None, text: str) -> ChannelParams:
-    """The channel parameters with the program's subroutine files, ready for the decoder."""
+def program_channel(
+    settings: Settings, program: Path | None, text: str, channel: ChannelParams | None = None
+) -> ChannelParams:
+    """The channel parameters (default: the [cnc] channel's) with the program's subroutine
+    files, ready for the decoder."""
     sources = read_sources(program, text, settings.subroutine_dirs)
-    return dataclasses.replace(settings.channel, nc_sources=sources)
+    return dataclasses.replace(channel or settings.channel, nc_sources=sources)
 
 
 def with_program(settings: Settings, program: Path | None, text: str) -> Settings:
-    """Settings whose channel carries the program's subroutine files."""
-    return dataclasses.replace(settings, channel=program_channel(settings, program, text))
+    """Settings whose [cnc] channel runs `program` and carries its subroutine files."""
+    channel = program_channel(settings, program, text)
+    machine = list(settings.machine)
+    machine[settings.primary_index] = dataclasses.replace(
+        machine[settings.primary_index], params=channel, program=program
+    )
+    return dataclasses.replace(settings, channel=channel, program=program, channels=tuple(machine))
+
+
+def read_program(path: Path | None) -> str:
+    """A program's text ("" for none); OSError when it cannot be read."""
+    return path.read_text(encoding="utf-8", errors="replace") if path is not None else ""
+
+
+def machine_programs(settings: Settings) -> list[tuple[ChannelParams, str]]:
+    """Every channel in channel order with its program's text and subroutine files (a channel
+    without a program: ""). OSError names the program that cannot be read."""
+    out = []
+    for c in settings.machine:
+        text = read_program(c.program)
+        out.append((program_channel(settings, c.program, text, c.params), text))
+    return out

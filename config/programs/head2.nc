@@ -1,0 +1,36 @@
+%head2
+( liftd two-head demo, channel 2: head 2 (U V W) cuts the right sheet,     )
+( from U 1510 mm. Path-based Lifting: W follows the path between parts.    )
+N10 G90 G17 G94
+#SLOPE[TYPE=TRAPEZ]
+N20 G00 U1560 V40 W1
+( part 1: square 120 x 80 )
+N30 M04
+N40 G01 U1680 V40 F6000
+N50 V120
+N60 U1560
+N70 V40
+N80 M05
+( travel to part 2 )
+N90 W[LIFT_START POS=1 POS_LIMIT=50]
+N100 G01 U1760 V60 F24000
+N110 U1800 V80
+N120 W[LIFT_END]
+( part 2: full circle R25 )
+N130 M04
+N140 G02 I25 J0 F5000
+N150 M05
+( travel to part 3 in one block )
+N160 G01 U1900 V200 F24000 W[LIFT POS=1 POS_LIMIT=40]
+( part 3: plate 100 x 60 )
+N170 M04
+N180 G01 U2000 V200 F6000
+N190 V260
+N200 U1900
+N210 V200
+N220 M05
+( park )
+N230 W[LIFT_START POS=50 POS_LIMIT=80]
+N240 G00 U1560 V40
+N250 W[LIFT_END]
+N260 M30
