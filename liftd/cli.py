@@ -145,6 +145,8 @@ def cmd_simulate(args: argparse.Namespace) -> int:
                 traces[method] = stack.enter_context(open(name, "w", encoding="utf-8", newline=""))
             if args.compare:
                 return _compare(args, settings, program, text, schedule, traces)
+            if len(settings.machine) > 1:
+                return _simulate_machine(args, settings, schedule, stack)
             return _simulate(args, settings, program, text, schedule, traces.get(args.method))
     except OSError as exc:
         print(f"{exc.filename}: error: cannot write the trace: {exc.strerror}", file=sys.stderr)
@@ -192,6 +194,60 @@ def _simulate(
         plot.plot_run(Path(args.plot), rows, ch.axis_names, z, summary.lifts, title)
     text_out = json.dumps(summary.to_json()) if args.json else describe(summary)
     return _output(text_out, result.program_error, result.finished)
+
+
+def _channel_trace(trace: str, channel_id: int) -> str:
+    """The trace of a further channel next to the [cnc] channel's: OUT.ch2.csv by OUT.csv."""
+    out = Path(trace)
+    return str(out.with_name(f"{out.stem}.ch{channel_id}{out.suffix or '.csv'}"))
+
+
+def _simulate_machine(
+    args: argparse.Namespace, settings: Settings, schedule: Schedule, stack: contextlib.ExitStack
+) -> int:
+    """Every channel of the start-up list in one GEO task: the [cnc] channel runs PROGRAM
+    with the --override/--feedhold schedule, the others their [[channel]] programs with
+    none; one trace per channel (OUT.csv, OUT.ch<N>.csv) and summary."""
+    from liftd.cnc.plc import Schedule  # noqa: PLC0415
+    from liftd.settings.programs import machine_programs  # noqa: PLC0415
+    from liftd.sim import plot  # noqa: PLC0415
+    from liftd.sim.simulate import channel_for, simulate_machine  # noqa: PLC0415
+    from liftd.sim.summary import ChannelSummary, describe, machine_json  # noqa: PLC0415
+
+    primary = settings.primary_index
+    try:
+        programs = machine_programs(settings)
+    except OSError as exc:
+        print(f"{exc.filename}: error: cannot read program: {exc.strerror}", file=sys.stderr)
+        return EXIT_PROGRAM
+    channels = [(channel_for(ch, args.method), text) for ch, text in programs]
+    traces: list[TextIO | None] = [None] * len(channels)
+    if args.trace:
+        for i, (ch, _) in enumerate(channels):
+            name = args.trace if i == primary else _channel_trace(args.trace, ch.channel_id)
+            traces[i] = stack.enter_context(open(name, "w", encoding="utf-8", newline=""))  # noqa: SIM115
+    schedules = [schedule if i == primary else Schedule() for i in range(len(channels))]
+    delay = settings.config.plc.m_ack_delay_ms * 1e-3
+    results = simulate_machine(channels, schedules, delay, traces, args.max_time)
+    entries = []
+    for c, (ch, _), result in zip(settings.machine, channels, results, strict=True):
+        name = str(c.program) if c.program is not None else ""
+        if c.program is not None:
+            _report_run(c.program, result, args.max_time, f" (channel {ch.channel_id})")
+        entries.append(ChannelSummary(ch.channel_id, name, result.summary))
+    main = results[primary]
+    if args.plot:
+        ch = channels[primary][0]
+        program = settings.machine[primary].program or Path("-")
+        title = f"{program.name}: {describe(main.summary)}"
+        plot.plot_run(Path(args.plot), main.series.rows, ch.axis_names, ch.lift_axis_index,
+                      main.summary.lifts, title)  # fmt: skip
+    if args.json:
+        text_out = json.dumps(machine_json(main.summary, tuple(entries)))
+    else:
+        text_out = "\n".join(f"channel {e.channel_id}: {describe(e.summary)}" for e in entries)
+    ran = [r for c, r in zip(settings.machine, results, strict=True) if c.program is not None]
+    return _output(text_out, any(r.program_error for r in ran), all(r.finished for r in ran))
 
 
 def _output(text: str, program_error: bool, finished: bool) -> int:

@@ -10,13 +10,14 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import TextIO
 
 import numpy as np
 
 from liftd.cnc.geo_task import LIFT_LATE_ID, GeoTask
+from liftd.cnc.machine import ChannelProgram, Machine
 from liftd.cnc.params import ChannelParams, LiftMethod
 from liftd.cnc.plc import Schedule, SimPlc
 from liftd.cnc.snapshot import ChannelState, GeoSnapshot
@@ -141,34 +142,36 @@ def run_cycles(
             return
 
 
-def simulate(
-    ch: ChannelParams,
-    text: str,
-    schedule: Schedule,
-    m_ack_delay: float,
-    trace: TextIO | None = None,
-    max_time: float = 3600.0,
-    on_cycle: Callable[[GeoSnapshot], None] | None = None,
-) -> SimResult:
-    dt = ch.cycle_time
-    task = GeoTask(ch, text)
-    plc = SimPlc(m_ack_delay)
-    writer = TraceWriter(trace, ch.axis_names) if trace is not None else None
-    monitor = LimitMonitor(len(ch.axes), dt)
-    series = SeriesBuffer(len(ch.axes) + 6)
-    errors: list[ErrorEntry] = []
-    snap: GeoSnapshot | None = None
-    cycles = 0
-    timer = StepTimer()
-    for snap in run_cycles(task, plc, schedule, dt, max_time, timer):
-        cycles += 1
-        if writer is not None:
-            writer.write(snap)
-        monitor.add(snap.positions)
-        if on_cycle is not None:
-            on_cycle(snap)
-        if series.wants():
-            series.add(
+class ChannelRun:
+    """What one channel's run records, cycle by cycle: its trace, the limit monitor, the
+    decimated series for the plot, its errors and step CPU time."""
+
+    def __init__(
+        self,
+        ch: ChannelParams,
+        trace: TextIO | None = None,
+        on_cycle: Callable[[GeoSnapshot], None] | None = None,
+    ) -> None:
+        self.ch = ch
+        self.writer = TraceWriter(trace, ch.axis_names) if trace is not None else None
+        self.monitor = LimitMonitor(len(ch.axes), ch.cycle_time)
+        self.series = SeriesBuffer(len(ch.axes) + 6)
+        self.errors: list[ErrorEntry] = []
+        self.last: GeoSnapshot | None = None
+        self.cycles = 0
+        self.timer = StepTimer()
+        self.on_cycle = on_cycle
+
+    def add(self, snap: GeoSnapshot) -> None:
+        self.cycles += 1
+        self.last = snap
+        if self.writer is not None:
+            self.writer.write(snap)
+        self.monitor.add(snap.positions)
+        if self.on_cycle is not None:
+            self.on_cycle(snap)
+        if self.series.wants():
+            self.series.add(
                 (
                     snap.t,
                     *snap.positions,
@@ -181,14 +184,77 @@ def simulate(
             )
         for ev in snap.events:
             if ev.name == "geo.error":
-                errors.append(ErrorEntry(int(ev.value), ev.line, ev.text))
+                self.errors.append(ErrorEntry(int(ev.value), ev.line, ev.text))
             elif ev.name == "lift.late":
-                errors.append(ErrorEntry(LIFT_LATE_ID, ev.line, ev.text))
-    if writer is not None:
-        writer.flush()
-    finished = snap is not None and snap.state in (ChannelState.READY, ChannelState.ERROR)
-    summary = build_summary(ch, task, monitor, cycles, snap, tuple(errors), timer.summary())
-    return SimResult(summary, series, finished)
+                self.errors.append(ErrorEntry(LIFT_LATE_ID, ev.line, ev.text))
+
+    def result(self, task: GeoTask) -> SimResult:
+        if self.writer is not None:
+            self.writer.flush()
+        snap = self.last
+        finished = snap is not None and snap.state in (ChannelState.READY, ChannelState.ERROR)
+        summary = build_summary(self.ch, task, self.monitor, self.cycles, snap,
+                                tuple(self.errors), self.timer.summary())  # fmt: skip
+        return SimResult(summary, self.series, finished)
+
+
+def simulate(
+    ch: ChannelParams,
+    text: str,
+    schedule: Schedule,
+    m_ack_delay: float,
+    trace: TextIO | None = None,
+    max_time: float = 3600.0,
+    on_cycle: Callable[[GeoSnapshot], None] | None = None,
+) -> SimResult:
+    task = GeoTask(ch, text)
+    run = ChannelRun(ch, trace, on_cycle)
+    plc = SimPlc(m_ack_delay)
+    for snap in run_cycles(task, plc, schedule, ch.cycle_time, max_time, run.timer):
+        run.add(snap)
+    return run.result(task)
+
+
+def simulate_machine(
+    channels: Sequence[tuple[ChannelParams, str]],
+    schedules: Sequence[Schedule],
+    m_ack_delay: float,
+    traces: Sequence[TextIO | None],
+    max_time: float = 3600.0,
+) -> list[SimResult]:
+    """All channels in one GEO task (`Machine`), each with its program ("" : it idles), its
+    own automatic PLC and schedule, and its trace; in channel order. Runs until every channel
+    with a program has ended it (READY or ERROR) or max_time; a channel's trace and summary
+    end with its program, so each channel's result is what it would be alone."""
+    machine = Machine([ChannelProgram(ch, text) for ch, text in channels])
+    order = sorted(range(len(channels)), key=lambda i: channels[i][0].channel_id)
+    runs = [ChannelRun(channels[i][0], traces[i]) for i in order]
+    plcs = [SimPlc(m_ack_delay) for _ in order]
+    sched = [schedules[i] for i in order]
+    active = [bool(channels[i][1].strip()) for i in order]
+    dt = machine.cycle_time
+    limit = round(max_time / dt)
+    clock = time.perf_counter_ns
+    k = 0
+    while k < limit and any(active):
+        k += 1
+        t = k * dt
+        for i, run in enumerate(runs):  # one GEO cycle: every channel, in channel order
+            inputs = plcs[i].inputs(run.last, t, sched[i])
+            c0 = clock()
+            snap = machine.step_channel(i, inputs, t)
+            ns = clock() - c0
+            if not active[i]:
+                continue
+            run.timer.add(ns)
+            run.add(snap)
+            if snap.state in (ChannelState.READY, ChannelState.ERROR) and machine.tasks[i].runs:
+                active[i] = False
+    results = [run.result(task) for run, task in zip(runs, machine.tasks, strict=True)]
+    back = [0] * len(order)
+    for pos, i in enumerate(order):
+        back[i] = pos
+    return [results[back[i]] for i in range(len(channels))]
 
 
 def build_summary(

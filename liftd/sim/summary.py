@@ -274,3 +274,25 @@ def describe(summary: SimSummary) -> str:
         f"method {summary.method}, {len(lifts)} lifts, mean clearance [mm]: "
         f"{', '.join(clear) or '-'}, duration {summary.duration_s:.2f} s"
     )
+
+
+@dataclass(frozen=True, slots=True)
+class ChannelSummary:
+    """One channel's run in a machine of several channels."""
+
+    channel_id: int
+    program: str  # the program's path, "" for a channel that idled
+    summary: SimSummary
+
+    def to_json(self) -> JsonObject:
+        return {"channel": self.channel_id, "program": self.program, **self.summary.to_json()}
+
+
+def machine_json(primary: SimSummary, channels: tuple[ChannelSummary, ...]) -> JsonObject:
+    """simulate's JSON for several channels: the [cnc] channel's summary where a single
+    channel's is (DESIGN.md §3.3), and every channel's, that one included, under "channels"
+    in channel order. One channel: exactly the single-channel JSON."""
+    out = primary.to_json()
+    if len(channels) > 1:
+        out["channels"] = [c.to_json() for c in channels]
+    return out

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 from liftd.cnc.params import AxisParams, ChannelParams, LiftMethod, MSync, SlopeType
 
 
@@ -33,3 +35,17 @@ def make_channel(
         look_ahead_blocks=look_ahead,
         m_synch=((4, MSync.MVS_SVS), (5, MSync.MOS), (8, MSync.MNS_SNS)),
     )
+
+
+def make_second_channel(
+    method: LiftMethod = LiftMethod.LIFTING, channel_id: int = 2, first_axis: int = 4
+) -> ChannelParams:
+    """Head 2 of the two-head machine without files: channel 2, U V W (logical axes 4, 5, 6;
+    W lifts), path-based Lifting unless asked otherwise."""
+    ch = make_channel(method)
+    names = ("U", "V", "W")
+    axes = tuple(
+        dataclasses.replace(ax, name=names[j], log_axis_nr=first_axis + j)
+        for j, ax in enumerate(ch.axes)
+    )
+    return dataclasses.replace(ch, channel_id=channel_id, axes=axes, lift_axis="W")
