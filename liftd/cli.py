@@ -388,7 +388,7 @@ def cmd_objects(args: argparse.Namespace) -> int:
 
     settings = _load(args)
     ads = settings.config.ads
-    catalog = Catalog(settings.channel)
+    catalog = Catalog([c.params for c in settings.machine])
     if args.json:
         keys = ("symbol", "index_group", "index_offset", "type", "unit", "access", "comment")
         objs = [dict(zip(keys, row, strict=True)) for row in catalog.rows()]
@@ -396,10 +396,15 @@ def cmd_objects(args: argparse.Namespace) -> int:
         return EXIT_OK
     ports = ", ".join(str(p) for p in ads.ams_ports)
     print(f"AMS NetId {ads.net_id}, port {ports} (GEO), TCP {ads.host}:{ads.port}")
+    for ch, logical, index in zip(catalog.channels, catalog.ig_logicals, catalog.ig_indexes,
+                                  strict=True):  # fmt: skip
+        axes = ", ".join(f"{ax.name} {ax.log_axis_nr}" for ax in ch.axes)
+        print(f"channel {ch.channel_id}: IG 0x{logical:X} (logical: IO = logical axis number × "
+              f"0x10000 + element; axes {axes}), index-based IG 0x{index:X}")  # fmt: skip
     print(
-        f"index-based addressing: IG 0x{catalog.ig_index:X} with IO = position in the "
-        "channel × 0x10000 + element; element attributes at IG + 0x100 (name), + 0x200 "
-        "(type), + 0x300 (length), + 0x400 (unit), + 0x500 (write flag), + 0x600 (address)"
+        "index-based addressing: IO = position in the channel × 0x10000 + element; element "
+        "attributes at IG + 0x100 (name), + 0x200 (type), + 0x300 (length), + 0x400 (unit), "
+        "+ 0x500 (write flag), + 0x600 (address)"
     )
     head = ("symbol", "IG", "IO", "type", "unit", "access", "comment")
     rows = [head, *catalog.rows()]
@@ -426,9 +431,10 @@ def cmd_plc(args: argparse.Namespace) -> int:
         return EXIT_CONFIG
     if host in ("0.0.0.0", "::", ""):
         host = "127.0.0.1"  # the daemon listens on every address; reach it on loopback
+    ch = _channel_arg(settings, args.channel).params
     target = plc.Target(
         host=host, tcp_port=tcp_port, net_id=args.net_id or ads.net_id, ams_port=args.port,
-        channel=settings.channel.channel_id, axis=args.axis or settings.channel.lift_axis,
+        channel=ch.channel_id, axis=args.axis or ch.lift_axis,
     )  # fmt: skip
     try:
         plc.run(target, schedule, args.cycle_ms, args.duration, args.json, args.timeout_ms,
@@ -500,6 +506,9 @@ def build_parser() -> argparse.ArgumentParser:
     plc.add_argument("--port", type=int, default=551, help="AMS port (default 551, GEO)")
     plc.add_argument("--cycle-ms", type=float, default=10.0, help="PLC cycle (default 10 ms)")
     plc.add_argument("--duration", type=float, metavar="S", help="stop after S seconds")
+    plc.add_argument(
+        "--channel", type=int, metavar="N", help="channel whose objects are polled (default: 1)"
+    )
     plc.add_argument("--axis", help="axis whose lift status is polled (default: lift_axis)")
     plc.add_argument("--override", metavar="SPEC", help='write override steps "T:PERCENT,…"')
     plc.add_argument("--feedhold", metavar="SPEC", help='write feed hold "T:DURATION,…"')

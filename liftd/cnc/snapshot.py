@@ -51,6 +51,7 @@ class Event(NamedTuple):
     line: int
     value: float = 0.0
     text: str = ""
+    channel: int = 0  # logical channel id of a machine of several channels; 0: the only one
 
 
 class GeoSnapshot(NamedTuple):
@@ -108,3 +109,4 @@ class PlcSignal(enum.IntEnum):
 class PlcWrite(NamedTuple):
     signal: PlcSignal
     value: float = 1.0
+    channel: int = 0  # machine index of the channel it is for (0: the first, channel order)

@@ -11,7 +11,8 @@ points at 0xF005 with a fixed handle (STATIC_HANDLE_BIT | n), valid on every con
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import dataclasses
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -42,14 +43,28 @@ class AdsStats(NamedTuple):
 
 class GeoView(NamedTuple):
     """What the provider reads from: the last published cycle, the loop's timing and the ADS
-    server's counters."""
+    server's counters. `snapshot` is the first channel's (channel order), `channels` every
+    channel's of a machine of several (empty: only `snapshot`)."""
 
     snapshot: GeoSnapshot
     stats: LoopStats
     ads: AdsStats = AdsStats()
+    channels: tuple[GeoSnapshot, ...] = ()
 
 
 Getter = Callable[[GeoView], float | int | bool]
+SnapOf = Callable[[GeoView], GeoSnapshot]
+
+
+def _first(v: GeoView) -> GeoSnapshot:
+    return v.snapshot
+
+
+def _snap_of(index: int) -> SnapOf:
+    """How channel `index` (machine order) finds its snapshot in a view."""
+    if index == 0:
+        return _first
+    return lambda v: v.channels[index]
 
 
 @dataclass(frozen=True, slots=True)
@@ -64,6 +79,7 @@ class CncObject:
     index_offset: int | None = None  # logical-addressing IO; None: HLI-only (symbol only)
     index_offset_index: int | None = None  # index-based IO
     signal: PlcSignal | None = None  # writable: the PLC input it sets
+    channel: int = 0  # machine index of its channel (channel order)
 
     @property
     def writable(self) -> bool:
@@ -75,25 +91,45 @@ def normalise(name: str) -> str:
     return name.replace("^", "").strip().lower()
 
 
-def _flag(name: str, axis: int) -> Getter:
+def _flag(name: str, axis: int, snap: SnapOf) -> Getter:
     """A lift flag of channel axis `axis`: the channel's flag while this axis lifts (any axis of
     the channel may lift, vendor §3; one range at a time per channel)."""
-    return lambda v: bool(getattr(v.snapshot, name)) and v.snapshot.lift_axis == axis
+
+    def get(v: GeoView) -> bool:
+        s = snap(v)
+        return bool(getattr(s, name)) and s.lift_axis == axis
+
+    return get
 
 
-def _phase(axis: int) -> Getter:
-    return lambda v: int(v.snapshot.lift_phase) if v.snapshot.lift_axis == axis else 0
+def _phase(axis: int, snap: SnapOf) -> Getter:
+    def get(v: GeoView) -> int:
+        s = snap(v)
+        return int(s.lift_phase) if s.lift_axis == axis else 0
+
+    return get
 
 
-def _count(axis: int) -> Getter:
-    return lambda v: v.snapshot.lift_counts[axis] if v.snapshot.lift_counts else 0
+def _count(axis: int, snap: SnapOf) -> Getter:
+    def get(v: GeoView) -> int:
+        s = snap(v)
+        return s.lift_counts[axis] if s.lift_counts else 0
+
+    return get
 
 
-def _axis(i: int) -> Getter:
-    return lambda v: units.m_to_isg_pos(v.snapshot.positions[i])
+def _axis(i: int, snap: SnapOf) -> Getter:
+    return lambda v: units.m_to_isg_pos(snap(v).positions[i])
 
 
-def _objects(ch: ChannelParams) -> list[CncObject]:
+def _of(snap: SnapOf, field: Callable[[GeoSnapshot], float | int | bool]) -> Getter:
+    return lambda v: field(snap(v))
+
+
+def _objects(ch: ChannelParams, index: int = 0) -> list[CncObject]:
+    """Channel `index`'s objects (machine order); the loop's and the server's (GEO.cycle,
+    GEO.timing.*, GEO.ads.*) with the first channel's."""
+    snap = _snap_of(index)
     cid = ch.channel_id
     geo = f"GEO.ch{cid}"
     um_s = units.m_s_to_isg_vel
@@ -103,7 +139,7 @@ def _objects(ch: ChannelParams) -> list[CncObject]:
             (ELEMENT_LIFT_ACTIVE, "lift_active", "lift_active"),
             (ELEMENT_LIFT_SUPPRESSED, "lift_suppressed", "lift_suppressed"),
         ):
-            getter = _flag(flag, pos - 1)
+            getter = _flag(flag, pos - 1, snap)
             out.append(
                 CncObject(
                     name,
@@ -117,11 +153,12 @@ def _objects(ch: ChannelParams) -> list[CncObject]:
                     pos * 0x10000 + element,
                 )
             )
+        phase, count = _phase(pos - 1, snap), _count(pos - 1, snap)
         out += [
-            CncObject("lift_phase", f"{geo}.{ax.name}.lift_phase", UNS16, "-", _phase(pos - 1),
+            CncObject("lift_phase", f"{geo}.{ax.name}.lift_phase", UNS16, "-", phase,
                       f"lift phase of {ax.name}: 0 none, 1 up, 2 down, 3 done, 4 direct, "
                       "5 hold at POS_LIMIT, 6 coupled"),
-            CncObject("lift_count", f"{geo}.{ax.name}.lift_count", UNS32, "-", _count(pos - 1),
+            CncObject("lift_count", f"{geo}.{ax.name}.lift_count", UNS32, "-", count,
                       f"lift ranges started on {ax.name} since the program started (liftd "
                       "extension: counts lifts whose flags overlap in one GEO cycle)"),
         ]  # fmt: skip
@@ -131,75 +168,79 @@ def _objects(ch: ChannelParams) -> list[CncObject]:
                 f"{geo}.{ax.name}.command_position",
                 SGN32,
                 "0.1 µm",
-                _axis(pos - 1),
+                _axis(pos - 1, snap),
                 f"command position of {ax.name} (HLI act_position_r)",
             )
         )
     out += [
         CncObject("max_path_velocity", f"{geo}.max_path_velocity", UNS32, "µm/s",
-                  lambda v: round(um_s(v.snapshot.v_block_max)),
+                  lambda v: round(um_s(snap(v).v_block_max)),
                   "maximum velocity on path in the active block", (), 0xF, 0xF),
         CncObject("max_path_velocity_block_end", f"{geo}.max_path_velocity_block_end", UNS32,
-                  "µm/s", lambda v: round(um_s(v.snapshot.v_block_end)),
+                  "µm/s", lambda v: round(um_s(snap(v).v_block_end)),
                   "maximum velocity on path at block end", (), 0x10, 0x10),
         CncObject("path_velocity", f"{geo}.path_velocity", REAL64, "µm/s",
-                  lambda v: um_s(v.snapshot.v_path), "current velocity on path", (), 0x15, 0x15),
+                  lambda v: um_s(snap(v).v_path), "current velocity on path", (), 0x15, 0x15),
         CncObject("override", f"{geo}.override", UNS16, "0.1 %",
-                  lambda v: units.fraction_to_isg_permille(v.snapshot.override),
+                  lambda v: units.fraction_to_isg_permille(snap(v).override),
                   "path override in effect (after the lift's limits)"),
         CncObject("override_requested", f"{geo}.override_requested", UNS16, "0.1 %",
-                  lambda v: units.fraction_to_isg_permille(v.snapshot.override_requested),
+                  lambda v: units.fraction_to_isg_permille(snap(v).override_requested),
                   "path override requested by the PLC"),
         CncObject("override_max", f"{geo}.override_max", UNS16, "0.1 %",
-                  lambda v: units.fraction_to_isg_permille(v.snapshot.override_max),
+                  lambda v: units.fraction_to_isg_permille(snap(v).override_max),
                   "highest override Advanced Lifting accepts now"),
         CncObject("feed_hold", f"{geo}.feed_hold", BOOLEAN, "-",
-                  lambda v: v.snapshot.feed_hold, "feed hold in effect"),
-        CncObject("state", f"{geo}.state", UNS32, "-", lambda v: int(v.snapshot.state),
+                  lambda v: snap(v).feed_hold, "feed hold in effect"),
+        CncObject("state", f"{geo}.state", UNS32, "-", lambda v: int(snap(v).state),
                   "channel state (KERNELV: 3 READY, 4 ACTIVE, 5 HOLD, 6 ERROR)"),
-        CncObject("line", f"{geo}.line", UNS32, "-", lambda v: v.snapshot.line,
+        CncObject("line", f"{geo}.line", UNS32, "-", lambda v: snap(v).line,
                   "NC source line being executed"),
-        CncObject("block", f"{geo}.block", UNS32, "-", lambda v: v.snapshot.segment,
+        CncObject("block", f"{geo}.block", UNS32, "-", lambda v: snap(v).segment,
                   "motion block being executed (0-based)"),
-        CncObject("error_id", f"{geo}.error_id", UNS32, "-", lambda v: v.snapshot.error_id,
+        CncObject("error_id", f"{geo}.error_id", UNS32, "-", lambda v: snap(v).error_id,
                   "ISG error id of the channel error, 0 for none"),
         CncObject("error_line", f"{geo}.error_line", UNS32, "-",
-                  lambda v: v.snapshot.error_line, "NC line of the channel error"),
-        CncObject("m_pending", f"{geo}.m_pending", SGN32, "-", lambda v: v.snapshot.m_pending,
+                  lambda v: snap(v).error_line, "NC line of the channel error"),
+        CncObject("m_pending", f"{geo}.m_pending", SGN32, "-", lambda v: snap(v).m_pending,
                   "M function waiting for its acknowledge, -1 for none"),
-        CncObject("cycle", "GEO.cycle", UNS64, "-", lambda v: v.snapshot.cycle,
-                  "GEO cycles since start"),
-        CncObject("exceeded", "GEO.timing.exceeded", UNS32, "-", lambda v: v.stats.exceeded,
-                  "cycles that finished after their deadline"),
-        CncObject("compute_last_us", "GEO.timing.compute_last_us", REAL64, "µs",
-                  lambda v: v.stats.compute_last_us, "compute time of the last cycle"),
-        CncObject("compute_max_us", "GEO.timing.compute_max_us", REAL64, "µs",
-                  lambda v: v.stats.compute_max_us, "largest compute time since start"),
-        CncObject("compute_over_25pct", "GEO.timing.compute_over_25pct", UNS32, "-",
-                  lambda v: v.stats.compute_over, "cycles whose compute took > 25 % of the cycle"),
-        CncObject("lateness_last_us", "GEO.timing.lateness_last_us", REAL64, "µs",
-                  lambda v: v.stats.lateness_last_us, "wake-up lateness of the last cycle"),
-        CncObject("lateness_max_us", "GEO.timing.lateness_max_us", REAL64, "µs",
-                  lambda v: v.stats.lateness_max_us, "largest wake-up lateness since start"),
-        CncObject("connections", "GEO.ads.connections", UNS32, "-",
-                  lambda v: v.ads.connections, "open ADS connections"),
-        CncObject("requests", "GEO.ads.requests", UNS64, "-", lambda v: v.ads.requests,
-                  "ADS requests answered since start"),
-        CncObject("errors", "GEO.ads.errors", UNS32, "-", lambda v: v.ads.errors,
-                  "connections closed for protocol errors and requests answered 0x700"),
-        CncObject("notifications", "GEO.ads.notifications", UNS64, "-",
-                  lambda v: v.ads.notifications, "device notification frames sent"),
-        CncObject("log_dropped", "GEO.ads.log_dropped", UNS64, "-",
-                  lambda v: v.ads.log_dropped,
-                  "daemon log lines dropped because nobody read the log output"),
     ]  # fmt: skip
+    if index == 0:
+        out += [
+            CncObject("cycle", "GEO.cycle", UNS64, "-", lambda v: v.snapshot.cycle,
+                      "GEO cycles since start"),
+            CncObject("exceeded", "GEO.timing.exceeded", UNS32, "-", lambda v: v.stats.exceeded,
+                      "cycles that finished after their deadline"),
+            CncObject("compute_last_us", "GEO.timing.compute_last_us", REAL64, "µs",
+                      lambda v: v.stats.compute_last_us, "compute time of the last cycle"),
+            CncObject("compute_max_us", "GEO.timing.compute_max_us", REAL64, "µs",
+                      lambda v: v.stats.compute_max_us, "largest compute time since start"),
+            CncObject("compute_over_25pct", "GEO.timing.compute_over_25pct", UNS32, "-",
+                      lambda v: v.stats.compute_over,
+                      "cycles whose compute took > 25 % of the cycle"),
+            CncObject("lateness_last_us", "GEO.timing.lateness_last_us", REAL64, "µs",
+                      lambda v: v.stats.lateness_last_us, "wake-up lateness of the last cycle"),
+            CncObject("lateness_max_us", "GEO.timing.lateness_max_us", REAL64, "µs",
+                      lambda v: v.stats.lateness_max_us, "largest wake-up lateness since start"),
+            CncObject("connections", "GEO.ads.connections", UNS32, "-",
+                      lambda v: v.ads.connections, "open ADS connections"),
+            CncObject("requests", "GEO.ads.requests", UNS64, "-", lambda v: v.ads.requests,
+                      "ADS requests answered since start"),
+            CncObject("errors", "GEO.ads.errors", UNS32, "-", lambda v: v.ads.errors,
+                      "connections closed for protocol errors and requests answered 0x700"),
+            CncObject("notifications", "GEO.ads.notifications", UNS64, "-",
+                      lambda v: v.ads.notifications, "device notification frames sent"),
+            CncObject("log_dropped", "GEO.ads.log_dropped", UNS64, "-",
+                      lambda v: v.ads.log_dropped,
+                      "daemon log lines dropped because nobody read the log output"),
+        ]  # fmt: skip
     plc = f"PLC.ch{cid}"
     out += [
         CncObject("override", f"{plc}.override", UNS16, "0.1 %",
-                  lambda v: units.fraction_to_isg_permille(v.snapshot.override_requested),
+                  lambda v: units.fraction_to_isg_permille(snap(v).override_requested),
                   "write: path override 0..2000 (0.1 %)", signal=PlcSignal.OVERRIDE),
         CncObject("feed_hold", f"{plc}.feed_hold", BOOLEAN, "-",
-                  lambda v: v.snapshot.feed_hold, "write: feed hold", signal=PlcSignal.FEED_HOLD),
+                  lambda v: snap(v).feed_hold, "write: feed hold", signal=PlcSignal.FEED_HOLD),
         CncObject("start", f"{plc}.start", BOOLEAN, "-", lambda v: False,
                   "write TRUE: start / continue the program", signal=PlcSignal.START),
         CncObject("stop", f"{plc}.stop", BOOLEAN, "-", lambda v: False,
@@ -209,27 +250,41 @@ def _objects(ch: ChannelParams) -> list[CncObject]:
         CncObject("m_ack", f"{plc}.m_ack", BOOLEAN, "-", lambda v: False,
                   "write TRUE: acknowledge the pending M function", signal=PlcSignal.M_ACK),
     ]  # fmt: skip
-    return out
+    return [dataclasses.replace(obj, channel=index) for obj in out]
 
 
 class Catalog:
-    """Every object of one channel, looked up by address or by symbol name."""
+    """Every object of the machine's channels, looked up by address or by symbol name.
 
-    def __init__(self, ch: ChannelParams, channel_index: int = 1) -> None:
-        self.channel = ch
-        self.objects = tuple(_objects(ch))
-        self.ig_logical = IPO_LOGICAL + ch.channel_id
-        self.ig_index = IPO_INDEX + channel_index
-        self.by_group: dict[int, dict[int, CncObject]] = {self.ig_logical: {}, self.ig_index: {}}
+    Channel i (machine order, ascending channel id) is at index group 0x121300 + its channel
+    id (logical) and 0x21300 + i + 1 (index based: the n-th configured channel); a catalogue
+    of one channel takes its index from `channel_index`."""
+
+    def __init__(self, ch: ChannelParams | Sequence[ChannelParams], channel_index: int = 1) -> None:
+        channels = (ch,) if isinstance(ch, ChannelParams) else tuple(ch)
+        channels = tuple(sorted(channels, key=lambda c: c.channel_id))
+        self.channels = channels
+        self.channel = channels[0]
+        self.objects = tuple(obj for i, c in enumerate(channels) for obj in _objects(c, i))
+        self.ig_logicals = tuple(IPO_LOGICAL + c.channel_id for c in channels)
+        self.ig_indexes = tuple(
+            IPO_INDEX + (channel_index if len(channels) == 1 else i + 1)
+            for i in range(len(channels))
+        )
+        self.ig_logical, self.ig_index = self.ig_logicals[0], self.ig_indexes[0]
+        self.by_group: dict[int, dict[int, CncObject]] = {
+            ig: {} for ig in (*self.ig_logicals, *self.ig_indexes)
+        }
         self.static: dict[int, CncObject] = {}
         self.symbols: list[Symbol] = []
         self.by_name: dict[str, Symbol] = {}
         self.object_of: dict[str, CncObject] = {}
         for n, obj in enumerate(self.objects):
             if obj.index_offset is not None and obj.index_offset_index is not None:
-                self.by_group[self.ig_logical][obj.index_offset] = obj
-                self.by_group[self.ig_index][obj.index_offset_index] = obj
-                ig, io = self.ig_logical, obj.index_offset
+                logical = self.ig_logicals[obj.channel]
+                self.by_group[logical][obj.index_offset] = obj
+                self.by_group[self.ig_indexes[obj.channel]][obj.index_offset_index] = obj
+                ig, io = logical, obj.index_offset
             else:
                 ig, io = int(IndexGroup.SYM_VALBYHND), STATIC_HANDLE_BIT | n
                 self.static[io] = obj
@@ -242,6 +297,13 @@ class Catalog:
                     raise ValueError(f"symbol {name} declared twice")
                 self.by_name[key] = sym if name == obj.symbol else _alias(sym, name)
                 self.object_of[key] = obj
+
+    def index_of(self, channel_id: int) -> int | None:
+        """Machine index of logical channel `channel_id`, None if the machine has none."""
+        for i, c in enumerate(self.channels):
+            if c.channel_id == channel_id:
+                return i
+        return None
 
     def rows(self) -> list[tuple[str, str, str, str, str, str, str]]:
         """(symbol, IG, IO, type, unit, access, comment) for `liftd objects`."""

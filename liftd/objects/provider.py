@@ -97,7 +97,8 @@ class CncProvider:
         if length < 8:
             raise AdsError(AdsErr.INVALIDSIZE, "an object address is IG + IO, 8 bytes")
         data_ig = (ig & ~ATTRIBUTE_FIELD) | DATA
-        io = obj.index_offset if data_ig == self.catalog.ig_logical else obj.index_offset_index
+        logical = data_ig == self.catalog.ig_logicals[obj.channel]
+        io = obj.index_offset if logical else obj.index_offset_index
         return struct.pack("<II", data_ig, io or 0)
 
     def write(self, index_group: int, index_offset: int, data: bytes) -> None:
@@ -107,20 +108,21 @@ class CncProvider:
             obj, _ = self._locate(index_group, index_offset)
         if obj.signal is None:
             raise AdsError(AdsErr.INVALIDACCESS, f"{obj.symbol} is read-only")
-        self._submit(obj.signal, obj.type.unpack(data))
+        self._submit(obj.signal, obj.type.unpack(data), obj.channel)
 
-    def _submit(self, signal: PlcSignal, raw: float | int) -> None:
+    def _submit(self, signal: PlcSignal, raw: float | int, channel: int) -> None:
+        """A PLC write for channel `channel` (machine index) into the GEO loop's inputs."""
         if signal is PlcSignal.OVERRIDE:
             if not 0 <= raw <= MAX_OVERRIDE_PERMILLE:
                 raise AdsError(AdsErr.INVALIDDATA, f"override {raw} (0..2000 × 0.1 %)")
-            self.sink(PlcWrite(signal, units.isg_permille_to_fraction(int(raw))))
+            self.sink(PlcWrite(signal, units.isg_permille_to_fraction(int(raw)), channel))
             return
         if raw not in (0, 1):
             raise AdsError(AdsErr.INVALIDDATA, f"BOOL value {raw}")
         if signal is PlcSignal.FEED_HOLD:
-            self.sink(PlcWrite(signal, float(raw)))
+            self.sink(PlcWrite(signal, float(raw), channel))
         elif raw:  # commands and the acknowledge act on TRUE; FALSE does nothing
-            self.sink(PlcWrite(signal))
+            self.sink(PlcWrite(signal, 1.0, channel))
 
     def read_write(
         self, index_group: int, index_offset: int, read_length: int, data: bytes
@@ -133,14 +135,16 @@ class CncProvider:
         if len(data) != 8 or read_length < 8:
             raise AdsError(AdsErr.INVALIDSIZE, "object address: in 8 bytes, out 8 bytes")
         channel, axis = struct.unpack("<II", data)
-        if channel != self.catalog.channel.channel_id:
+        index = self.catalog.index_of(channel)
+        if index is None:
             raise AdsError(AdsErr.INVALIDDATA, f"channel {channel}")
+        ig = self.catalog.ig_logicals[index]
         io = obj.index_offset or 0
         if io >= 0x10000:  # an axis object: the same element of the asked axis
             io = axis * 0x10000 + (io & 0xFFFF)
-            if (io not in self.catalog.by_group[self.catalog.ig_logical]) or axis == 0:
+            if (io not in self.catalog.by_group[ig]) or axis == 0:
                 raise AdsError(AdsErr.INVALIDDATA, f"axis {axis}")
-        return struct.pack("<II", self.catalog.ig_logical, io)
+        return struct.pack("<II", ig, io)
 
     def find_symbol(self, name: str) -> Symbol:
         sym = self.catalog.by_name.get(normalise(name))

@@ -2,12 +2,14 @@
 
 Started by the daemon's `GeoProcess` as `python -m liftd.runtime` (a clean interpreter that
 loads the core and nothing of the daemon's: no numpy, pydantic, structlog). Per cycle, without
-logging and without blocking: drain the PLC input ring, step the GEO task at t = k·dt, publish the
-snapshot through the seqlock (and the trace ring), write its events to the event pipe
+logging and without blocking: drain the PLC input ring (each write names its channel), step
+every channel of the machine at t = k·dt (`Machine.step`, channel order), publish their
+snapshots in one record through the seqlock (and the trace ring), write its events to the event pipe
 (non-blocking; dropped and counted when full), update counters and the fixed-size compute and
 lateness histograms. The timing policy is in cycle.py. A configuration sent by the daemon
-(SIGHUP) takes effect at the next program boundary. Memory is locked once the programs are
-prepared and the heap trimmed (rt.lock_memory), so the lock holds what the loop uses.
+(SIGHUP) takes effect in each channel at that channel's next program boundary. Memory is
+locked once the programs are prepared and the heap trimmed (rt.lock_memory), so the lock
+holds what the loop uses.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ import time
 from dataclasses import dataclass, field
 
 from liftd.cnc.geo_task import GeoTask
+from liftd.cnc.machine import ChannelProgram, Machine
 from liftd.cnc.params import ChannelParams
 from liftd.cnc.snapshot import ChannelState, Command, Event, GeoSnapshot, LoopStats
 from liftd.runtime import rt
@@ -46,18 +49,31 @@ OVERRUN_EVENT_EVERY_NS = 1_000_000_000  # at most one geo.overrun event per seco
 
 
 @dataclass(frozen=True, slots=True)
-class LoopConfig:
-    """Everything the loop needs; plain picklable data (no pydantic, no files)."""
+class ChannelConfig:
+    """One channel of the loop and its program; plain picklable data."""
 
     channel: ChannelParams
     program_text: str
     program_name: str
     autostart: bool = True
     repeat: bool = False
+
+
+@dataclass(frozen=True, slots=True)
+class LoopConfig:
+    """Everything the loop needs; plain picklable data (no pydantic, no files). `channels`
+    in channel order (ascending channel id), the order of their snapshots in shared memory
+    and of the PLC inputs' channel index."""
+
+    channels: tuple[ChannelConfig, ...]
     m_ack_auto: bool = True
     m_ack_delay_s: float = 0.02
     rt: rt.RtRequest = field(default_factory=rt.RtRequest)
     max_behind: int = 100
+
+    @property
+    def cycle_time(self) -> float:
+        return self.channels[0].channel.cycle_time
 
 
 class _Events:
@@ -66,9 +82,9 @@ class _Events:
         os.set_blocking(self.fd, False)
         self.dropped = 0
 
-    def send(self, ev: Event) -> None:
+    def send(self, ev: Event, channel: int = 0) -> None:
         try:
-            os.write(self.fd, pack_event(ev))
+            os.write(self.fd, pack_event(ev, channel))
         except (BlockingIOError, BrokenPipeError):
             self.dropped += 1
 
@@ -79,44 +95,60 @@ class GeoLoop:
         self.cfg = cfg
         self.events = events
         self.control_fd = control_fd
-        self.task = GeoTask(cfg.channel, cfg.program_text, autostart=cfg.autostart)
-        if cfg.repeat:
-            self.task.prepare_next_run()  # now, not in the cycle of the first repeat
-        self.plc = PlcInputs(cfg.m_ack_auto, cfg.m_ack_delay_s)
-        self.pending: LoopConfig | None = None
+        self.machine = Machine(
+            [ChannelProgram(c.channel, c.program_text, c.autostart) for c in cfg.channels]
+        )
+        if self.machine.channel_ids != tuple(c.channel.channel_id for c in cfg.channels):
+            raise ValueError("LoopConfig.channels must be in channel order")
+        for task, c in zip(self.machine.tasks, cfg.channels, strict=True):
+            if c.repeat:
+                task.prepare_next_run()  # now, not in the cycle of the first repeat
+        self.current = list(cfg.channels)
+        self.plcs = [PlcInputs(cfg.m_ack_auto, cfg.m_ack_delay_s) for _ in cfg.channels]
+        # events of a machine of several channels say which channel they come from
+        several = len(cfg.channels) > 1
+        self.tags = [c.channel.channel_id if several else 0 for c in cfg.channels]
+        self.pending: list[ChannelConfig | None] = [None] * len(cfg.channels)
+        self.pending_cfg = cfg
         self.reload_gen = 0
 
-    def _check_reload(self, snap: GeoSnapshot) -> None:
+    def _check_reload(self, snaps: list[GeoSnapshot]) -> None:
         words = self.shared.words
         if words[RELOAD] != self.reload_gen:
             words[LOADING] += 1  # a large program takes a while to arrive
-            self.reload_gen, self.pending = read_message(
-                self.control_fd
-            )  # one per reload, in order
+            self.reload_gen, cfg = read_message(self.control_fd)  # one per reload, in order
+            self.pending_cfg = cfg
+            self.pending = list(cfg.channels)
             words[RELOAD_TAKEN] = self.reload_gen
             words[LOADING] += 1
-        pending = self.pending
-        if pending is None or snap.state not in (ChannelState.READY, ChannelState.ERROR):
-            return
-        # the program boundary: the new lists and program take effect from where the axes are
-        self.cfg, self.pending = pending, None
-        words[LOADING] += 1  # decoding and planning: tell the supervisor it works
-        self.task = GeoTask(pending.channel, pending.program_text, autostart=False,
-                            start_position=snap.positions)  # fmt: skip
-        if pending.repeat:
-            self.task.prepare_next_run()
-        words[LOADING] += 1
-        self.plc = PlcInputs(pending.m_ack_auto, pending.m_ack_delay_s)
-        self.events.send(Event("geo.reloaded", snap.t, 0, 0.0, pending.program_name))
-        if pending.autostart:
-            self.plc.request(Command.START)
+        for i, pending in enumerate(self.pending):
+            snap = snaps[i]
+            if pending is None or snap.state not in (ChannelState.READY, ChannelState.ERROR):
+                continue
+            # the channel's program boundary: its new lists and program take effect from
+            # where its axes are; the other channels go on
+            self.pending[i] = None
+            self.current[i] = pending
+            words[LOADING] += 1  # decoding and planning: tell the supervisor it works
+            task = GeoTask(pending.channel, pending.program_text, autostart=False,
+                           start_position=snap.positions)  # fmt: skip
+            if pending.repeat:
+                task.prepare_next_run()
+            self.machine.replace(i, task)
+            words[LOADING] += 1
+            common = self.pending_cfg
+            self.plcs[i] = PlcInputs(common.m_ack_auto, common.m_ack_delay_s)
+            self.events.send(Event("geo.reloaded", snap.t, 0, 0.0, pending.program_name),
+                             self.tags[i])  # fmt: skip
+            if pending.autostart:
+                self.plcs[i].request(Command.START)
 
     def run(self) -> None:
         shared, cfg = self.shared, self.cfg
         words = shared.words
-        period_ns = round(cfg.channel.cycle_time * 1e9)
+        period_ns = round(cfg.cycle_time * 1e9)
         quarter_ns = round(period_ns * COMPUTE_SHARE)
-        dt = cfg.channel.cycle_time
+        dt = cfg.cycle_time
         codec = shared.codec
         publish = shared.snapshot.write
         trace = shared.trace
@@ -125,9 +157,14 @@ class GeoLoop:
         clock = CycleClock(period_ns, now_ns() + period_ns, cfg.max_behind)
         k = exceeded = over = regridded = 0
         compute_ns = compute_max = late_max = compute_sum = late_sum = 0
-        last: GeoSnapshot | None = None
+        n = len(self.machine)
+        channels = range(n)
+        last: list[GeoSnapshot | None] = [None] * n
         last_overrun_event = -OVERRUN_EVENT_EVERY_NS
         sleep_until = rt.sleep_until
+        tags, plcs, tasks, step = self.tags, self.plcs, self.machine.tasks, self.machine.step
+        send = self.events.send
+        start = Command.START
         while not words[STOP]:
             deadline = clock.deadline_ns
             if deadline > now_ns():
@@ -138,28 +175,34 @@ class GeoLoop:
             t = k * dt
             while (raw := shared.inputs.get()) is not None:  # rare: only when the PLC writes
                 w = unpack_input(raw)
-                if self.plc.apply(w):  # logged with the cycle it takes effect in
-                    self.events.send(Event("geo.plc_input", t, 0, w.value, w.signal.name.lower()))
-            inputs = self.plc.inputs(last, t)
-            starting = inputs.command is Command.START  # may decode and plan the program
+                if w.channel < n and plcs[w.channel].apply(w):  # logged with its cycle
+                    send(Event("geo.plc_input", t, 0, w.value, w.signal.name.lower()),
+                         tags[w.channel])  # fmt: skip
+            inputs = [plcs[i].inputs(last[i], t) for i in channels]
+            # a START may decode and plan the program
+            starting = any(inp.command is start for inp in inputs)
             if starting:
                 words[LOADING] += 1
-            snap = self.task.step(inputs, t)
+            snaps = step(inputs, t)
             if starting:
                 words[LOADING] += 1
             stats = LoopStats(k, exceeded, compute_ns / 1e3, compute_max / 1e3, late / 1e3,
                               late_max / 1e3, over)  # fmt: skip
-            record = codec.pack(snap, stats)
+            record = codec.pack(snaps, stats)
             publish(record)
             if trace is not None:
                 trace.put(record)
-            for ev in snap.events:
-                self.events.send(ev)
-            if (self.cfg.repeat and snap.state is ChannelState.READY and self.task.runs
-                    and (last is None or last.state is not ChannelState.READY)):  # fmt: skip
-                self.plc.request(Command.START)
-            self._check_reload(snap)
-            last = snap
+            for i in channels:
+                snap, before = snaps[i], last[i]
+                for ev in snap.events:
+                    send(ev, tags[i])
+                ended = snap.state is ChannelState.READY and (
+                    before is None or before.state is not ChannelState.READY
+                )
+                if ended and self.current[i].repeat and tasks[i].runs:
+                    plcs[i].request(start)
+            self._check_reload(snaps)
+            last = list(snaps)
             end = now_ns()
             compute_ns = end - wake
             compute_max = max(compute_max, compute_ns)
@@ -178,13 +221,13 @@ class GeoLoop:
                 words[EXCEEDED] = exceeded
                 if end - last_overrun_event >= OVERRUN_EVENT_EVERY_NS:
                     last_overrun_event = end
-                    self.events.send(Event("geo.overrun", t, snap.line, compute_ns / 1e3))
+                    send(Event("geo.overrun", t, snaps[0].line, compute_ns / 1e3))
             words[CYCLES] = k
             skipped = clock.next_cycle(end)
             if skipped:
                 regridded += skipped
                 words[REGRIDDED] = regridded
-                self.events.send(Event("geo.regrid", t, snap.line, float(skipped)))
+                send(Event("geo.regrid", t, snaps[0].line, float(skipped)))
             if self.events.dropped:
                 words[EVENTS_DROPPED] = self.events.dropped
 

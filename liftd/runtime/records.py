@@ -7,6 +7,7 @@ from __future__ import annotations
 import os
 import pickle
 import struct
+from collections.abc import Sequence
 from typing import Any
 
 from liftd.cnc.snapshot import (
@@ -19,8 +20,9 @@ from liftd.cnc.snapshot import (
     PlcWrite,
 )
 
-INPUT = struct.Struct("<Id4x")  # signal, value
-EVENT_HEAD = struct.Struct("<HHIdd")  # name id, text bytes, line, t, value
+INPUT = struct.Struct("<IdI")  # signal, value, machine index of the channel
+EVENT_HEAD = struct.Struct("<HHIdd")  # name id (+ channel id << 8), text bytes, line, t, value
+EVENT_NAME_MASK = 0xFF
 MAX_EVENT_TEXT = 1000  # a record stays far below PIPE_BUF (4096): one atomic write
 
 EVENT_NAMES = (
@@ -70,6 +72,10 @@ class SnapshotCodec:
 
     def unpack(self, raw: bytes) -> tuple[GeoSnapshot, LoopStats]:
         v = self.fmt.unpack(raw)
+        return self.snapshot_of(v), LoopStats(*v[21 + 2 * self.n :])
+
+    def snapshot_of(self, v: tuple[Any, ...]) -> GeoSnapshot:
+        """The snapshot from the unpacked fields (its 21 + 2·n_axes values first)."""
         n = self.n
         pos = tuple(v[5 : 5 + n])
         r = v[5 + n :]
@@ -78,23 +84,60 @@ class SnapshotCodec:
             r[5], r[6], LiftPhase(r[7]), r[8], r[9], r[10], r[11], r[12], (), r[13], r[14],
             r[15], tuple(r[16 : 16 + n]),
         )  # fmt: skip
-        return snap, LoopStats(*r[16 + n :])
+        return snap
+
+
+class MachineCodec:
+    """The snapshots of every channel of a machine (channel order) + LoopStats ↔ bytes: the
+    channels' fields one after the other, the loop's timing once at the end. With one
+    channel the bytes are exactly `SnapshotCodec`'s."""
+
+    def __init__(self, axes: Sequence[int]) -> None:
+        self.axes = tuple(axes)
+        self.channels = [SnapshotCodec(n) for n in self.axes]
+        bodies = "".join(c.fmt.format[1:-7] for c in self.channels)  # without "<" and stats
+        self.fmt = struct.Struct(f"<{bodies}qqddddq")
+        self.size = self.fmt.size
+        self._fields = [21 + 2 * n for n in self.axes]
+
+    def pack(self, snaps: Sequence[GeoSnapshot], st: LoopStats) -> bytes:
+        values: list[Any] = []
+        for s, n in zip(snaps, self.axes, strict=True):
+            values += (
+                s.cycle, s.t, s.state, s.line, s.segment, *s.positions, s.v_path, s.override,
+                s.override_requested, s.override_max, s.feed_hold, s.lift_active,
+                s.lift_suppressed, s.lift_phase, s.lift_vz, s.lift_az, s.m_pending, s.error_id,
+                s.error_line, s.v_block_max, s.v_block_end, s.lift_axis,
+                *(s.lift_counts or (0,) * n),
+            )  # fmt: skip
+        return self.fmt.pack(*values, *st)
+
+    def unpack(self, raw: bytes) -> tuple[tuple[GeoSnapshot, ...], LoopStats]:
+        v = self.fmt.unpack(raw)
+        snaps, at = [], 0
+        for codec, size in zip(self.channels, self._fields, strict=True):
+            snaps.append(codec.snapshot_of(v[at : at + size]))
+            at += size
+        return tuple(snaps), LoopStats(*v[at:])
 
 
 def pack_input(w: PlcWrite) -> bytes:
-    return INPUT.pack(int(w.signal), w.value)
+    return INPUT.pack(int(w.signal), w.value, w.channel)
 
 
 def unpack_input(raw: bytes) -> PlcWrite:
-    signal, value = INPUT.unpack(raw)
-    return PlcWrite(PlcSignal(signal), value)
+    signal, value, channel = INPUT.unpack(raw)
+    return PlcWrite(PlcSignal(signal), value, channel)
 
 
-def pack_event(ev: Event) -> bytes:
+def pack_event(ev: Event, channel: int = 0) -> bytes:
+    """An event record; `channel` (or the event's own) is the logical channel id it comes
+    from in a machine of several channels, 0 for none."""
     eid = EVENT_IDS.get(ev.name, 0)
     text = ev.text if eid else f"{ev.name}\0{ev.text}"
     raw = text.encode("utf-8", "replace")[:MAX_EVENT_TEXT]
-    return EVENT_HEAD.pack(eid, len(raw), ev.line & 0xFFFFFFFF, ev.t, ev.value) + raw
+    head = eid | ((channel or ev.channel) << 8)
+    return EVENT_HEAD.pack(head, len(raw), ev.line & 0xFFFFFFFF, ev.t, ev.value) + raw
 
 
 class EventReader:
@@ -108,7 +151,8 @@ class EventReader:
         out: list[Event] = []
         pos = 0
         while len(self._buf) - pos >= EVENT_HEAD.size:
-            eid, n, line, t, value = EVENT_HEAD.unpack_from(self._buf, pos)
+            head, n, line, t, value = EVENT_HEAD.unpack_from(self._buf, pos)
+            eid, channel = head & EVENT_NAME_MASK, head >> 8
             end = pos + EVENT_HEAD.size + n
             if end > len(self._buf):
                 break
@@ -116,7 +160,7 @@ class EventReader:
             name = EVENT_NAMES[eid] if eid < len(EVENT_NAMES) else "?"
             if not eid:
                 name, _, text = text.partition("\0")
-            out.append(Event(name, t, line, value, text))
+            out.append(Event(name, t, line, value, text, channel))
             pos = end
         del self._buf[:pos]
         return out

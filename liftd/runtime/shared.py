@@ -1,5 +1,6 @@
 """The one shared-memory block between the daemon and the GEO loop process, and its layout:
-words (u64: two control words daemon → loop, counters loop → daemon), the snapshot seqlock,
+words (u64: two control words daemon → loop, counters loop → daemon), the snapshot seqlock
+(every channel's snapshot of one cycle in one record, `MachineCodec`),
 the PLC input ring, the optional trace ring and the compute and lateness histograms.
 
 Words are read and written by index through `words` (the loop: one store per counter per
@@ -8,11 +9,12 @@ cycle, no lookup) and read by name through the properties (the daemon).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import NamedTuple
 
 from liftd.runtime.cycle import BUCKETS
-from liftd.runtime.records import INPUT, SnapshotCodec
+from liftd.runtime.records import INPUT, MachineCodec
 from liftd.runtime.shm import Block, Ring, Seqlock
 
 # word indices; daemon → loop:
@@ -57,16 +59,21 @@ class LoopTotals(NamedTuple):
 class SharedSpec:
     """What the loop process needs to map the block (besides its descriptor)."""
 
-    n_axes: int
+    axes: tuple[int, ...]  # axes per channel, in channel order
     trace_capacity: int
 
 
 class Shared:
     def __init__(
-        self, n_axes: int, trace_capacity: int = 0, name: str | None = None, fd: int | None = None
+        self,
+        axes: int | Sequence[int],
+        trace_capacity: int = 0,
+        name: str | None = None,
+        fd: int | None = None,
     ) -> None:
-        self.codec = SnapshotCodec(n_axes)
-        self.n_axes = n_axes
+        """`axes`: the axes of each channel in channel order (an int: one channel)."""
+        self.axes = (axes,) if isinstance(axes, int) else tuple(axes)
+        self.codec = MachineCodec(self.axes)
         self.trace_capacity = trace_capacity
         snap_at = _line(8 * WORDS)
         in_at = _line(snap_at + Seqlock.space(self.codec.size))
@@ -89,12 +96,12 @@ class Shared:
 
     @property
     def spec(self) -> SharedSpec:
-        return SharedSpec(self.n_axes, self.trace_capacity)
+        return SharedSpec(self.axes, self.trace_capacity)
 
     @classmethod
     def attach(cls, spec: SharedSpec, fd: int) -> Shared:
         """The loop process's view of the block whose descriptor it inherited."""
-        return cls(spec.n_axes, spec.trace_capacity, fd=fd)
+        return cls(spec.axes, spec.trace_capacity, fd=fd)
 
     # -- the daemon's side ------------------------------------------------------------------------
     def request_stop(self) -> None:

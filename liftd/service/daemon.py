@@ -36,7 +36,7 @@ from liftd.cnc.nc import DecoderContext, Severity, decode
 from liftd.cnc.snapshot import PlcWrite
 from liftd.objects.catalog import AdsStats, Catalog, GeoView
 from liftd.objects.provider import CncProvider
-from liftd.runtime.geo_loop import LoopConfig
+from liftd.runtime.geo_loop import ChannelConfig, LoopConfig
 from liftd.runtime.geo_process import GeoFailure, GeoGone, GeoProcess, GeoStartError, rss_mb
 from liftd.runtime.records import pack_input
 from liftd.runtime.rt import RtRequest
@@ -47,7 +47,7 @@ from liftd.service.control import Verdict
 from liftd.service.geo_log import GeoEventLog
 from liftd.settings import ConfigError, Settings, load_settings
 from liftd.settings.load import program_problem
-from liftd.settings.programs import program_channel
+from liftd.settings.programs import program_channel, read_program
 
 if TYPE_CHECKING:
     from liftd.service.metrics import Sample
@@ -62,21 +62,44 @@ class StartError(Exception):
 
 
 def loop_config(settings: Settings) -> LoopConfig:
-    """What the GEO process runs. Without a program the channel idles in READY, serving its
-    objects, until a reload brings one (an empty program: a PLC START ends at once)."""
+    """What the GEO process runs: every channel in channel order. A channel without a program
+    idles in READY, serving its objects, until a reload brings one (an empty program: a PLC
+    START ends at once)."""
     cfg = settings.config
-    program = settings.program
-    text = program.read_text(encoding="utf-8", errors="replace") if program else ""
+    channels = []
+    for c in settings.machine:
+        program = c.program
+        text = read_program(program)
+        channels.append(
+            ChannelConfig(
+                channel=program_channel(settings, program, text, c.params),  # + subroutines
+                program_text=text,
+                program_name=str(program) if program else "(none)",
+                autostart=c.autostart and program is not None,
+                repeat=c.repeat and program is not None,
+            )
+        )
     return LoopConfig(
-        channel=program_channel(settings, program, text),  # with its subroutine files
-        program_text=text,
-        program_name=str(program) if program else "(none)",
-        autostart=cfg.program.autostart and program is not None,
-        repeat=cfg.program.repeat and program is not None,
+        channels=tuple(channels),
         m_ack_auto=cfg.plc.m_ack == "auto",
         m_ack_delay_s=cfg.plc.m_ack_delay_ms * 1e-3,
         rt=RtRequest(**cfg.rt.model_dump(exclude={"stall_timeout_ms"})),
     )
+
+
+def trace_names(trace: str, settings: Settings) -> list[str]:
+    """One trace per channel: the [cnc] channel's at OUT.csv, channel N's at OUT.chN.csv."""
+    out = Path(trace)
+    return [
+        trace if i == settings.primary_index
+        else str(out.with_name(f"{out.stem}.ch{c.params.channel_id}{out.suffix or '.csv'}"))
+        for i, c in enumerate(settings.machine)
+    ]  # fmt: skip
+
+
+def _shape(settings: Settings) -> tuple[tuple[int, int], ...]:
+    """What a reload cannot change: the channels and their axis counts."""
+    return tuple((c.params.channel_id, len(c.params.axes)) for c in settings.machine)
 
 
 class Daemon:
@@ -93,9 +116,9 @@ class Daemon:
         self.stopping = asyncio.Event()
         cycle = settings.channel.cycle_time
         capacity = round(TRACE_CAPACITY_S / cycle) if trace_path else 0
-        self.shared = Shared(len(settings.channel.axes), capacity)
+        self.shared = Shared([len(c.params.axes) for c in settings.machine], capacity)
         try:
-            self.catalog = Catalog(settings.channel)
+            self.catalog = Catalog([c.params for c in settings.machine])
             self.provider = CncProvider(self.catalog, self._view, self._submit)
             self.service = AdsService(self.provider, service_limits(settings.config.ads),
                                       DeviceInfo())  # fmt: skip
@@ -121,8 +144,8 @@ class Daemon:
             return None
         seq = self.shared.snapshot.sequence
         if seq != self._view_cache[0]:
-            snap, stats = self.shared.codec.unpack(self.shared.snapshot.read())
-            self._view_cache = (seq, GeoView(snap, stats, self._ads_stats()))
+            snaps, stats = self.shared.codec.unpack(self.shared.snapshot.read())
+            self._view_cache = (seq, GeoView(snaps[0], stats, self._ads_stats(), snaps))
         return self._view_cache[1]
 
     def _ads_stats(self) -> AdsStats:
@@ -190,46 +213,56 @@ class Daemon:
             loop.add_signal_handler(sig, self.stopping.set)
         loop.add_signal_handler(signal.SIGHUP, lambda: asyncio.ensure_future(self.reload()))
 
-    def _open_trace(self) -> TextIO | None:
+    def _open_trace(self) -> list[TextIO] | None:
         if not self.trace_path:
             return None
-        try:
-            return open(self.trace_path, "w", encoding="utf-8", newline="")
-        except OSError as exc:
-            raise StartError(f"{self.trace_path}: cannot write the trace: {exc.strerror}") from None
+        files: list[TextIO] = []
+        for name in trace_names(self.trace_path, self.settings):
+            try:
+                files.append(open(name, "w", encoding="utf-8", newline=""))  # noqa: SIM115
+            except OSError as exc:
+                for f in files:
+                    f.close()
+                raise StartError(f"{name}: cannot write the trace: {exc.strerror}") from None
+        return files
 
-    def _start_trace(self, trace_file: TextIO | None) -> None:
-        if trace_file is None or self.shared.trace is None:
+    def _start_trace(self, trace_files: list[TextIO] | None) -> None:
+        if trace_files is None or self.shared.trace is None:
             return
         # only here: the trace writer brings numpy (sim.trace), which a daemon without --trace
         # does not need in memory
         from liftd.service.trace_recorder import TraceRecorder  # noqa: PLC0415
 
-        recorder = TraceRecorder(trace_file, self.shared.trace, self.shared.codec,
-                                 self.settings.channel.axis_names, self.log)  # fmt: skip
+        names = [c.params.axis_names for c in self.settings.machine]
+        recorder = TraceRecorder(trace_files, self.shared.trace, self.shared.codec, names,
+                                 self.log)  # fmt: skip
         recorder.start()
         self._trace = recorder
 
     def _loop_config(self, settings: Settings) -> LoopConfig:
-        """The GEO process's configuration; the program's problems logged (nc.problem)."""
+        """The GEO process's configuration; the programs' problems logged (nc.problem)."""
         try:
             cfg = loop_config(settings)
         except OSError as exc:
-            raise StartError(
-                f"{settings.program}: cannot read the program: {exc.strerror}"
-            ) from None
-        if settings.program is None:
-            idle = "no [program] file: the channel idles until a reload brings one"
-            self.log.warning("daemon.no_program", detail=idle)
-            return cfg
-        ch = cfg.channel  # with the program's subroutine files
-        result = decode(cfg.program_text,
-                        DecoderContext.from_channel(ch, tuple(0.0 for _ in ch.axes)))  # fmt: skip
-        for err in result.errors:
-            level = "warning" if err.severity is Severity.WARNING else "error"
-            getattr(self.log, level)("nc.problem", file=err.file or str(settings.program),
-                                     line=err.line, id=err.id, message=err.message)  # fmt: skip
-        self.log.info("daemon.program", file=str(settings.program), blocks=len(result.blocks))
+            raise StartError(f"{exc.filename}: cannot read the program: {exc.strerror}") from None
+        several = len(cfg.channels) > 1
+        for c, run in zip(settings.machine, cfg.channels, strict=True):
+            tag = {"channel": c.params.channel_id} if several else {}
+            if c.program is None:
+                idle = "no program: the channel idles until a reload brings one"
+                if not several:
+                    idle = "no [program] file: the channel idles until a reload brings one"
+                self.log.warning("daemon.no_program", detail=idle, **tag)
+                continue
+            ch = run.channel  # with the program's subroutine files
+            home = tuple(0.0 for _ in ch.axes)
+            result = decode(run.program_text, DecoderContext.from_channel(ch, home))
+            for err in result.errors:
+                level = "warning" if err.severity is Severity.WARNING else "error"
+                getattr(self.log, level)("nc.problem", file=err.file or str(c.program),
+                                         line=err.line, id=err.id, message=err.message,
+                                         **tag)  # fmt: skip
+            self.log.info("daemon.program", file=str(c.program), blocks=len(result.blocks), **tag)
         return cfg
 
     async def _listen(self) -> None:
@@ -308,10 +341,8 @@ class Daemon:
                            detail="the running configuration is kept")  # fmt: skip
             return Verdict(False, "; ".join(problems))
         old = self.settings
-        if len(new.channel.axes) != len(old.channel.axes) or (
-            new.channel.cycle_time != old.channel.cycle_time
-        ):
-            detail = "axes or cycle time changed: restart"
+        if _shape(new) != _shape(old) or new.channel.cycle_time != old.channel.cycle_time:
+            detail = "channels, axes or cycle time changed: restart"
             self.log.error("config.reload_rejected", detail=detail)
             return Verdict(False, detail)
         try:

@@ -34,5 +34,6 @@ class GeoEventLog:
         elif ev.name in WARNINGS or (ev.name == "geo.rt_setting" and not ev.value):
             level = "warning"
         value = float(f"{ev.value:.9g}")  # no float noise in the log
+        extra = {"channel": ev.channel} if ev.channel else {}  # a machine of several channels
         getattr(self.log, level)(ev.name, t=round(ev.t, 6), line=ev.line, value=value,
-                                 text=ev.text or None)  # fmt: skip
+                                 text=ev.text or None, **extra)  # fmt: skip

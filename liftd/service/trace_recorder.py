@@ -1,14 +1,16 @@
 """`liftd run --trace`: a daemon-side thread drains the GEO loop's trace ring into the CSV of
-`liftd simulate` (trace.py), off the loop's CPU time. A write error (disk full) stops the
-trace, never the loop; records the ring had to drop are reported at the end."""
+`liftd simulate` (trace.py), one file per channel, off the loop's CPU time. A write error
+(disk full) stops the trace, never the loop; records the ring had to drop are reported at the
+end."""
 
 from __future__ import annotations
 
 import threading
 import time
+from collections.abc import Sequence
 from typing import Any, TextIO
 
-from liftd.runtime.records import SnapshotCodec
+from liftd.runtime.records import MachineCodec
 from liftd.runtime.shm import Ring
 from liftd.sim.trace import TraceWriter
 
@@ -16,12 +18,13 @@ DRAIN_PERIOD_S = 0.02
 
 
 class TraceRecorder:
-    def __init__(self, out: TextIO, ring: Ring, codec: SnapshotCodec,
-                 axis_names: tuple[str, ...], log: Any) -> None:  # fmt: skip
-        self.out = out
+    def __init__(self, outs: Sequence[TextIO], ring: Ring, codec: MachineCodec,
+                 axis_names: Sequence[tuple[str, ...]], log: Any) -> None:  # fmt: skip
+        """`outs` and `axis_names`: one per channel, in channel order."""
+        self.outs = list(outs)
         self.ring = ring
         self.codec = codec
-        self.writer = TraceWriter(out, axis_names)
+        self.writers = [TraceWriter(o, n) for o, n in zip(outs, axis_names, strict=True)]
         self.log = log
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._drain, name="liftd-trace", daemon=True)
@@ -42,18 +45,22 @@ class TraceRecorder:
             while (raw := ring.get()) is not None:
                 if ok:
                     try:
-                        self.writer.write(self.codec.unpack(raw)[0])
+                        snaps = self.codec.unpack(raw)[0]
+                        for writer, snap in zip(self.writers, snaps, strict=True):
+                            writer.write(snap)
                     except OSError as exc:  # disk full: stop tracing, never the loop
                         ok = False
                         self.log.error("trace.stopped", reason=exc.strerror)
             if stop:
                 break
             time.sleep(DRAIN_PERIOD_S)
-        try:
-            if ok:
-                self.writer.flush()
-            self.out.close()
-        except OSError as exc:
-            self.log.error("trace.stopped", reason=exc.strerror)
+        for writer, out in zip(self.writers, self.outs, strict=True):
+            try:
+                if ok:
+                    writer.flush()
+                out.close()
+            except OSError as exc:
+                ok = False
+                self.log.error("trace.stopped", reason=exc.strerror)
         if ring.dropped:
             self.log.warning("trace.dropped", records=ring.dropped)
