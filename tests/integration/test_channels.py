@@ -1,0 +1,104 @@
+"""The two-head configuration as shipped (config/liftd-2ch.toml) under `liftd run`: pyads
+reads both channels' lift_active at their own index groups, a PLC write reaches only its
+channel, `liftd plc --channel 2` follows channel 2's lift axis, and --trace writes one file
+per channel (issue 18 items 1 and 4)."""
+
+from __future__ import annotations
+
+import csv
+import json
+import re
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pyads
+import pytest
+
+from tests.support.daemon import Daemon
+from tests.support.paths import REPO
+
+pytestmark = pytest.mark.integration
+
+SHIPPED = REPO / "config" / "liftd-2ch.toml"
+# (index group, index offset) of lift_active: channel 1 Z (logical axis 3), channel 2 W (6)
+CH1_Z = (0x121301, 0x00030095)
+CH2_W = (0x121302, 0x00060095)
+
+
+def two_channel_config(tmp: Path, net_id: str) -> Path:
+    """The shipped two-head liftd.toml with its files found from tmp, on a free port, without
+    the RT settings tests cannot have on a shared VM."""
+    text = SHIPPED.read_text()
+    config = REPO / "config"
+    text = re.sub(r'startup_list = "([^"]+)"', lambda m: f'startup_list = "{config / m[1]}"',
+                  text)  # fmt: skip
+    text = re.sub(r'(file|program) = "(programs/[^"]+)"',
+                  lambda m: f'{m[1]} = "{config / m[2]}"', text)  # fmt: skip
+    text = text.replace("port = 48898", "port = 0").replace('"127.0.0.1.1.1"', f'"{net_id}"')
+    text += (
+        "\n[rt]\nsched_fifo_priority = 0\nhold_cpu_dma_latency = false\nlock_memory = false\n"
+        '\n[log]\nformat = "json"\n'
+    )
+    path = tmp / "liftd-2ch.toml"
+    path.write_text(text)
+    return path
+
+
+def test_pyads_reads_both_channels_at_their_index_groups(tmp_path: Path) -> None:
+    cfg = two_channel_config(tmp_path, "127.0.0.1.61.1")
+    trace = tmp_path / "run.csv"
+    d = Daemon(cfg, "--trace", str(trace))
+    try:
+        d.ready()
+        plc = pyads.Connection(d.net_id, 551, d.address)
+        plc.open()
+        try:
+            seen: set[tuple[bool, bool]] = set()
+            deadline = time.monotonic() + 25  # both heads lift within their first parts
+            while time.monotonic() < deadline and not (
+                any(a for a, _ in seen) and any(b for _, b in seen)
+            ):
+                seen.add((plc.read(*CH1_Z, pyads.PLCTYPE_BOOL),
+                          plc.read(*CH2_W, pyads.PLCTYPE_BOOL)))  # fmt: skip
+                time.sleep(0.005)
+            assert any(a for a, _ in seen) and any(b for _, b in seen), seen
+            assert plc.read_by_name("GEO.ch2.W.lift_active") in (True, False)
+            with pytest.raises(pyads.ADSError) as err:  # channel 2 has no logical axis 3
+                plc.read(0x121302, 0x00030095, pyads.PLCTYPE_BOOL)
+            assert err.value.err_code == 0x703
+            plc.write_by_name("PLC.ch2.override", 500, pyads.PLCTYPE_UINT)
+            deadline = time.monotonic() + 5
+            while plc.read_by_name("GEO.ch2.override_requested") != 500:
+                assert time.monotonic() < deadline
+                time.sleep(0.01)
+            assert plc.read_by_name("GEO.ch1.override_requested") == 1000
+            assert plc.read_by_name("GEO.ch2.state") in (3, 4, 5)
+        finally:
+            plc.close()
+        run = subprocess.run(
+            [sys.executable, "-m", "liftd", "plc", "-c", str(cfg), "--host", d.address,
+             "--channel", "2", "--duration", "12", "--json"],
+            capture_output=True, text=True, timeout=60, check=False,
+        )  # fmt: skip
+        assert run.returncode == 0, run.stderr
+        objects = {json.loads(line).get("object") for line in run.stdout.splitlines()}
+        assert "W.lift_active" in objects, run.stdout[:500]
+        bad = subprocess.run(
+            [sys.executable, "-m", "liftd", "plc", "-c", str(cfg), "--host", d.address,
+             "--channel", "3", "--duration", "1"],
+            capture_output=True, text=True, timeout=60, check=False,
+        )  # fmt: skip
+        assert bad.returncode == 2 and "--channel" in bad.stderr
+    finally:
+        assert d.stop() == 0
+    with trace.open() as f:
+        head1 = next(csv.reader(f))
+    with (tmp_path / "run.ch2.csv").open() as f:
+        rows = list(csv.DictReader(f))
+    assert head1[:9] == ["t", "line", "x", "y", "z", "v_path", "override", "lift_active",
+                         "lift_suppressed"]  # fmt: skip
+    assert list(rows[0])[:5] == ["t", "line", "u", "v", "w"]
+    assert any(r["lift_active"] == "1" for r in rows)
+    assert any(rec.get("channel") == 2 and rec["event"] == "lift.start" for rec in d.logs)
