@@ -8,6 +8,7 @@ from __future__ import annotations
 import csv
 import json
 import re
+import signal
 import subprocess
 import sys
 import time
@@ -102,3 +103,36 @@ def test_pyads_reads_both_channels_at_their_index_groups(tmp_path: Path) -> None
     assert list(rows[0])[:5] == ["t", "line", "u", "v", "w"]
     assert any(r["lift_active"] == "1" for r in rows)
     assert any(rec.get("channel") == 2 and rec["event"] == "lift.start" for rec in d.logs)
+
+
+def test_a_reload_reaches_each_channel_at_its_own_program_boundary(tmp_path: Path) -> None:
+    """SIGHUP: channel 2 (a 0.5 s program) takes its new program at its next end, while
+    channel 1 (a long one) runs on and takes it at its own end."""
+    config = REPO / "config"
+    long1 = tmp_path / "long1.nc"
+    long1.write_text("N10 G01 X400 F6000\nN20 G01 X0\nN30 M30\n")  # 8 s
+    short2 = tmp_path / "short2.nc"
+    short2.write_text("N10 G01 U30 F6000\nN20 M30\n")
+    path = tmp_path / "liftd.toml"
+    path.write_text(
+        f'[cnc]\nstartup_list = "{config / "cnc-2ch" / "hochlauf.lis"}"\n'
+        f'[program]\nfile = "{long1}"\nrepeat = true\n'
+        f'[[channel]]\nid = 2\nprogram = "{short2}"\nrepeat = true\n'
+        '[ads]\nport = 0\nnet_id = "127.0.0.1.62.1"\n'
+        "[rt]\nsched_fifo_priority = 0\nhold_cpu_dma_latency = false\nlock_memory = false\n"
+        '[log]\nformat = "json"\n'
+    )
+    d = Daemon(path)
+    try:
+        d.ready()
+        d.signal(signal.SIGHUP)
+        assert d.event("config.reload_accepted") is not None, "".join(d.raw[-20:])
+        deadline = time.monotonic() + 30
+        reloaded: list[dict[str, object]] = []
+        while time.monotonic() < deadline and len(reloaded) < 2:
+            reloaded = [r for r in d.logs if r.get("event") == "geo.reloaded"]
+            time.sleep(0.05)
+        assert [r["channel"] for r in reloaded] == [2, 1]  # the short program ends first
+        assert float(str(reloaded[1]["t"])) > 5.0 > float(str(reloaded[0]["t"]))
+    finally:
+        assert d.stop() == 0
