@@ -26,7 +26,10 @@ def test_the_shipped_two_head_configuration() -> None:
     assert one.axis_names == ("X", "Y", "Z") and two.axis_names == ("U", "V", "W")
     assert [ax.log_axis_nr for ax in two.axes] == [4, 5, 6]
     assert (one.lift_method.value, two.lift_method.value) == ("advanced", "lifting")
-    assert two.lift_axis == "W" and s.machine[1].program == CONFIG / "programs" / "head2.nc"
+    assert (
+        two.lift_axis == "W"
+        and s.machine[1].program == CONFIG / "programs" / "two-head" / "head2.nc"
+    )
     assert s.machine[1].repeat and s.machine[1].autostart
     assert str(CONFIG / "cnc-2ch" / "sda_mds2.lis") in s.files
 
@@ -147,13 +150,13 @@ def test_exit_codes_of_bad_channels(machine: Path) -> None:
     """A configuration error exits 2 (check, simulate, run); an axis of another channel in a
     channel's program is an NC error, exit 1."""
     cfg = machine / "liftd.toml"
-    head1 = str(machine / "programs" / "head1.nc")
+    head1 = str(machine / "programs" / "two-head" / "head1.nc")
     edit(cfg, "id = 2 ", "id = 5 ")
     for args in (("check",), ("simulate", head1), ("run", "--duration", "1"), ("objects",)):
         r = liftd(args[0], "-c", str(cfg), *args[1:])
         assert r.returncode == 2 and "channel.0.id = '5'" in r.stderr, (args, r.stderr)
     edit(cfg, "id = 5 ", "id = 2 ")
-    edit(machine / "programs" / "head2.nc", "N50 V120", "N50 Y120")  # Y is head 1's
+    edit(machine / "programs" / "two-head" / "head2.nc", "N50 V120", "N50 Y120")  # Y is head 1's
     r = liftd("check", "-c", str(cfg))
     assert r.returncode == 1 and "head2.nc:10:5: error 990018: Y is not an axis" in r.stderr
     r = liftd("simulate", "-c", str(cfg), head1, "--json")
