@@ -302,6 +302,7 @@ def cmd_study(args: argparse.Namespace) -> int:
     from liftd.sim.progress import ProgressBar  # noqa: PLC0415
 
     settings = _load(args)
+    chosen = _channel_arg(settings, args.channel)
     programs = _study_programs(args.paths)
     if not programs:
         print(f"liftd study: no NC programs (*.nc) in {' '.join(args.paths)}", file=sys.stderr)
@@ -311,12 +312,13 @@ def cmd_study(args: argparse.Namespace) -> int:
         return EXIT_CONFIG
     jobs = min(args.jobs or len(os.sched_getaffinity(0)), len(programs))
     cfg = study.StudyConfig(
-        functools.partial(program_channel, settings),  # subroutine files, read in the worker
+        # the channel's parameters with the subroutine files, read in the worker
+        functools.partial(program_channel, settings, channel=chosen.params),
         settings.config.plc.m_ack_delay_ms * 1e-3,
         args.max_time,
     )
     meta = {"liftd": __version__, "config": str(settings.path),
-            "method": settings.channel.lift_method.value, "programs": len(programs)}  # fmt: skip
+            "method": chosen.params.lift_method.value, "programs": len(programs)}  # fmt: skip
     out = Path(args.out)
     bar = ProgressBar(len(programs), sys.stderr)
 
@@ -580,6 +582,9 @@ def build_parser() -> argparse.ArgumentParser:
     st.add_argument("paths", nargs="+", metavar="DIR|FILE", help="directories of *.nc, or programs")
     st.add_argument("-c", "--config", help="liftd.toml")
     st.add_argument("--jobs", type=int, metavar="N", help="worker processes (default: all cores)")
+    st.add_argument(
+        "--channel", type=int, metavar="N", help="run the programs in channel N (default: [cnc])"
+    )
     st.add_argument(
         "--out", default="study", metavar="DIR",
         help="where report.csv, report.json and report.html go (default: ./study)",

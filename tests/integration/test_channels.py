@@ -136,3 +136,17 @@ def test_a_reload_reaches_each_channel_at_its_own_program_boundary(tmp_path: Pat
         assert float(str(reloaded[1]["t"])) > 5.0 > float(str(reloaded[0]["t"]))
     finally:
         assert d.stop() == 0
+
+
+def test_study_runs_a_channels_programs_in_that_channel(tmp_path: Path) -> None:
+    head2 = str(REPO / "config" / "programs" / "two-head" / "head2.nc")
+    base = [sys.executable, "-m", "liftd", "study", head2, "-c", str(SHIPPED), "--jobs", "1"]
+    ok = subprocess.run([*base, "--channel", "2", "--out", str(tmp_path / "ch2")],
+                        capture_output=True, text=True, timeout=120, check=False)  # fmt: skip
+    assert ok.returncode == 0, ok.stderr
+    report = json.loads((tmp_path / "ch2" / "report.json").read_text())
+    assert report["summary"]["compared"] == 3 and report["summary"]["status"]["ok"] == 1
+    # in channel 1 (the default) U V W are no axes: the program is reported with its errors
+    wrong = subprocess.run([*base, "--out", str(tmp_path / "ch1")], capture_output=True,
+                           text=True, timeout=120, check=False)  # fmt: skip
+    assert wrong.returncode == 1 and "990018" in wrong.stderr
