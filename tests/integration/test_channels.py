@@ -19,6 +19,7 @@ import pytest
 
 from tests.support.daemon import Daemon
 from tests.support.paths import REPO
+from tests.support.settings import copy_two_head_machine, edit
 
 pytestmark = pytest.mark.integration
 
@@ -150,3 +151,32 @@ def test_study_runs_a_channels_programs_in_that_channel(tmp_path: Path) -> None:
     wrong = subprocess.run([*base, "--out", str(tmp_path / "ch1")], capture_output=True,
                            text=True, timeout=120, check=False)  # fmt: skip
     assert wrong.returncode == 1 and "990018" in wrong.stderr
+
+
+def liftd(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "liftd", *args], capture_output=True,
+                          text=True, timeout=120, check=False)  # fmt: skip
+
+
+def test_exit_codes_of_bad_channels(tmp_path: Path) -> None:
+    """A configuration error exits 2 (check, simulate, run); an axis of another channel in a
+    channel's program is an NC error, exit 1."""
+    machine = copy_two_head_machine(tmp_path)
+    cfg = machine / "liftd.toml"
+    head1 = str(machine / "programs" / "two-head" / "head1.nc")
+    edit(cfg, "id = 2 ", "id = 5 ")
+    for args in (("check",), ("simulate", head1), ("run", "--duration", "1"), ("objects",)):
+        r = liftd(args[0], "-c", str(cfg), *args[1:])
+        assert r.returncode == 2 and "channel.0.id = '5'" in r.stderr, (args, r.stderr)
+    edit(cfg, "id = 5 ", "id = 2 ")
+    edit(machine / "programs" / "two-head" / "head2.nc", "N50 V120", "N50 Y120")  # Y is head 1's
+    r = liftd("check", "-c", str(cfg))
+    assert r.returncode == 1 and "head2.nc:10:5: error 990018: Y is not an axis" in r.stderr
+    r = liftd("simulate", "-c", str(cfg), head1, "--json")
+    assert r.returncode == 1 and "(channel 2)" in r.stderr
+    r = liftd("check", "-c", str(cfg), "--channel", "2", head1)  # X Y Z in channel 2
+    assert r.returncode == 1 and "X is not an axis" in r.stderr
+    r = liftd("check", "-c", str(cfg), "--channel", "3", head1)
+    assert r.returncode == 2 and "--channel = '3' error: no such channel (channels: 1, 2)" in (
+        r.stderr
+    )

@@ -4,9 +4,6 @@ line and what is wrong."""
 
 from __future__ import annotations
 
-import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -14,6 +11,7 @@ import pytest
 from liftd.settings import ConfigError, load_settings
 from liftd.settings.load import toml_line
 from tests.support.paths import REPO
+from tests.support.settings import copy_two_head_machine, edit
 
 CONFIG = REPO / "config"
 
@@ -41,17 +39,7 @@ def test_a_single_channel_configuration_is_one_channel() -> None:
 
 @pytest.fixture
 def machine(tmp_path: Path) -> Path:
-    """A copy of the two-head configuration to break."""
-    for d in ("cnc", "cnc-2ch", "programs"):
-        shutil.copytree(CONFIG / d, tmp_path / d)
-    shutil.copy(CONFIG / "liftd-2ch.toml", tmp_path / "liftd.toml")
-    return tmp_path
-
-
-def edit(path: Path, old: str, new: str) -> None:
-    text = path.read_text()
-    assert old in text, old
-    path.write_text(text.replace(old, new))
+    return copy_two_head_machine(tmp_path)
 
 
 def errors(root: Path) -> list[str]:
@@ -139,31 +127,3 @@ def test_toml_line_finds_keys_of_the_nth_array_table() -> None:
     assert toml_line(text, ("channel", 1, "id")) == 6
     assert toml_line(text, ("channel", 1, "lift_axis")) == 7
     assert toml_line(text, ("cnc", "channel")) == 2
-
-
-def liftd(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "liftd", *args], capture_output=True,
-                          text=True, timeout=120, check=False)  # fmt: skip
-
-
-def test_exit_codes_of_bad_channels(machine: Path) -> None:
-    """A configuration error exits 2 (check, simulate, run); an axis of another channel in a
-    channel's program is an NC error, exit 1."""
-    cfg = machine / "liftd.toml"
-    head1 = str(machine / "programs" / "two-head" / "head1.nc")
-    edit(cfg, "id = 2 ", "id = 5 ")
-    for args in (("check",), ("simulate", head1), ("run", "--duration", "1"), ("objects",)):
-        r = liftd(args[0], "-c", str(cfg), *args[1:])
-        assert r.returncode == 2 and "channel.0.id = '5'" in r.stderr, (args, r.stderr)
-    edit(cfg, "id = 5 ", "id = 2 ")
-    edit(machine / "programs" / "two-head" / "head2.nc", "N50 V120", "N50 Y120")  # Y is head 1's
-    r = liftd("check", "-c", str(cfg))
-    assert r.returncode == 1 and "head2.nc:10:5: error 990018: Y is not an axis" in r.stderr
-    r = liftd("simulate", "-c", str(cfg), head1, "--json")
-    assert r.returncode == 1 and "(channel 2)" in r.stderr
-    r = liftd("check", "-c", str(cfg), "--channel", "2", head1)  # X Y Z in channel 2
-    assert r.returncode == 1 and "X is not an axis" in r.stderr
-    r = liftd("check", "-c", str(cfg), "--channel", "3", head1)
-    assert r.returncode == 2 and "--channel = '3' error: no such channel (channels: 1, 2)" in (
-        r.stderr
-    )
