@@ -121,6 +121,8 @@ class GeoLoop:
             self.pending = list(cfg.channels)
             words[RELOAD_TAKEN] = self.reload_gen
             words[LOADING] += 1
+        if self.pending_cfg is self.cfg:  # nothing waits for a program boundary (every cycle)
+            return
         for i, pending in enumerate(self.pending):
             snap = snaps[i]
             if pending is None or snap.state not in (ChannelState.READY, ChannelState.ERROR):
@@ -142,6 +144,8 @@ class GeoLoop:
                              self.tags[i])  # fmt: skip
             if pending.autostart:
                 self.plcs[i].request(Command.START)
+        if not any(self.pending):
+            self.cfg = self.pending_cfg  # every channel has it
 
     def run(self) -> None:
         shared, cfg = self.shared, self.cfg
