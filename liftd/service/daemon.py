@@ -97,9 +97,16 @@ def trace_names(trace: str, settings: Settings) -> list[str]:
     ]  # fmt: skip
 
 
-def _shape(settings: Settings) -> tuple[tuple[int, int], ...]:
-    """What a reload cannot change: the channels and their axis counts."""
-    return tuple((c.params.channel_id, len(c.params.axes)) for c in settings.machine)
+def _shape(settings: Settings) -> tuple[tuple[int, int, tuple[int, ...]], ...]:
+    """What a reload cannot change: the channels, their axis counts and, with several
+    channels, which logical axes each has (channels take a reload one at a time, each at its
+    own program boundary: an axis moving between channels would be in two for a while)."""
+    several = len(settings.machine) > 1
+    return tuple(
+        (c.params.channel_id, len(c.params.axes),
+         tuple(ax.log_axis_nr for ax in c.params.axes) if several else ())
+        for c in settings.machine
+    )  # fmt: skip
 
 
 class Daemon:
