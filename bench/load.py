@@ -85,6 +85,36 @@ def poller(net_id: str, address: str, period_s: float, duration_s: float, out: A
              "latency_us": percentiles_us(lat[: min(n, len(lat))])})  # fmt: skip
 
 
+OVERRIDE_STEPS = (600, 800, 1000, 1500, 2000)  # 0.1 %
+
+
+def override_writer(net_id: str, address: str, period_s: float, duration_s: float,
+                    out: Any) -> None:  # fmt: skip
+    """A PLC that writes a new override (cycling 60/80/100/150/200 %) every period_s."""
+    plc = pyads.Connection(net_id, 551, address)
+    plc.open()
+    n = errors = 0
+    end = time.perf_counter() + duration_s
+    next_t = time.perf_counter()
+    try:
+        for value in itertools.cycle(OVERRIDE_STEPS):
+            next_t += period_s
+            wait = next_t - time.perf_counter()
+            if wait > 0:
+                time.sleep(wait)
+            if time.perf_counter() >= end:
+                break
+            try:
+                plc.write_by_name("PLC.ch1.override", value, pyads.PLCTYPE_UINT)
+            except pyads.ADSError:
+                errors += 1
+            n += 1
+        plc.write_by_name("PLC.ch1.override", 1000, pyads.PLCTYPE_UINT)
+    finally:
+        plc.close()
+    out.put({"kind": "override_writer", "writes": n, "errors": errors})
+
+
 def notifier(net_id: str, address: str, cycle_ms: int, duration_s: float, out: Any,
              subscriptions: int = len(NOTIFY_SYMBOLS)) -> None:  # fmt: skip
     plc = pyads.Connection(net_id, 551, address)
@@ -137,6 +167,7 @@ def notifier(net_id: str, address: str, cycle_ms: int, duration_s: float, out: A
 def start(
     net_id: str, address: str, duration_s: float, pollers: int, poll_hz: float,
     notifiers: int, cycle_ms: int, subscriptions: int = len(NOTIFY_SYMBOLS),
+    override_every_s: float = 0.0,
 ) -> tuple[list[mp.Process], Any]:  # fmt: skip
     ctx = mp.get_context("spawn")
     out = ctx.Queue()
@@ -144,6 +175,9 @@ def start(
                                               duration_s, out)) for _ in range(pollers)]  # fmt: skip
     procs += [ctx.Process(target=notifier, args=(net_id, address, cycle_ms, duration_s, out,
                                                  subscriptions)) for _ in range(notifiers)]  # fmt: skip
+    if override_every_s:
+        procs.append(ctx.Process(target=override_writer,
+                                 args=(net_id, address, override_every_s, duration_s, out)))  # fmt: skip
     for p in procs:
         p.start()
     return procs, out

@@ -22,13 +22,25 @@ def _refused(exc: RuckigError) -> ProfileError:
 
 
 class Ruckig1:
-    """One reusable 1-DoF calculator (its input object is reused: ~0.3 µs per field set)."""
+    """One reusable 1-DoF calculator. Setting a field of ruckig's input costs ~0.3 µs (a list
+    converted to a C++ array), so each interface keeps its own input object and only the
+    fields that changed since the last call are set: about 2.5 µs instead of 5 per profile."""
 
-    __slots__ = ("_inp", "_r", "calls")
+    __slots__ = ("_last_pos", "_last_vel", "_pos", "_r", "_vel", "calls")
 
     def __init__(self) -> None:
         self._r = Ruckig(1)
-        self._inp = InputParameter(1)
+        self._pos = InputParameter(1)
+        self._pos.control_interface = ControlInterface.Position
+        self._pos.target_acceleration = [0.0]
+        self._vel = InputParameter(1)
+        self._vel.control_interface = ControlInterface.Velocity
+        self._vel.target_acceleration = [0.0]
+        self._vel.min_velocity = None
+        self._vel.minimum_duration = None
+        # (target velocity, v_max, forward only, a_max, j_max, minimum duration) last set
+        self._last_pos: tuple[float, float, bool, float, float, float | None] | None = None
+        self._last_vel: tuple[float, float, float] | None = None  # (v_max, a_max, j_max)
         self.calls = 0
 
     def position(
@@ -47,19 +59,26 @@ class Ruckig1:
     ) -> Trajectory:
         """Time-optimal (or at least `min_duration` long) profile from (p0, v0, a0) to (p1, v1, 0).
         `forward_only`: the velocity never becomes negative (a path never moves backwards)."""
-        inp = self._inp
-        inp.control_interface = ControlInterface.Position
+        inp = self._pos
         inp.current_position = [p0]
         inp.current_velocity = [v0]
         inp.current_acceleration = [a0]
         inp.target_position = [p1]
-        inp.target_velocity = [v1]
-        inp.target_acceleration = [0.0]
-        inp.max_velocity = [v_max]
-        inp.min_velocity = [0.0] if forward_only else None
-        inp.max_acceleration = [a_max]
-        inp.max_jerk = [j_max]
-        inp.minimum_duration = min_duration
+        last = self._last_pos
+        if last is None or last != (v1, v_max, forward_only, a_max, j_max, min_duration):
+            if last is None or last[0] != v1:
+                inp.target_velocity = [v1]
+            if last is None or last[1] != v_max:
+                inp.max_velocity = [v_max]
+            if last is None or last[2] != forward_only:
+                inp.min_velocity = [0.0] if forward_only else None
+            if last is None or last[3] != a_max:
+                inp.max_acceleration = [a_max]
+            if last is None or last[4] != j_max:
+                inp.max_jerk = [j_max]
+            if last is None or last[5] != min_duration:
+                inp.minimum_duration = min_duration
+            self._last_pos = (v1, v_max, forward_only, a_max, j_max, min_duration)
         traj = Trajectory(1)
         self.calls += 1
         try:
@@ -72,26 +91,27 @@ class Ruckig1:
         self, p0: float, v0: float, a0: float, v1: float, a_max: float, j_max: float
     ) -> Trajectory:
         """Time-optimal change of velocity from (v0, a0) to (v1, 0); positions follow from p0."""
-        inp = self._inp
-        inp.control_interface = ControlInterface.Velocity
+        inp = self._vel
         inp.current_position = [p0]
         inp.current_velocity = [v0]
         inp.current_acceleration = [a0]
         inp.target_velocity = [v1]
-        inp.target_acceleration = [0.0]
-        inp.max_velocity = [max(abs(v0), abs(v1), 1e-12)]
-        inp.min_velocity = None
-        inp.max_acceleration = [max(a_max, abs(a0))]
-        inp.max_jerk = [j_max]
-        inp.minimum_duration = None
+        limits = (max(abs(v0), abs(v1), 1e-12), max(a_max, abs(a0)), j_max)
+        last = self._last_vel
+        if last != limits:
+            if last is None or last[0] != limits[0]:
+                inp.max_velocity = [limits[0]]
+            if last is None or last[1] != limits[1]:
+                inp.max_acceleration = [limits[1]]
+            if last is None or last[2] != limits[2]:
+                inp.max_jerk = [limits[2]]
+            self._last_vel = limits
         traj = Trajectory(1)
         self.calls += 1
         try:
             self._r.calculate(inp, traj)
         except RuckigError as exc:
             raise _refused(exc) from None
-        finally:
-            inp.control_interface = ControlInterface.Position
         return traj
 
 

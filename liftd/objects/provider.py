@@ -18,6 +18,7 @@ from liftd.ads.device import ENCODING, STATIC_HANDLE_BIT, Symbol
 from liftd.ads.errors import AdsError
 from liftd.ads.symbols import DataType
 from liftd.cnc import units
+from liftd.cnc.plc import MAX_OVERRIDE
 from liftd.cnc.snapshot import PlcSignal, PlcWrite
 from liftd.objects.catalog import (
     ADDRESS,
@@ -37,7 +38,8 @@ from liftd.objects.types import CNC_TYPES
 
 Source = Callable[[], GeoView | None]  # None: the GEO task is not running
 Sink = Callable[[PlcWrite], None]  # raises AdsError(BUSY) when the input queue is full
-MAX_OVERRIDE_PERMILLE = 2000
+# the override a PLC may write, in the ISG unit (0.1 %): the core's MAX_OVERRIDE (200 %)
+MAX_OVERRIDE_PERMILLE = units.fraction_to_isg_permille(MAX_OVERRIDE)
 
 
 class CncProvider:
@@ -114,7 +116,9 @@ class CncProvider:
         """A PLC write for channel `channel` (machine index) into the GEO loop's inputs."""
         if signal is PlcSignal.OVERRIDE:
             if not 0 <= raw <= MAX_OVERRIDE_PERMILLE:
-                raise AdsError(AdsErr.INVALIDDATA, f"override {raw} (0..2000 × 0.1 %)")
+                raise AdsError(
+                    AdsErr.INVALIDDATA, f"override {raw} (0..{MAX_OVERRIDE_PERMILLE} × 0.1 %)"
+                )
             self.sink(PlcWrite(signal, units.isg_permille_to_fraction(int(raw)), channel))
             return
         if raw not in (0, 1):

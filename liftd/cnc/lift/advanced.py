@@ -60,6 +60,10 @@ class AdvancedLift:
         self.landed = 0.0  # exact time Z reached the target
         self.rise: Trajectory | None = None  # last rise profile (fallback)
         self.rise_t0 = 0.0
+        # the state is the rise's at (t − rise_t0): the next cycle follows it without a new
+        # profile (from a state on a time-optimal profile toward the same goal, ruckig would
+        # plan its own remainder again; one ruckig call per rising cycle saved)
+        self._on_rise = False
 
     # -- lifecycle -------------------------------------------------------------------------------
     def start(
@@ -82,6 +86,7 @@ class AdvancedLift:
         self.late = 0.0
         self.peak = self.q
         self.plan = None
+        self._on_rise = False
         if direct:
             self._plan_direct(t)
             self.phase = Phase.DIRECT
@@ -91,6 +96,7 @@ class AdvancedLift:
     def rise_and_hold(self, t: float) -> None:
         """Program error inside the range: go to POS_LIMIT and stay (vendor §2.1.3 case 2)."""
         self.target = max(self.limit, self.q) if self.limit >= self.target else self.limit
+        self._on_rise = False
         self._plan_direct(t)
         self.phase = Phase.HOLD_LIMIT
 
@@ -124,9 +130,10 @@ class AdvancedLift:
         dt = t_new - self.t
         if dt <= 0.0:
             return
+        on_rise, self._on_rise = self._on_rise, False
         try:
             if self.phase is Phase.UP:
-                self._up(dt, t_rem)
+                self._up(dt, t_rem, on_rise)
             elif self.phase is Phase.DOWN:
                 self._down(dt, t_rem)
             elif self.phase in (Phase.DIRECT, Phase.HOLD_LIMIT):
@@ -189,30 +196,42 @@ class AdvancedLift:
         lo, hi = position_range(traj)
         return hi <= self.limit + POS_TOL and lo >= min(start_q, self.target) - POS_TOL
 
-    def _up(self, dt: float, t_rem: float) -> None:
-        up = self.prof.to_rest(self.q, self.v, self.a, max(self.limit, self.target))
-        self.rise, self.rise_t0 = up, self.t
-        nxt = state_at(up, dt)
+    def _up(self, dt: float, t_rem: float, on_rise: bool = False) -> None:
+        if on_rise and self.rise is not None:
+            up = self.rise
+        else:
+            up = self.prof.to_rest(self.q, self.v, self.a, max(self.limit, self.target))
+            self.rise, self.rise_t0 = up, self.t
+        base = self.t - self.rise_t0  # the rise's local time of the current state
+        goal = max(self.limit, self.target)
+        if base + dt >= up.duration - TIME_TOL:
+            nxt = (goal, 0.0, 0.0)  # at rest at the goal (ruckig's end may round a bit past it)
+        else:
+            nxt = state_at(up, base + dt)
+            if nxt[0] > goal:
+                nxt = (goal, nxt[1], nxt[2])
         desc = self.prof.to_rest(nxt[0], nxt[1], nxt[2], self.target)
         self.t_need = desc.duration  # also while holding: the restart is limited by it
         if t_rem == INF:
             self._set(nxt)
+            self._on_rise = True
             return
         if desc.duration <= t_rem - dt + TIME_TOL and self._descent_fits(desc, nxt[0]):
             self._set(nxt)
+            self._on_rise = True
             return
         # The switch lies in this cycle (or is overdue): find τ ∈ [0, dt).
         now = self.prof.to_rest(self.q, self.v, self.a, self.target)
         if now.duration >= t_rem - TIME_TOL:
             tau, plan = 0.0, now  # overdue: descend time-optimally now
         elif self._descent_fits(desc, nxt[0]):
-            tau, plan = self._switch_time(up, now, desc, dt, t_rem)
+            tau, plan = self._switch_time(up, base, now, desc, dt, t_rem)
         else:  # the limit, not the time, ends the rise: bisection on both conditions
             lo, hi = 0.0, dt
             plan = now
             for _ in range(30):
                 mid = 0.5 * (lo + hi)
-                s = state_at(up, mid)
+                s = state_at(up, base + mid)
                 trial = self.prof.to_rest(s[0], s[1], s[2], self.target)
                 if mid + trial.duration <= t_rem and self._descent_fits(trial, s[0]):
                     lo, plan = mid, trial
@@ -226,11 +245,13 @@ class AdvancedLift:
         self._follow(self.t + dt)
 
     def _switch_time(
-        self, up: Trajectory, now: Trajectory, desc: Trajectory, dt: float, t_rem: float
-    ) -> tuple[float, Trajectory]:
+        self, up: Trajectory, base: float, now: Trajectory, desc: Trajectory, dt: float,
+        t_rem: float,
+    ) -> tuple[float, Trajectory]:  # fmt: skip
         """Root of f(τ) = τ + t_min(state(τ) → POS) − T_rem on [0, dt] by regula falsi (Illinois):
         f(0) < 0 < f(dt), f is smooth and increasing; ~5 ruckig calls instead of ~30 for
-        bisection. Returns the last τ with f ≤ 0 (lands at most 1e-11 s early) and its plan."""
+        bisection. Returns the last τ with f ≤ 0 (lands at most 1e-11 s early) and its plan.
+        The rise's state at τ is `up` at base + τ."""
         lo, f_lo, plan = 0.0, now.duration - t_rem, now
         hi, f_hi = dt, dt + desc.duration - t_rem
         side = 0
@@ -240,7 +261,7 @@ class AdvancedLift:
             mid = (lo * f_hi - hi * f_lo) / (f_hi - f_lo)
             if not lo < mid < hi:
                 mid = 0.5 * (lo + hi)
-            s = state_at(up, mid)
+            s = state_at(up, base + mid)
             trial = self.prof.to_rest(s[0], s[1], s[2], self.target)
             f_mid = mid + trial.duration - t_rem
             if f_mid <= 0.0:

@@ -88,6 +88,10 @@ class Interpolator:
         self._virtual = False  # the nominal run is the path itself (not parted yet)
         self.nominal_arrival: float | None = None
         self.nominal_override = 1.0
+        # the last lower bound `arrival` computed and its inputs (boundary, producer state,
+        # override): the lift asks for the same one twice when nothing moved in between
+        self._bound_key: tuple[int, float, float, float, int, float] | None = None
+        self._bound = INF
 
     # -- errors of the producer (never expected; counted for the summary and events) ----------
     @property
@@ -288,7 +292,11 @@ class Interpolator:
             j_max = tb.run_j[tb.run[min(p.seg, tb.n - 1)]]
             top = projected_velocity(p.v, max(p.a, 0.0), j_max)
             return p.t + gap / top if top > 0.0 else INF
-        return p.t + lower_bound_time(self.table, p.s, p.v, p.seg, k, self.override)
+        key = (k, p.t, p.s, p.v, p.seg, self.override)
+        if key != self._bound_key:  # asked again in the next cycle's override rule: keep it
+            self._bound_key = key
+            self._bound = p.t + lower_bound_time(self.table, p.s, p.v, p.seg, k, self.override)
+        return self._bound
 
     def exact(self, k: int) -> bool:
         """Whether `arrival(k)` is the committed (exact) time."""
