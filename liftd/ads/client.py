@@ -8,6 +8,7 @@ import struct
 from typing import Any
 
 from liftd.ads import wire
+from liftd.ads.constants import Command
 from liftd.ads.framing import AmsFramer
 
 SOURCE = bytes([10, 1, 2, 3, 1, 1])
@@ -33,6 +34,7 @@ class RawClient:
         self.framer = AmsFramer(1 << 24)
         self.pending: list[bytes] = []
         self.invoke = 0
+        self.notifications = 0  # device notifications skipped while waiting for a response
 
     def frame(self, command: int, payload: bytes, port: int = 551, target: bytes | None = None,
               flags: int = 4) -> bytes:  # fmt: skip
@@ -53,8 +55,15 @@ class RawClient:
         return wire.decode_frame(self.pending.pop(0))
 
     def request(self, command: int, payload: bytes, **kw: Any) -> wire.Frame:
+        """Send one request and return the next frame that is not a device notification (the
+        server sends those whenever they are due, also between a request and its response;
+        they are kept in `notifications`)."""
         self.send(self.frame(command, payload, **kw))
-        return self.recv_frame()
+        while True:
+            frame = self.recv_frame()
+            if frame.header.command != Command.NOTIFICATION or command == Command.NOTIFICATION:
+                return frame
+            self.notifications += 1
 
     def read_state(self) -> tuple[int, int, int]:
         """(result, ADS state, device state)"""
