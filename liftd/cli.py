@@ -19,9 +19,9 @@ from liftd import __version__
 from liftd.cnc.nc import DecoderContext
 from liftd.cnc.nc import Severity as NcSeverity
 from liftd.cnc.nc.decoder import iter_decode
-from liftd.cnc.nc.lift_summary import LiftRangeTracker
+from liftd.cnc.nc.lift_summary import LiftPlanHook, LiftRangeSummary, LiftRangeTracker
 from liftd.cnc.nc.lift_summary import describe as describe_lift
-from liftd.cnc.params import ChannelParams
+from liftd.cnc.params import ChannelParams, LiftMethod
 from liftd.settings import ConfigError, Problem, Settings, Severity, load_settings
 from liftd.settings.load import ChannelSettings
 from liftd.settings.programs import program_channel, with_program
@@ -76,13 +76,36 @@ def check_program(settings: Settings, path: Path, channel: ChannelParams | None 
     for problem in result.errors:
         print(problem.located(str(path)), file=sys.stderr)
         errors += problem.severity is NcSeverity.ERROR
-    for summary in ranges.finish():  # one line per lift range (issue 15)
-        print(f"{path}: {describe_lift(summary, ch.lift_method)}")
+    summaries = ranges.finish()
+    plan = None
+    if not errors and ch.lift_method is LiftMethod.ADVANCED and summaries:
+        plan = _lift_plan(settings, ch, text)
+    for summary in summaries:  # one line per lift range (issue 15)
+        print(f"{path}: {describe_lift(summary, ch.lift_method, plan)}")
     if not errors:
         print(f"{path}: ok ({blocks} blocks, {lifts} lift ranges)")
     approx = ", ".join(f"{kind} in {n} block{'s' * (n != 1)}" for kind, n in result.not_emulated)
     print(f"{path}: not emulated: {approx or 'nothing (everything runs as on the CNC)'}")
     return errors
+
+
+CHECK_PLAN_SECONDS = 120.0  # simulated seconds of a program `check` plans lifts over
+
+
+def _lift_plan(settings: Settings, ch: ChannelParams, text: str) -> LiftPlanHook:
+    """Advanced Lifting's planned peak and nominal time per range, from the GEO core run over
+    the program's first CHECK_PLAN_SECONDS (a few seconds of CPU at most)."""
+    from liftd.sim.simulate import plan_lifts  # noqa: PLC0415
+
+    planned = plan_lifts(ch, text, settings.config.plc.m_ack_delay_ms * 1e-3, CHECK_PLAN_SECONDS)
+
+    def hook(r: LiftRangeSummary) -> tuple[float, float] | None:
+        got = planned.get(r.index)
+        if got is None or got[0] != r.start.line:
+            return None
+        return got[1], got[2]
+
+    return hook
 
 
 def cmd_check(args: argparse.Namespace) -> int:

@@ -262,6 +262,20 @@ def simulate_machine(
     return [results[back[i]] for i in range(len(channels))]
 
 
+def plan_lifts(
+    ch: ChannelParams, text: str, m_ack_delay: float, max_time: float
+) -> dict[int, tuple[int, float, float]]:
+    """What `liftd check` prints per lift range: the program run by the GEO core for at most
+    `max_time` simulated seconds at 100 % override with the automatic PLC; per range (1-based,
+    in the order they start) its LIFT_START line, the peak the lift reached (m) and the
+    range's nominal path time (s). Ranges beyond `max_time` are missing."""
+    task = GeoTask(ch, text)
+    for _ in run_cycles(task, SimPlc(m_ack_delay), Schedule(), ch.cycle_time, max_time):
+        pass
+    return {i: (rec.range.start.line, rec.peak, rec.nominal_time)
+            for i, rec in enumerate(task.lift.records, start=1)}  # fmt: skip
+
+
 def build_summary(
     ch: ChannelParams,
     task: GeoTask,

@@ -2,10 +2,10 @@
 where a range is, the lift method, POS, the limit in effect, the path it covers and whether
 the lift is suppressed (P-CHAN-00244) — what the decoder knows, without simulating.
 
-The planned peak height and the nominal time of an Advanced Lifting range come from the lift
-planner of the GEO core, not from the decoder. `LiftPlanHook` is where the core plugs in:
-given a range it returns (peak m, nominal s) or None; `liftd check` passes none yet and says
-so in the line ("peak/time: not planned by check")."""
+The planned peak height and the nominal time of an Advanced Lifting range come from the GEO
+core, not from the decoder. `LiftPlanHook` is where it plugs in: given a range it returns
+(peak m, nominal s), or None for a range it did not plan (`liftd check` runs the core over
+the first CHECK_PLAN_SECONDS of the program: `liftd.sim.simulate.plan_lifts`)."""
 
 from __future__ import annotations
 
@@ -114,7 +114,7 @@ METHOD_NAMES = {
 
 def describe(r: LiftRangeSummary, method: LiftMethod, plan: LiftPlanHook | None = None) -> str:
     """One line: `lift 3: lines 12-18, Advanced Lifting, Z 1.000 -> POS 1.000 mm, limit
-    30.000 mm, path 23.400 mm: lifts (peak and nominal time: not planned by check)`."""
+    30.000 mm, path 23.400 mm: lifts (planned peak 41.2 mm, nominal 0.120 s)`."""
     s = r.start
     kind = ", single block" if s.single_block else ", resumed after #FLUSH" if s.implicit else ""
     down = ", DOWN" if s.down else ""
@@ -138,8 +138,10 @@ def describe(r: LiftRangeSummary, method: LiftMethod, plan: LiftPlanHook | None 
         state = "lifts"
         if method is LiftMethod.ADVANCED:
             planned = plan(r) if plan is not None else None
-            if planned is None:
+            if plan is None:
                 state += " (peak and nominal time: not planned by check)"
+            elif planned is None:
+                state += " (peak and nominal time: beyond what check plans; liftd simulate)"
             else:
                 peak, seconds = planned
                 state += f" (planned peak {peak * MM:.3f} mm, nominal {seconds:.3f} s)"

@@ -80,4 +80,7 @@ def test_the_planner_hook_fills_peak_and_nominal_time() -> None:
     hop = summaries()[0]
     line = describe(hop, LiftMethod.ADVANCED, plan=lambda r: (0.0123, 0.456))
     assert line.endswith("lifts (planned peak 12.300 mm, nominal 0.456 s)")
+    unplanned = describe(hop, LiftMethod.ADVANCED, plan=lambda r: None)  # beyond its horizon
+    assert unplanned.endswith("lifts (peak and nominal time: beyond what check plans; "
+                              "liftd simulate)")  # fmt: skip
     assert describe(hop, LiftMethod.LIFTING).endswith(", path 100.000 mm: lifts")
