@@ -15,6 +15,8 @@ same inputs give bit-identical snapshots. Order within a cycle:
 
 from __future__ import annotations
 
+import functools
+
 from liftd.cnc.geo_program import GeoProgram, PreparedPrograms
 from liftd.cnc.lift.controller import LiftController, LiftRecord
 from liftd.cnc.lift.monitor import AccelMonitor
@@ -212,10 +214,6 @@ class GeoTask:
                 return k
         return rng.k_end
 
-    def _arrival(self) -> float:
-        k = self._horizon()
-        return INF if k < 0 else self.interp.arrival(k)
-
     def _limit_override(self, ov_req: float, holding: bool) -> float:
         """The lift's override rule (Advanced Lifting: vendor §2.5; path-based: none)."""
         self.ov_max = MAX_OVERRIDE
@@ -259,8 +257,15 @@ class GeoTask:
         m = self.lift.motion
         if m is not None:
             ip = self.interp
-            t_rem = self._arrival() - m.t if m.uses_time else 0.0
-            self.lift.step(t, ip.s, ip.v, ip.a, t_rem, self.ov_eff)
+            t_rem, refine = 0.0, None
+            if m.uses_time:
+                k, t_z = self._horizon(), m.t
+                if k < 0:
+                    t_rem = INF
+                else:  # a bound that costs nothing while it still holds; exact on demand
+                    t_rem = ip.arrival_bound(k) - t_z
+                    refine = functools.partial(_remaining, ip, k, t_z)
+            self.lift.step(t, ip.s, ip.v, ip.a, t_rem, self.ov_eff, refine)
             for finding in self.lift.findings:
                 self._emit(finding.name, t, self.line, finding.value)
             self.lift.findings.clear()
@@ -490,6 +495,11 @@ class GeoTask:
             lift.axis_index,
             lift.counts,
         )
+
+
+def _remaining(interp: Interpolator, k: int, t_z: float) -> float:
+    """The path's remaining time to boundary k from the lift's time t_z (exact or its bound)."""
+    return interp.arrival(k) - t_z
 
 
 def lead_cycles(ch: ChannelParams, axis: str) -> int:

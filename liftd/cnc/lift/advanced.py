@@ -20,12 +20,16 @@ never above it) and checked on every descent plan (community ruckig ignores posi
 from __future__ import annotations
 
 import enum
+from collections.abc import Callable
 
 from ruckig import Trajectory
 
 from liftd.cnc.lift.profile import LiftProfiles, ProfileError, position_range, state_at
 
 INF = float("inf")
+# the exact remaining path time, when the generator was given a lower bound of it and its
+# decision depends on the difference (the bound is enough while Z rises with time to spare)
+Refine = Callable[[], float]
 POS_TOL = 1e-7  # 0.1 µm: tolerance of the position checks
 TIME_TOL = 1e-9  # s
 
@@ -124,16 +128,20 @@ class AdvancedLift:
         )
 
     # -- cycle ------------------------------------------------------------------------------------
-    def step(self, t_new: float, t_rem: float) -> None:
+    def step(self, t_new: float, t_rem: float, refine: Refine | None = None) -> None:
         """Advance from the last output time to t_new; t_rem is the remaining path time until
-        LIFT_END measured at the last output time."""
+        LIFT_END measured at the last output time, or a lower bound of it that `refine()`
+        makes exact: used as it is only to decide that Z may go on rising (if it may with
+        less time, it may with more), refined for every other decision."""
         dt = t_new - self.t
         if dt <= 0.0:
             return
         on_rise, self._on_rise = self._on_rise, False
+        if refine is not None and self.phase is not Phase.UP:
+            t_rem, refine = refine(), None
         try:
             if self.phase is Phase.UP:
-                self._up(dt, t_rem, on_rise)
+                self._up(dt, t_rem, on_rise, refine)
             elif self.phase is Phase.DOWN:
                 self._down(dt, t_rem)
             elif self.phase in (Phase.DIRECT, Phase.HOLD_LIMIT):
@@ -196,7 +204,9 @@ class AdvancedLift:
         lo, hi = position_range(traj)
         return hi <= self.limit + POS_TOL and lo >= min(start_q, self.target) - POS_TOL
 
-    def _up(self, dt: float, t_rem: float, on_rise: bool = False) -> None:
+    def _up(
+        self, dt: float, t_rem: float, on_rise: bool = False, refine: Refine | None = None
+    ) -> None:
         if on_rise and self.rise is not None:
             up = self.rise
         else:
@@ -220,6 +230,16 @@ class AdvancedLift:
             self._set(nxt)
             self._on_rise = True
             return
+        if refine is not None:  # t_rem was a lower bound: decide on the exact time
+            exact = refine()
+            if exact != t_rem:
+                t_rem = exact
+                if t_rem == INF or (
+                    desc.duration <= t_rem - dt + TIME_TOL and self._descent_fits(desc, nxt[0])
+                ):
+                    self._set(nxt)
+                    self._on_rise = True
+                    return
         # The switch lies in this cycle (or is overdue): find τ ∈ [0, dt).
         now = self.prof.to_rest(self.q, self.v, self.a, self.target)
         if now.duration >= t_rem - TIME_TOL:

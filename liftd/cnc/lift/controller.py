@@ -23,7 +23,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from liftd.cnc.lift.advanced import AdvancedLift
+from liftd.cnc.lift.advanced import AdvancedLift, Refine
 from liftd.cnc.lift.guard import GuardFinding, LiftGuard
 from liftd.cnc.lift.motion import CoupledLift, LiftMotion, TimeBasedLift
 from liftd.cnc.lift.path_based import RangePlan
@@ -176,14 +176,14 @@ class LiftController:
 
     # -- cycle ------------------------------------------------------------------------------------
     def step(self, t_new: float, s: float, v: float, a: float, t_rem: float,
-             override: float) -> None:  # fmt: skip
+             override: float, refine: Refine | None = None) -> None:  # fmt: skip
         """Move the lift axis to t_new: against the remaining path time t_rem (time-based) or
         to the path position s (coupled, path velocity v and acceleration a)."""
         m = self.motion
         if m is None:
             return
         t_old, z_old = m.t, m.z
-        m.step(t_new, s, v, a, t_rem, override)
+        m.step(t_new, s, v, a, t_rem, override, refine)
         self.findings.extend(m.take_findings())
         rec = self.record
         if rec is not None:

@@ -15,7 +15,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Protocol
 
-from liftd.cnc.lift.advanced import AdvancedLift, Phase
+from liftd.cnc.lift.advanced import AdvancedLift, Phase, Refine
 from liftd.cnc.lift.guard import GuardFinding, LiftGuard
 from liftd.cnc.lift.path_based import RangePlan
 from liftd.cnc.lift.ranges import LiftRange
@@ -78,10 +78,12 @@ class LiftMotion(Protocol):
         ...
 
     def step(
-        self, t_new: float, s: float, v: float, a: float, t_rem: float, override: float
-    ) -> None:
-        """Move to t_new (`t_rem`: the path's remaining time to the horizon, time-based;
-        s, v, a: the path's state, coupled; `override`: in effect)."""
+        self, t_new: float, s: float, v: float, a: float, t_rem: float, override: float,
+        refine: Refine | None = None,
+    ) -> None:  # fmt: skip
+        """Move to t_new (`t_rem`: the path's remaining time to the horizon, time-based, or a
+        lower bound of it that `refine()` makes exact when the decision needs it; s, v, a:
+        the path's state, coupled; `override`: in effect)."""
         ...
 
     def needed_time(self) -> float: ...
@@ -147,11 +149,12 @@ class TimeBasedLift:
         return LiftPhase(int(self.gen.phase))
 
     def step(
-        self, t_new: float, s: float, v: float, a: float, t_rem: float, override: float
-    ) -> None:
+        self, t_new: float, s: float, v: float, a: float, t_rem: float, override: float,
+        refine: Refine | None = None,
+    ) -> None:  # fmt: skip
         gen = self.gen
         was_down = gen.phase is Phase.DOWN
-        gen.step(t_new, t_rem)
+        gen.step(t_new, t_rem, refine)
         z, findings = self.guard.check(gen.z, gen.fallbacks)
         if findings:
             self.findings.extend(findings)
@@ -258,8 +261,9 @@ class CoupledLift:
         return abs(self.z - self.rng.start.target) <= 1e-12 and self.vz == 0.0
 
     def step(
-        self, t_new: float, s: float, v: float, a: float, t_rem: float, override: float
-    ) -> None:
+        self, t_new: float, s: float, v: float, a: float, t_rem: float, override: float,
+        refine: Refine | None = None,
+    ) -> None:  # fmt: skip
         z, dz, ddz = self.plan.state(s)
         self.t, self.vz, self.az = t_new, dz * v, ddz * v * v + dz * a
         self.z, findings = self.guard.check(z, 0)

@@ -92,6 +92,10 @@ class Interpolator:
         # override): the lift asks for the same one twice when nothing moved in between
         self._bound_key: tuple[int, float, float, float, int, float] | None = None
         self._bound = INF
+        self.restarts = 0  # committed futures discarded (events)
+        # (boundary, restarts) of the last lower bound: it stays a lower bound while the
+        # future it was computed on stands (`arrival_bound`)
+        self._loose_key = (-1, -1)
 
     # -- errors of the producer (never expected; counted for the summary and events) ----------
     @property
@@ -105,6 +109,7 @@ class Interpolator:
     # -- events ---------------------------------------------------------------------------------
     def _restart(self) -> None:
         """Discard the committed future; the producer goes on from the current state."""
+        self.restarts += 1
         self.queue.clear()
         self.arrivals.clear()
         self.parked = self.parked and self.hold
@@ -296,7 +301,23 @@ class Interpolator:
         if key != self._bound_key:  # asked again in the next cycle's override rule: keep it
             self._bound_key = key
             self._bound = p.t + lower_bound_time(self.table, p.s, p.v, p.seg, k, self.override)
+            self._loose_key = (k, self.restarts)
         return self._bound
+
+    def arrival_bound(self, k: int) -> float:
+        """A lower bound of `arrival(k)` that may be looser but costs nothing when the last
+        one is still good: a lower bound computed from an earlier state of the producer stays
+        one as long as the committed future it started from stands (no restart since), and it
+        is never above the one computed now (the path from that state to this one is a
+        feasible motion of the same relaxation). Exact times are returned as `arrival`."""
+        if (
+            self.stopped_at is None
+            and k > self.segment
+            and k not in self.arrivals
+            and self._loose_key == (k, self.restarts)
+        ):
+            return self._bound
+        return self.arrival(k)
 
     def exact(self, k: int) -> bool:
         """Whether `arrival(k)` is the committed (exact) time."""
