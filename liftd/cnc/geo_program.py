@@ -26,6 +26,8 @@ from liftd.cnc.params import PLANNING_MARGIN, ChannelParams, LiftMethod
 from liftd.cnc.path.geometry import Vec
 from liftd.cnc.path.program import Action, ActionKind, PathProgram, prepare
 from liftd.cnc.path.table import PathTable, build_table
+from liftd.cnc.path.velocity import brake_distance
+from liftd.cnc.plc import MAX_OVERRIDE
 
 
 @dataclass(frozen=True, slots=True)
@@ -152,6 +154,29 @@ def _conditional(path: PathProgram) -> dict[int, tuple[int, ...]]:
     return {m: tuple(ks) for m, ks in out.items()}
 
 
+def _limits_reach(rng: LiftRange, changed: list[int], nominal: PathTable,
+                  ch: ChannelParams) -> bool:  # fmt: skip
+    """Whether segments the lifts' limits changed can shape the path inside `rng`: those in
+    the range, and those after it that the path inside it can see (within its look-ahead
+    and its braking distance from the fastest it can go there at 200 % override). Segments
+    before the range cannot: the nominal run starts from the path's state at LIFT_START."""
+    n = nominal.n
+    end = rng.k_end if rng.k_end >= 0 else n
+    last = min(end + max(1, ch.look_ahead_blocks) + 1, n)
+    inside = [k for k in changed if rng.k_start <= k < last]
+    if not inside:
+        return False
+    if any(k < end for k in inside):
+        return True
+    top = max(nominal.ceiling(k, MAX_OVERRIDE) for k in range(rng.k_start, last))
+    runs = {nominal.run[k] for k in range(rng.k_start, last)}
+    a_min = min(nominal.run_a[r] for r in runs)
+    j_min = min(nominal.run_j[r] for r in runs)
+    reach = brake_distance(top, 0.0, 0.0, a_min, j_min) + 1e-3  # m, and a mm to spare
+    s_end = nominal.s[min(end, n)]
+    return any(nominal.s[k] - s_end <= reach for k in inside)
+
+
 def load_program(text: str, ch: ChannelParams, start: Vec) -> GeoProgram:
     result = decode(text, DecoderContext.from_channel(ch, start))
     path = prepare(result.blocks, ch, start)
@@ -164,12 +189,7 @@ def load_program(text: str, ch: ChannelParams, start: Vec) -> GeoProgram:
     elif ch.lift_method is LiftMethod.LIFTING:
         path, plans = _couple_lifts(path, ranges, ch)
     changed = [k for k, (a, b) in enumerate(zip(original, path.segments, strict=True)) if a != b]
-    reach = max(1, ch.look_ahead_blocks) + 1
-    differs = tuple(
-        any(r.k_start - reach <= k <= (r.k_end if r.k_end >= 0 else len(original)) + reach
-            for k in changed)
-        for r in ranges
-    )  # fmt: skip
+    differs = tuple(_limits_reach(r, changed, nominal, ch) for r in ranges)
     first = result.blocks[0].line if result.blocks else 1
     warnings = tuple(e for e in result.errors if e.severity is Severity.WARNING)
     return GeoProgram(
