@@ -16,6 +16,7 @@ from __future__ import annotations
 import math
 
 from liftd.cnc.path.table import PathTable
+from liftd.cnc.path.velocity import brake_distance, projected_velocity
 
 INF = float("inf")
 MAX_POINTS = 12
@@ -38,15 +39,29 @@ def _interval_time(d: float, u0: float, u1: float, ceiling: float, acc: float) -
     return t_ramp + max(cruise, 0.0) / peak
 
 
-def lower_bound_time(tb: PathTable, s: float, v: float, seg: int, target: int, ov: float) -> float:
-    """Seconds the path needs at least from (s, v) in segment `seg` to boundary `target` at
-    override `ov` (held constant); 0 if the target is behind, inf if the path cannot move."""
+def lower_bound_time(
+    tb: PathTable, s: float, v: float, seg: int, target: int, ov: float, a: float = 0.0
+) -> float:
+    """Seconds the path needs at least from (s, v, a) in segment `seg` to boundary `target` at
+    override `ov` (held constant); 0 if the target is behind, inf if the path cannot move.
+
+    The feed caps (F × ov) are soft: after a sudden override decrease the path is above them
+    until it has braked, and the tracker passes those it cannot get down to as slowly as it
+    can (wide seed 1747: a bound that took them as hard said 1.61 s where the path arrived at
+    1.49 s, and Z, planning against it, landed late). Meanwhile the velocity never rises above
+    its projected value `top`, so a point's cap here is at least min(top, its hard cap); and
+    beyond the distance in which the path can stop (twice it, to spare) every feed cap is
+    reachable, so the tracker keeps it."""
     n = tb.n
     target = min(target, n)
     if target <= seg or s >= tb.s[target]:
         return 0.0
     if ov <= 0.0:
         return INF
+    r0 = tb.run[min(seg, n - 1)]
+    top = projected_velocity(v, max(a, 0.0), tb.run_j[r0])
+    stop = brake_distance(top, 0.0, 0.0, tb.run_a[r0], tb.run_j[r0]) if top > 0.0 else 0.0
+    settled = s + 2.0 * stop
     # the constraint points between here and the target (exclusive), then the target
     pos = [s]
     caps = [v]
@@ -59,14 +74,19 @@ def lower_bound_time(tb: PathTable, s: float, v: float, seg: int, target: int, o
             cut = b
             break
         pos.append(tb.s[b])
-        caps.append(tb.point_cap[b] if tb.stop[b] else tb.entry_cap(b, ov))
+        if tb.stop[b]:
+            caps.append(tb.point_cap[b])
+        else:
+            hard = min(tb.cap[b], tb.point_cap[b]) if b < n else 0.0
+            caps.append(max(tb.entry_cap(b, ov), min(top, hard)))
         ceil.append(tb.ceiling(b - 1, ov))
         acc.append(tb.run_a[tb.run[b - 1]])
         b = tb.next_constraint[b + 1] if b + 1 <= n else n
     end = target if cut < 0 else cut
     pos.append(tb.s[end])
     last_ceiling = tb.ceiling(end - 1, ov)
-    caps.append(last_ceiling)  # free at the end of the solved part (its ceiling at most)
+    # free at the end of the solved part (its ceiling at most, or what is left of a brake)
+    caps.append(max(last_ceiling, min(top, tb.cap[end - 1])))
     ceil.append(last_ceiling)
     acc.append(tb.run_a[tb.run[end - 1]])
     m = len(pos)
@@ -82,8 +102,10 @@ def lower_bound_time(tb: PathTable, s: float, v: float, seg: int, target: int, o
         nxt = min(e[i], math.sqrt(u * u + 2.0 * acc[i] * d))
         total += _interval_time(d, u, nxt, ceil[i], acc[i])
         u = nxt
-    if cut >= 0:  # the rest at its ceilings at the most
-        total += max(
-            (tb.sum_l_f[target] - tb.sum_l_f[cut]) / ov, tb.sum_l_c[target] - tb.sum_l_c[cut]
-        )
+    if cut >= 0:  # the rest at its ceilings at the most (its feed caps once the path can keep them)
+        hard_rest = tb.sum_l_c[target] - tb.sum_l_c[cut]
+        if tb.s[cut] >= settled:
+            total += max((tb.sum_l_f[target] - tb.sum_l_f[cut]) / ov, hard_rest)
+        else:
+            total += hard_rest
     return total

@@ -90,7 +90,7 @@ class Interpolator:
         self.nominal_override = 1.0
         # the last lower bound `arrival` computed and its inputs (boundary, producer state,
         # override): the lift asks for the same one twice when nothing moved in between
-        self._bound_key: tuple[int, float, float, float, int, float] | None = None
+        self._bound_key: tuple[int, float, float, float, float, int, float] | None = None
         self._bound = INF
         self.restarts = 0  # committed futures discarded (events)
         # (boundary, restarts) of the last lower bound: it stays a lower bound while the
@@ -291,16 +291,19 @@ class Interpolator:
         p = self.prod
         if (p.stopped_at is not None and p.stopped_at < k) or p.parked:
             return INF  # the path rests before k (a wait, or a hold that stops short of it)
-        if self.hold:  # braking for a hold (velocity only falls) and not yet at rest
+        if self.hold or self.override <= 0.0:
+            # braking for a hold, or override 0 which acts as one (the velocity only falls) and
+            # not yet at rest: it may still pass k (wide seed 890: the path passed LIFT_END
+            # braking for override 0 while Z, told "never", rose)
             tb = self.table
             gap = tb.s[min(k, tb.n)] - p.s
             j_max = tb.run_j[tb.run[min(p.seg, tb.n - 1)]]
             top = projected_velocity(p.v, max(p.a, 0.0), j_max)
             return p.t + gap / top if top > 0.0 else INF
-        key = (k, p.t, p.s, p.v, p.seg, self.override)
+        key = (k, p.t, p.s, p.v, p.a, p.seg, self.override)
         if key != self._bound_key:  # asked again in the next cycle's override rule: keep it
             self._bound_key = key
-            self._bound = p.t + lower_bound_time(self.table, p.s, p.v, p.seg, k, self.override)
+            self._bound = p.t + lower_bound_time(self.table, p.s, p.v, p.seg, k, self.override, p.a)
             self._loose_key = (k, self.restarts)
         return self._bound
 
@@ -329,7 +332,7 @@ class Interpolator:
         if self.stopped_at is not None and self.stopped_at == k:
             return self.t_state
         return self.t_state + lower_bound_time(
-            self.table, self.s, self.v, self.segment, k, override
+            self.table, self.s, self.v, self.segment, k, override, self.a
         )
 
     def position(self) -> tuple[float, ...]:
