@@ -79,13 +79,7 @@ class Ruckig1:
             if last is None or last[5] != min_duration:
                 inp.minimum_duration = min_duration
             self._last_pos = (v1, v_max, forward_only, a_max, j_max, min_duration)
-        traj = Trajectory(1)
-        self.calls += 1
-        try:
-            self._r.calculate(inp, traj)
-        except RuckigError as exc:
-            raise _refused(exc) from None
-        return traj
+        return self._solve(inp)
 
     def velocity(
         self, p0: float, v0: float, a0: float, v1: float, a_max: float, j_max: float
@@ -106,6 +100,9 @@ class Ruckig1:
             if last is None or last[2] != limits[2]:
                 inp.max_jerk = [limits[2]]
             self._last_vel = limits
+        return self._solve(inp)
+
+    def _solve(self, inp: InputParameter) -> Trajectory:
         traj = Trajectory(1)
         self.calls += 1
         try:
