@@ -7,7 +7,7 @@ STAMP  := $(VENV)/.installed
 NODE_DIR := tests/interop/node
 NODE_STAMP := $(NODE_DIR)/node_modules/.installed
 
-.PHONY: run test lint typecheck unit bench clean tools
+.PHONY: run test lint typecheck unit bench clean tools core
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -15,7 +15,18 @@ $(STAMP): pyproject.toml
 	$(BIN)/python -m pip install --quiet -e '.[dev,plot]'
 	touch $(STAMP)
 
-run: $(STAMP)
+# The GEO cycle's modules compiled with mypyc (liftd.cnc.COMPILED), rebuilt when one changes;
+# without a C compiler the core runs as Python (the script says so and exits 0).
+CORE_SRC   := $(shell $(PYTHON) -c "import ast,sys; m=ast.parse(open('liftd/cnc/__init__.py').read()); print(' '.join(v.value.replace('.','/')+'.py' for n in m.body if isinstance(n,ast.AnnAssign) for v in n.value.elts))")
+CORE_STAMP := build/mypyc/.compiled
+
+$(CORE_STAMP): $(STAMP) $(CORE_SRC) liftd/cnc/__init__.py tools/compile_core.py
+	$(BIN)/python tools/compile_core.py
+	@mkdir -p $(dir $@) && touch $@
+
+core: $(CORE_STAMP)
+
+run: $(STAMP) $(CORE_STAMP)
 	$(BIN)/liftd run
 
 # The interop tests' independent clients: Node ads-client from the committed lockfile, and
@@ -30,7 +41,7 @@ tools: $(NODE_STAMP)
 	    { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq tshark >/dev/null; }; }; } || \
 	  echo "tshark missing and not root: the Wireshark interop test is skipped"
 
-test: $(STAMP) tools
+test: $(STAMP) $(CORE_STAMP) tools
 	$(BIN)/ruff check liftd tests bench
 	$(BIN)/ruff format --check liftd tests bench
 	$(BIN)/mypy liftd
@@ -40,4 +51,5 @@ bench: $(STAMP)
 	for f in bench/bench_*.py; do $(BIN)/python $$f || exit 1; done
 
 clean:
+	test ! -x $(BIN)/python || $(BIN)/python tools/compile_core.py --clean
 	rm -rf $(VENV) .mypy_cache .ruff_cache .pytest_cache .hypothesis build dist $(NODE_DIR)/node_modules

@@ -9,11 +9,26 @@ import pytest
 from hypothesis import settings
 
 from tests.support.paths import REPO
+from tests.support.pure_core import PureCore
 
 # CI: derandomised and bounded; `HYPOTHESIS_PROFILE=dev` for longer local runs
 settings.register_profile("ci", max_examples=150, deadline=None, derandomize=True)
 settings.register_profile("dev", max_examples=5000, deadline=None)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
+
+
+def pytest_sessionstart(session: pytest.Session) -> None:
+    """An edited core module whose old extension would run instead: test nothing."""
+    from liftd.runtime.core import core_build  # noqa: PLC0415
+
+    if core_build() == "stale":
+        pytest.exit("the compiled GEO core is older than its source: run `make core`", 2)
+
+
+@pytest.fixture(scope="session")
+def pure_core(tmp_path_factory: pytest.TempPathFactory) -> PureCore:
+    """The core as Python source in a subprocess (tests/support/pure_core.py)."""
+    return PureCore(tmp_path_factory.mktemp("pure"))
 
 
 @pytest.fixture

@@ -15,6 +15,7 @@ from liftd.cli.check import cmd_check
 from liftd.cli.common import EXIT_CONFIG, EXIT_UNHEALTHY
 from liftd.cli.service import cmd_healthcheck, cmd_objects, cmd_plc, cmd_reload, cmd_run
 from liftd.cli.simulate import cmd_simulate, cmd_study
+from liftd.runtime.core import core_build
 from liftd.settings import ConfigError
 
 
@@ -23,7 +24,8 @@ def build_parser() -> argparse.ArgumentParser:
         prog="liftd",
         description="Emulated TwinCAT 3 CNC GEO task: collision avoidance by lifting, over ADS.",
     )
-    parser.add_argument("--version", action="version", version=f"liftd {__version__}")
+    version = f"liftd {__version__} (GEO core: {core_build()})"
+    parser.add_argument("--version", action="version", version=version)
     sub = parser.add_subparsers(dest="command", required=True)
 
     check = sub.add_parser("check", help="validate the configuration and NC programs")

@@ -2,4 +2,32 @@
 
 No IO, no clock, no logging, no threads; SI units inside (`units` is the only place with unit
 factors). Imports nothing of liftd outside `liftd.cnc`.
+
+`COMPILED` names the modules of the GEO cycle that `make` compiles to C extensions with mypyc
+(`tools/compile_core.py`, docs/architecture.md "The compiled core"): the same source, 3× less
+CPU per cycle, bit-identical results. Without a C compiler they run as Python.
 """
+
+# The cycle's path: everything `GeoTask.step` and `Machine.step` run, and the automatic PLC of
+# `simulate`. Not compiled: preparation (nc/, geo_program, the lists), and `lift/profile.py`,
+# the thin wrapper tests use to inject ruckig failures (a compiled class cannot be patched).
+COMPILED: tuple[str, ...] = (
+    "liftd.cnc.geo_task",
+    "liftd.cnc.machine",
+    "liftd.cnc.plc",
+    "liftd.cnc.ruckig1",
+    "liftd.cnc.lift.advanced",
+    "liftd.cnc.lift.controller",
+    "liftd.cnc.lift.guard",
+    "liftd.cnc.lift.monitor",
+    "liftd.cnc.lift.motion",
+    "liftd.cnc.lift.path_based",
+    "liftd.cnc.path.bounds",
+    "liftd.cnc.path.geometry",
+    "liftd.cnc.path.interpolator",
+    "liftd.cnc.path.limits",
+    "liftd.cnc.path.program",
+    "liftd.cnc.path.table",
+    "liftd.cnc.path.tracker",
+    "liftd.cnc.path.velocity",
+)

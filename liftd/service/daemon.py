@@ -36,6 +36,7 @@ from liftd.cnc.nc import DecoderContext, Severity, decode
 from liftd.cnc.snapshot import PlcWrite
 from liftd.objects.catalog import AdsStats, Catalog, GeoView
 from liftd.objects.provider import CncProvider
+from liftd.runtime.core import core_build
 from liftd.runtime.geo_loop import ChannelConfig, LoopConfig
 from liftd.runtime.geo_process import GeoFailure, GeoGone, GeoProcess, GeoStartError, rss_mb
 from liftd.runtime.records import pack_input
@@ -194,8 +195,12 @@ class Daemon:
             f"READY=1\nSTATUS=GEO cycling, ADS on {ads.host}:{self.server.port} port "
             f"{','.join(map(str, ads.ams_ports))}"
         )
+        core = core_build()
         self.log.info("daemon.ready", seconds=round(time.monotonic() - t0, 3),
-                      ads_port=self.server.port, net_id=ads.net_id)  # fmt: skip
+                      ads_port=self.server.port, net_id=ads.net_id, core=core)  # fmt: skip
+        if core == "stale":
+            self.log.warning("geo.core_stale", hint="a compiled module is older than its "
+                             "source, which does not run until `make core`")  # fmt: skip
         failure = await self._serve()
         if failure is not None:
             self.provider.down_state = AdsState.ERROR

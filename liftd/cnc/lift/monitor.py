@@ -20,7 +20,9 @@ INF = float("inf")
 
 
 class AccelMonitor:
-    NONE, WARNING, ERROR = 0, 1, 2
+    NONE = 0
+    WARNING = 1
+    ERROR = 2
 
     def __init__(self, axis: AxisParams, cycle: float) -> None:
         self.a_max = axis.a_max

@@ -25,6 +25,7 @@ from liftd.cnc.snapshot import LiftPhase
 INF = float("inf")
 MIN_LIFT_OVERRIDE = 0.01  # below this, the path waits for Z at the lift's horizon instead
 OVERRIDE_TRIALS = 6  # lower-bound evaluations to find the highest override Z still allows
+_PHASES = tuple(LiftPhase(int(p)) for p in Phase)  # the generator's phase as reported
 
 
 class PathTimes(Protocol):
@@ -146,7 +147,7 @@ class TimeBasedLift:
 
     @property
     def phase(self) -> LiftPhase:
-        return LiftPhase(int(self.gen.phase))
+        return _PHASES[self.gen.phase]  # an enum call per cycle costs more than the step
 
     def step(
         self, t_new: float, s: float, v: float, a: float, t_rem: float, override: float,
@@ -254,7 +255,10 @@ class CoupledLift:
         self.findings: list[GuardFinding] = []
 
     uses_time = False
-    phase = LiftPhase.COUPLED
+
+    @property
+    def phase(self) -> LiftPhase:
+        return LiftPhase.COUPLED
 
     @property
     def done(self) -> bool:

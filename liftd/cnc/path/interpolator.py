@@ -162,7 +162,8 @@ class Interpolator:
     def _produce(self) -> bool:
         """One more entry; False when the producer rests (a stop or a hold)."""
         p = self.prod
-        if p.stopped_at is not None or (p.parked and self.queue):
+        resting: int | None = p.stopped_at  # a local: `advance` changes p.stopped_at
+        if resting is not None or (p.parked and self.queue):
             return False  # resting: the last entry stands for every later cycle
         k = self.k_next
         crossings = p.advance(k * self.dt, self.dt)
