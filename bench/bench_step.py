@@ -16,7 +16,7 @@ VM both clocks occasionally read 0.1–4 ms for nothing). Best of `REPEAT` runs 
 (the shared 2-vCPU VM swings between identical runs); every run's maximum is printed. One
 JSON line per program.
 
-`--breakdown` prints where the time of the demo goes instead: per cycle the minimum over 3
+`--breakdown [NAME ...]` prints where the time of the demo (or the programs named) goes instead: per cycle the minimum over 3
 runs (the run is deterministic, so the minimum filters out the VM's noise), split by what
 the cycle did (a lift moving, the producer filling more than one entry after an event, a
 producer re-plan).
@@ -145,60 +145,48 @@ def clock_noise(clock: Callable[[], int], n: int = 100_000) -> dict[str, float]:
     return {"p50": got.p50_us, "p99": got.p99_us, "p999": got.p999_us, "max": got.max_us}
 
 
-def breakdown(text: str, runs: int = 3) -> dict[str, object]:
-    """Per-cycle minimum step time over `runs` identical runs, by what the cycle did."""
+def breakdown(name: str, text: str, schedule: Schedule, runs: int = 3) -> dict[str, object]:
+    """Per-cycle minimum step time over `runs` identical runs, by what the cycle did: read from
+    the core's own counters (entries the producer made, its ruckig calls), which works on the
+    compiled core too (its classes cannot be patched to count)."""
     import numpy as np  # noqa: PLC0415
 
     from liftd.cnc.geo_task import GeoTask  # noqa: PLC0415
-    from liftd.cnc.path import interpolator, tracker  # noqa: PLC0415
     from liftd.cnc.plc import SimPlc  # noqa: PLC0415
 
-    counts = {"produce": 0, "replan": 0}
-    produce, replan = interpolator.Interpolator._produce, tracker.Tracker._replan
-
-    def counted_produce(self: interpolator.Interpolator) -> bool:
-        counts["produce"] += 1
-        return produce(self)
-
-    def counted_replan(self: tracker.Tracker, dt: float, force: int | None = None) -> None:
-        counts["replan"] += 1
-        replan(self, dt, force)
-
-    interpolator.Interpolator._produce = counted_produce  # type: ignore[method-assign]
-    tracker.Tracker._replan = counted_replan  # type: ignore[method-assign]
     ch = load_settings(str(ROOT / "config" / "liftd.toml")).channel
     times: list[list[int]] = []
     kinds: list[str] = []
     clock = time.perf_counter_ns
-    try:
-        for r in range(runs):
-            task, plc = GeoTask(ch, text), SimPlc(0.02)
-            last = None
-            gc.collect()
-            gc.freeze()
-            gc.disable()
-            row = []
-            for k in range(1, 10_000_000):
-                t = k * ch.cycle_time
-                inputs = plc.inputs(last, t, Schedule())
-                counts["produce"] = counts["replan"] = 0
-                c0 = clock()
-                last = task.step(inputs, t)
-                row.append(clock() - c0)
-                if r == 0:
-                    kinds.append(("lift" if task.lift.motion is not None else "no lift")
-                                 + (", refill" if counts["produce"] > 1 else "")
-                                 + (", re-plan" if counts["replan"] else ""))  # fmt: skip
-                if last.state.name in ("READY", "ERROR") and task.runs:
-                    break
-            gc.enable()
-            gc.unfreeze()
-            times.append(row)
-    finally:
-        interpolator.Interpolator._produce = produce  # type: ignore[method-assign]
-        tracker.Tracker._replan = replan  # type: ignore[method-assign]
+    for r in range(runs):
+        task, plc = GeoTask(ch, text), SimPlc(0.02)
+        last = None
+        gc.collect()
+        gc.freeze()
+        gc.disable()
+        row = []
+        for k in range(1, 10_000_000):
+            t = k * ch.cycle_time
+            inputs = plc.inputs(last, t, schedule)
+            before = task.interp
+            made, calls = before.k_next, before.prod.calc.calls
+            c0 = clock()
+            last = task.step(inputs, t)
+            row.append(clock() - c0)
+            if r == 0:
+                interp = task.interp  # (a new program run has a new one)
+                entries = interp.k_next - made if interp is before else 1
+                solved = interp.prod.calc.calls - calls if interp is before else 0
+                kinds.append(("lift" if task.lift.motion is not None else "no lift")
+                             + (", refill" if entries > 1 else "")
+                             + (", re-plan" if solved > max(entries, 1) else ""))  # fmt: skip
+            if last.state.name in ("READY", "ERROR") and task.runs:
+                break
+        gc.enable()
+        gc.unfreeze()
+        times.append(row)
     best = np.min(np.array(times), axis=0) / 1e3
-    out: dict[str, object] = {"bench": "step_breakdown", "program": "demo", "runs": runs}
+    out: dict[str, object] = {"bench": "step_breakdown", "program": name, "runs": runs}
     for kind in sorted(set(kinds)):
         sel = best[np.array(kinds) == kind]
         out[kind] = {"cycles": int(sel.size), "p50": round(float(np.median(sel)), 1),
@@ -211,11 +199,13 @@ def breakdown(text: str, runs: int = 3) -> dict[str, object]:
 
 
 def main() -> None:
+    wanted = [a for a in sys.argv[1:] if not a.startswith("--")]
     if "--breakdown" in sys.argv:
-        demo = (ROOT / "config" / "programs" / "demo.nc").read_text()
-        print(json.dumps(breakdown(demo)), flush=True)
+        for name, (text, schedule_for) in programs().items():
+            if name in (wanted or ["demo"]):
+                schedule = schedule_for(3600.0)
+                print(json.dumps(breakdown(name, text, schedule)), flush=True)
         return
-    wanted = sys.argv[1:]
     print(json.dumps({"bench": "step_clock_noise", "wall_us": clock_noise(time.perf_counter_ns),
                       "cpu_us": clock_noise(time.thread_time_ns)}), flush=True)  # fmt: skip
     for name, (text, schedule_for) in programs().items():
