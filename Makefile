@@ -15,12 +15,14 @@ $(STAMP): pyproject.toml
 	$(BIN)/python -m pip install --quiet -e '.[dev,plot]'
 	touch $(STAMP)
 
-# The GEO cycle's modules compiled with mypyc (liftd.cnc.COMPILED), rebuilt when one changes;
+# The GEO cycle's modules and simulate's per-cycle part compiled with mypyc (liftd.cnc.COMPILED,
+# liftd.sim.COMPILED), rebuilt when one changes;
 # without a C compiler the core runs as Python (the script says so and exits 0).
-CORE_SRC   := $(shell $(PYTHON) -c "import ast,sys; m=ast.parse(open('liftd/cnc/__init__.py').read()); print(' '.join(v.value.replace('.','/')+'.py' for n in m.body if isinstance(n,ast.AnnAssign) for v in n.value.elts))")
+CORE_LISTS := liftd/cnc/__init__.py liftd/sim/__init__.py
+CORE_SRC   := $(shell $(PYTHON) -c "import ast,sys; print(' '.join(v.value.replace('.','/')+'.py' for f in sys.argv[1:] for n in ast.parse(open(f).read()).body if isinstance(n,ast.AnnAssign) for v in n.value.elts))" $(CORE_LISTS))
 CORE_STAMP := build/mypyc/.compiled
 
-$(CORE_STAMP): $(STAMP) $(CORE_SRC) liftd/cnc/__init__.py tools/compile_core.py
+$(CORE_STAMP): $(STAMP) $(CORE_SRC) $(CORE_LISTS) tools/compile_core.py
 	$(BIN)/python tools/compile_core.py
 	@mkdir -p $(dir $@) && touch $@
 

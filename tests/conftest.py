@@ -19,10 +19,11 @@ settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 
 def pytest_sessionstart(session: pytest.Session) -> None:
     """An edited core module whose old extension would run instead: test nothing."""
-    from liftd.runtime.core import core_build  # noqa: PLC0415
+    from liftd import cnc, sim  # noqa: PLC0415
+    from liftd.runtime.core import build_state  # noqa: PLC0415
 
-    if core_build() == "stale":
-        pytest.exit("the compiled GEO core is older than its source: run `make core`", 2)
+    if build_state(cnc.COMPILED + sim.COMPILED) == "stale":
+        pytest.exit("a compiled module is older than its source: run `make core`", 2)
 
 
 @pytest.fixture(scope="session")

@@ -1,4 +1,5 @@
-"""Compile the GEO cycle's modules (`liftd.cnc.COMPILED`) to C extensions with mypyc, in place.
+"""Compile the GEO cycle's modules (`liftd.cnc.COMPILED`) and the per-cycle part of `simulate`
+(`liftd.sim.COMPILED`) to C extensions with mypyc, in place.
 
 `make` runs it before `run` and `test`; the extension (`*.so`) sits next to its source and
 Python imports it first. Same source, same results bit for bit (tests/unit/cnc/
@@ -19,7 +20,9 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from liftd.cnc import COMPILED  # noqa: E402
+from liftd import cnc, sim  # noqa: E402
+
+COMPILED = cnc.COMPILED + sim.COMPILED
 
 BUILD = ROOT / "build" / "mypyc"
 
@@ -32,7 +35,7 @@ def clean() -> None:
     for m in COMPILED:
         for so in (ROOT / Path(*m.split(".")).parent).glob(m.rsplit(".", 1)[1] + ".*.so"):
             so.unlink()
-    for so in ROOT.glob("*__mypyc*.so"):
+    for so in [*ROOT.glob("*__mypyc*.so"), *(ROOT / "liftd").glob("*__mypyc*.so")]:
         so.unlink()
     shutil.rmtree(BUILD, ignore_errors=True)
 
@@ -49,8 +52,8 @@ def main() -> int:
         return 0
     os.chdir(ROOT)  # mypycify takes paths relative to the tree and names modules by them
     try:
-        # group_name: the shared runtime module is liftd_core__mypyc.*.so, next to liftd/
-        ext = mypycify(sources(), group_name="liftd_core", target_dir=str(BUILD / "c"))
+        # group_name: the shared runtime module is liftd/_core__mypyc.*.so, inside the package
+        ext = mypycify(sources(), group_name="liftd._core", target_dir=str(BUILD / "c"))
         dist = Distribution({"name": "liftd-core", "ext_modules": ext})
         cmd = dist.get_command_obj("build_ext")
         cmd.inplace = True  # type: ignore[attr-defined]

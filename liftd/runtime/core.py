@@ -13,11 +13,16 @@ EXTENSION = (".so", ".pyd")
 
 
 def core_build() -> str:
+    """How the GEO core's cycle runs: `build_state(liftd.cnc.COMPILED)`."""
+    return build_state(COMPILED)
+
+
+def build_state(modules: tuple[str, ...]) -> str:
     """`compiled` (every module an extension, none older than its source), `stale` (an
     extension older than the source next to it: Python imports the extension, so an edit does
     not run until `make core`), or `python` (not compiled, or only partly)."""
     compiled = 0
-    for name in COMPILED:
+    for name in modules:
         spec = importlib.util.find_spec(name)
         origin = spec.origin if spec is not None else None
         if origin is None or not origin.endswith(EXTENSION):
@@ -27,4 +32,4 @@ def core_build() -> str:
         if source.exists() and source.stat().st_mtime > ext.stat().st_mtime:
             return "stale"
         compiled += 1
-    return "compiled" if compiled == len(COMPILED) else "python"
+    return "compiled" if compiled == len(modules) else "python"

@@ -6,3 +6,7 @@ library in a process pool (`study`) with its report (`report`) and progress bar 
 May import the core (`liftd.cnc`), numpy and, lazily, matplotlib; nothing of the service,
 the runtime, the settings or ADS (the study gets the settings as a callable from the CLI).
 """
+
+# The per-cycle part of `simulate` (its cycle driver, the trace writer, the summary) compiled
+# with mypyc by `make` like the core's cycle (liftd.cnc.COMPILED, tools/compile_core.py).
+COMPILED: tuple[str, ...] = ("liftd.sim.simulate", "liftd.sim.summary", "liftd.sim.trace")

@@ -12,7 +12,7 @@ import dataclasses
 import time
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
-from typing import TextIO
+from typing import Protocol, TextIO
 
 import numpy as np
 
@@ -20,9 +20,16 @@ from liftd.cnc.geo_task import LIFT_LATE_ID, GeoTask
 from liftd.cnc.machine import ChannelProgram, Machine
 from liftd.cnc.params import ChannelParams, LiftMethod
 from liftd.cnc.plc import Schedule, SimPlc
-from liftd.cnc.snapshot import ChannelState, GeoSnapshot
+from liftd.cnc.snapshot import ChannelState, GeoInputs, GeoSnapshot
 from liftd.sim.summary import ErrorEntry, LiftSummary, Limits, Overload, SimSummary, StepCpu
 from liftd.sim.trace import LimitMonitor, TraceWriter
+
+
+class Plc(Protocol):
+    """What drives a channel's inputs cycle by cycle: the simulated PLC (`SimPlc`), or a test's
+    own (a protocol, not the class: the compiled driver checks argument types)."""
+
+    def inputs(self, last: GeoSnapshot | None, t: float, schedule: Schedule) -> GeoInputs: ...
 
 
 class SeriesBuffer:
@@ -119,7 +126,7 @@ class StepTimer:
 
 def run_cycles(
     task: GeoTask,
-    plc: SimPlc,
+    plc: Plc,
     schedule: Schedule,
     dt: float,
     max_time: float,

@@ -34,7 +34,7 @@ def run_task(
     replaces the simulated PLC."""
     task = GeoTask(ch, text)
     plc = SimPlc(ack_delay) if inputs is None else _InputsPlc(inputs)
-    snaps = list(run_cycles(task, plc, schedule or Schedule(), ch.cycle_time, max_time))  # type: ignore[arg-type]
+    snaps = list(run_cycles(task, plc, schedule or Schedule(), ch.cycle_time, max_time))
     return task, snaps
 
 

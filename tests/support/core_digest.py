@@ -7,6 +7,7 @@ subprocess on a copy of the source without the extensions, and once in-process."
 from __future__ import annotations
 
 import hashlib
+import io
 import json
 from collections.abc import Iterator
 
@@ -42,13 +43,25 @@ def _cases() -> Iterator[tuple[str, object, str, Schedule]]:
 
 
 def digests() -> dict[str, str]:
+    """Every snapshot of each case, and `simulate`'s trace CSV and JSON summary of the first
+    two (its per-cycle part is compiled too; the step timing excluded)."""
+    from liftd.sim.simulate import simulate  # noqa: PLC0415
+
     out = {}
-    for name, ch, text, schedule in _cases():
+    for i, (name, ch, text, schedule) in enumerate(_cases()):
         _, snaps = run_task(ch, text, schedule, max_time=300.0)  # type: ignore[arg-type]
         h = hashlib.sha256()
         for s in snaps:
             h.update(repr(s).encode())  # every field, floats to the last bit
         out[name] = f"{len(snaps)}:{h.hexdigest()}"
+        if i < 2:
+            trace = io.StringIO()
+            res = simulate(ch, text, schedule, 0.02, trace)  # type: ignore[arg-type]
+            summary = res.summary.to_json()
+            summary.pop("step_cpu_us")
+            h = hashlib.sha256(trace.getvalue().encode())
+            h.update(json.dumps(summary, sort_keys=True).encode())
+            out[f"{name} simulate"] = h.hexdigest()
     return out
 
 
