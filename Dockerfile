@@ -14,13 +14,25 @@ ARG PYTHON_IMAGE=python:3.11-slim-bookworm
 FROM ${PYTHON_IMAGE} AS build
 ENV PIP_NO_CACHE_DIR=1 PIP_DISABLE_PIP_VERSION_CHECK=1 \
     PIP_CONSTRAINT=/src/docker/constraints.txt
+# A C compiler for the compiled GEO core (mypyc, tools/compile_core.py), in this stage only
+RUN apt-get update \
+ && apt-get install -y --no-install-recommends gcc libc6-dev \
+ && rm -rf /var/lib/apt/lists/*
 WORKDIR /src
 COPY pyproject.toml README.md ./
 COPY docker/constraints.txt ./docker/constraints.txt
 COPY liftd ./liftd
 COPY config ./config
+COPY tools ./tools
+# install (mypyc type-checks against the dependencies), compile in place, install again with
+# the extensions (pyproject: wheel artifacts), then drop mypy: the extensions do not need it.
+# `liftd --version` must say "GEO core: compiled", or the build fails.
 RUN python -m venv /opt/liftd \
- && /opt/liftd/bin/pip install --no-compile .
+ && /opt/liftd/bin/pip install --no-compile . mypy \
+ && /opt/liftd/bin/python tools/compile_core.py \
+ && /opt/liftd/bin/pip install --no-compile --no-deps --force-reinstall . \
+ && /opt/liftd/bin/pip uninstall -y mypy mypy-extensions librt ast-serialize pathspec \
+ && cd / && /opt/liftd/bin/liftd --version | grep -q "GEO core: compiled"
 
 FROM ${PYTHON_IMAGE}
 ARG VERSION=0.1.0

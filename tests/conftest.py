@@ -23,7 +23,7 @@ def pytest_sessionstart(session: pytest.Session) -> None:
     from liftd.runtime.core import build_state  # noqa: PLC0415
 
     if build_state(cnc.COMPILED + sim.COMPILED) == "stale":
-        pytest.exit("a compiled module is older than its source: run `make core`", 2)
+        pytest.exit("a compiled module was built from another source: run `make core`", 2)
 
 
 @pytest.fixture(scope="session")

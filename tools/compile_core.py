@@ -12,6 +12,7 @@ Run: .venv/bin/python tools/compile_core.py [--clean]
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 import sys
@@ -21,6 +22,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from liftd import cnc, sim  # noqa: E402
+from liftd.runtime.core import SOURCES, source_hash  # noqa: E402
 
 COMPILED = cnc.COMPILED + sim.COMPILED
 
@@ -37,6 +39,7 @@ def clean() -> None:
             so.unlink()
     for so in [*ROOT.glob("*__mypyc*.so"), *(ROOT / "liftd").glob("*__mypyc*.so")]:
         so.unlink()
+    (ROOT / "liftd" / SOURCES).unlink(missing_ok=True)
     shutil.rmtree(BUILD, ignore_errors=True)
 
 
@@ -63,6 +66,8 @@ def main() -> int:
         clean()
         print(f"compile_core: not compiled ({exc}); the GEO core runs as Python", file=sys.stderr)
         return 0
+    record = {m: source_hash(ROOT / Path(*m.split(".")).with_suffix(".py")) for m in COMPILED}
+    (ROOT / "liftd" / SOURCES).write_text(json.dumps(record, indent=1) + "\n", encoding="utf-8")
     print(f"compile_core: {len(COMPILED)} modules compiled", file=sys.stderr)
     return 0
 

@@ -1,15 +1,23 @@
 """Which GEO core runs: the modules of `liftd.cnc.COMPILED` as mypyc extensions (`make core`,
-tools/compile_core.py) or as Python. Read from the import system and file times, nothing is
-imported; the daemon logs it (`daemon.ready core=…`) and `liftd --version` prints it."""
+tools/compile_core.py) or as Python. Read from the import system and the sources' hashes that
+the build recorded (`liftd/_core_sources.json`), nothing is imported; the daemon logs it
+(`daemon.ready core=…`) and `liftd --version` prints it."""
 
 from __future__ import annotations
 
+import hashlib
 import importlib.util
+import json
 from pathlib import Path
 
 from liftd.cnc import COMPILED
 
 EXTENSION = (".so", ".pyd")
+SOURCES = "_core_sources.json"  # {module: sha256 of its source when it was compiled}
+
+
+def source_hash(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
 def core_build() -> str:
@@ -18,18 +26,26 @@ def core_build() -> str:
 
 
 def build_state(modules: tuple[str, ...]) -> str:
-    """`compiled` (every module an extension, none older than its source), `stale` (an
-    extension older than the source next to it: Python imports the extension, so an edit does
-    not run until `make core`), or `python` (not compiled, or only partly)."""
+    """`compiled` (every module an extension built from the source next to it), `stale` (an
+    extension built from another source than the one next to it, or without a record: Python
+    imports the extension, so an edit does not run until `make core`), or `python` (not
+    compiled, or only partly). By content, not file times (a wheel's install sets those)."""
     compiled = 0
+    recorded: dict[str, str] | None = None
     for name in modules:
         spec = importlib.util.find_spec(name)
         origin = spec.origin if spec is not None else None
         if origin is None or not origin.endswith(EXTENSION):
             continue
         ext = Path(origin)
+        if recorded is None:
+            package = ext.parents[len(name.split(".")) - 2]  # the directory of `liftd`
+            try:
+                recorded = json.loads((package / SOURCES).read_text(encoding="utf-8"))
+            except (OSError, ValueError):
+                return "stale"
         source = ext.parent / (name.rpartition(".")[2] + ".py")
-        if source.exists() and source.stat().st_mtime > ext.stat().st_mtime:
+        if source.exists() and recorded.get(name) != source_hash(source):
             return "stale"
         compiled += 1
     return "compiled" if compiled == len(modules) else "python"

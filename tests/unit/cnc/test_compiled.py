@@ -7,6 +7,10 @@ there, not here), so the run itself is the test."""
 from __future__ import annotations
 
 import json
+import os
+import shutil
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -33,3 +37,24 @@ def test_compiled_core_equals_the_python_source_bit_for_bit(pure_core: PureCore)
     )
     python = json.loads(pure_core.run(code))
     assert digests() == python
+
+
+@pytest.mark.skipif(core_build() != "compiled", reason="core not compiled (no C compiler)")
+def test_an_edited_source_makes_the_build_stale(tmp_path: Path) -> None:
+    """Python imports the extension, not the edited source: the build says so (by content,
+    so a wheel's install, which sets every file's time, is not taken for an edit)."""
+    shutil.copytree(
+        REPO / "liftd", tmp_path / "liftd", ignore=shutil.ignore_patterns("__pycache__")
+    )
+    code = "import sys; sys.path.insert(0, sys.argv[1]); from liftd.runtime.core import core_build; print(core_build())"
+
+    def state() -> str:
+        run = [sys.executable, "-c", code, str(tmp_path)]
+        return subprocess.run(run, capture_output=True, text=True, check=True).stdout.strip()
+
+    for path in (tmp_path / "liftd").rglob("*.py"):
+        os.utime(path)  # newer than every extension: times do not count
+    assert state() == "compiled"
+    machine = tmp_path / "liftd" / "cnc" / "machine.py"
+    machine.write_text(machine.read_text() + "# an edit\n")
+    assert state() == "stale"
