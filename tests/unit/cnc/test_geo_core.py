@@ -15,7 +15,7 @@ from liftd.cnc.nc.blocks import ErrorId
 from liftd.cnc.params import LiftMethod
 from liftd.cnc.path.velocity import reach_velocity
 from liftd.cnc.plc import Schedule, parse_feedhold_spec, parse_override_spec
-from liftd.cnc.snapshot import ChannelState, GeoSnapshot, LiftPhase
+from liftd.cnc.snapshot import ChannelState, GeoInputs, GeoSnapshot, LiftPhase
 from tests.support.channel import make_channel
 from tests.support.closed_loop import events, fd_ratios, run_task
 from tests.support.pure_core import PureCore
@@ -266,3 +266,27 @@ print(json.dumps({"errors": out["errors"], "lift": out["lifts"][0],
     assert len(late) == 1 and late[0]["line"] == 4, res["errors"]
     assert res["lift"]["arrival_error"] == pytest.approx(20.0, abs=1e-3)
     assert not res["program_error"] and res["finished"]
+
+
+def test_what_events_discard_is_released_within_a_few_cycles() -> None:
+    """An event discards the committed future without freeing it in its own cycle (that cost
+    ~50 µs): a few entries per cycle go, also while events keep coming, so nothing is left a
+    bounded number of cycles later."""
+    from liftd.cnc.path.interpolator import RELEASE_PER_CYCLE  # noqa: PLC0415
+
+    ch = make_channel()
+    task = GeoTask(ch, "G01 X10 Y10 F6000\nG01 X900 F20000\nM30\n")
+    dt = ch.cycle_time
+    for k in range(1, 300):  # the committed future grows to its lead
+        task.step(GeoInputs(override=1.0), k * dt)
+    queued = len(task.interp.queue)
+    task.step(GeoInputs(override=0.9), 300 * dt)  # an event
+    held = sum(len(b) for b in task.interp.discarded.bins)
+    assert queued > 100 and held >= queued - RELEASE_PER_CYCLE  # not freed in the event's cycle
+    for k in range(301, 351):  # a new override every cycle: each discards a little more
+        task.step(GeoInputs(override=0.9 + 0.01 * (k % 20)), k * dt)
+    held = sum(len(b) for b in task.interp.discarded.bins)
+    assert 0 < held < queued
+    for k in range(351, 351 + held // RELEASE_PER_CYCLE + 2):  # no more events
+        task.step(GeoInputs(override=1.0), k * dt)
+    assert not task.interp.discarded.bins
