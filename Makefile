@@ -26,7 +26,10 @@ $(CORE_STAMP): $(STAMP) $(CORE_SRC) $(CORE_LISTS) tools/compile_core.py
 	$(BIN)/python tools/compile_core.py
 	@mkdir -p $(dir $@) && touch $@
 
-core: $(CORE_STAMP)
+# always compiles (e.g. after installing a compiler)
+core: $(STAMP)
+	$(BIN)/python tools/compile_core.py
+	@mkdir -p $(dir $(CORE_STAMP)) && touch $(CORE_STAMP)
 
 run: $(STAMP) $(CORE_STAMP)
 	$(BIN)/liftd run

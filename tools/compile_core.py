@@ -12,11 +12,15 @@ Run: .venv/bin/python tools/compile_core.py [--clean]
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import shutil
 import sys
+import tempfile
+from collections.abc import Iterator
 from pathlib import Path
+from typing import IO
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
@@ -43,29 +47,62 @@ def clean() -> None:
     shutil.rmtree(BUILD, ignore_errors=True)
 
 
+@contextlib.contextmanager
+def _output_to(log: IO[str]) -> Iterator[None]:
+    """stdout and stderr of this process and of the compiler it runs, into `log`."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    saved = os.dup(1), os.dup(2)
+    os.dup2(log.fileno(), 1)
+    os.dup2(log.fileno(), 2)
+    try:
+        yield
+    finally:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os.dup2(saved[0], 1)
+        os.dup2(saved[1], 2)
+        os.close(saved[0])
+        os.close(saved[1])
+
+
+def _build() -> None:
+    from mypyc.build import mypycify  # noqa: PLC0415
+    from setuptools import Distribution  # noqa: PLC0415
+
+    # group_name: the shared runtime module is liftd/_core__mypyc.*.so, inside the package
+    ext = mypycify(sources(), group_name="liftd._core", target_dir=str(BUILD / "c"))
+    dist = Distribution({"name": "liftd-core", "ext_modules": ext})
+    cmd = dist.get_command_obj("build_ext")
+    cmd.inplace = True  # type: ignore[attr-defined]
+    cmd.build_temp = str(BUILD / "temp")  # type: ignore[attr-defined]
+    dist.run_command("build_ext")
+
+
 def main() -> int:
     clean()
     if "--clean" in sys.argv:
         return 0
     try:
-        from mypyc.build import mypycify  # noqa: PLC0415
-        from setuptools import Distribution  # noqa: PLC0415
+        import mypyc.build  # noqa: F401, PLC0415
+        import setuptools  # noqa: F401, PLC0415
     except ImportError as exc:
         print(f"compile_core: {exc}; the GEO core runs as Python", file=sys.stderr)
         return 0
     os.chdir(ROOT)  # mypycify takes paths relative to the tree and names modules by them
-    try:
-        # group_name: the shared runtime module is liftd/_core__mypyc.*.so, inside the package
-        ext = mypycify(sources(), group_name="liftd._core", target_dir=str(BUILD / "c"))
-        dist = Distribution({"name": "liftd-core", "ext_modules": ext})
-        cmd = dist.get_command_obj("build_ext")
-        cmd.inplace = True  # type: ignore[attr-defined]
-        cmd.build_temp = str(BUILD / "temp")  # type: ignore[attr-defined]
-        dist.run_command("build_ext")
-    except (SystemExit, Exception) as exc:  # a missing compiler or headers: not fatal
-        clean()
-        print(f"compile_core: not compiled ({exc}); the GEO core runs as Python", file=sys.stderr)
-        return 0
+    print(f"compile_core: compiling {len(COMPILED)} modules with mypyc (about a minute)…",
+          file=sys.stderr, flush=True)  # fmt: skip
+    with tempfile.TemporaryFile("w+") as log:
+        try:
+            with _output_to(log):  # the compiler's lines, shown only when it fails
+                _build()
+        except (SystemExit, Exception) as exc:  # a missing compiler or headers: not fatal
+            clean()
+            log.seek(0)
+            tail = "".join(log.readlines()[-15:])
+            why = f"not compiled ({exc}); the GEO core runs as Python (same results, slower)"
+            print(f"{tail}compile_core: {why}; with a compiler: make core", file=sys.stderr)
+            return 0
     record = {m: source_hash(ROOT / Path(*m.split(".")).with_suffix(".py")) for m in COMPILED}
     (ROOT / "liftd" / SOURCES).write_text(json.dumps(record, indent=1) + "\n", encoding="utf-8")
     print(f"compile_core: {len(COMPILED)} modules compiled", file=sys.stderr)
