@@ -13,6 +13,7 @@ from pathlib import Path
 
 from liftd.cnc import units
 from liftd.cnc.params import AxisParams, LiftMethod, MSync, SlopeType
+from liftd.settings.channel_rules import lift_method_of, look_ahead_of, m_synch_of
 from liftd.settings.isg_list import Problem, Severity, read_list
 from liftd.settings.isg_schema import (
     AXIS_KEYS,
@@ -20,23 +21,13 @@ from liftd.settings.isg_schema import (
     STARTUP_KEYS,
     TOOL_KEYS,
     ZERO_OFFSET_KEYS,
-    KeySpec,
     TypedList,
     Value,
-    parse_m_synch,
     type_list,
 )
+from liftd.settings.list_reader import ListReader, as_int, flags_of, int_of
 
-# Look-ahead sizes per interpolator flag, CNC builds ≥ V2.11.2800 (vendor text §4.2.1).
-LOOK_AHEAD_BLOCKS = {
-    "FCT_LOOK_AHEAD_LOW": 30,
-    "FCT_LOOK_AHEAD_STANDARD": 120,
-    "FCT_LOOK_AHEAD_HIGH": 190,
-}
-DEFAULT_LOOK_AHEAD = 120  # FCT_IPO_DEFAULT = FCT_LOOK_AHEAD_STANDARD
 DEFAULT_MAX_RADIUS_DIFF = 50  # P-CHAN-00171 default, 0.1 µm
-LIFT_FLAG_TIME = "FCT_LIFT_UP_TIME"
-LIFT_FLAG_PATH = "FCT_LIFT_UP"
 
 
 @dataclass(frozen=True, slots=True)
@@ -62,48 +53,6 @@ class ChannelLists:
     axis_refs: tuple[tuple[str, int | None], ...] = ()
 
 
-class _Reader:
-    """Collects problems while reading and typing list files."""
-
-    def __init__(self) -> None:
-        self.problems: list[Problem] = []
-        self.files: list[str] = []
-
-    def error(self, value: Value | None, message: str, file: str | None = None) -> None:
-        if value is None:
-            self.problems.append(Problem(Severity.ERROR, file or "?", None, None, None, message))
-            return
-        e = value.entry
-        self.problems.append(Problem(Severity.ERROR, e.file, e.line, e.key, e.value, message))
-
-    def read(self, path: Path, specs: tuple[KeySpec, ...], ref: Value | None) -> TypedList | None:
-        try:
-            parsed = read_list(path)
-        except OSError as exc:
-            reason = exc.strerror or type(exc).__name__
-            self.error(ref, f"cannot read list file {str(path)!r}: {reason}", str(path))
-            return None
-        self.files.append(str(path))
-        values, problems = type_list(parsed, specs)
-        self.problems.extend(problems)
-        return values
-
-
-def _as_int(value: Value) -> int:
-    assert isinstance(value.value, int)
-    return value.value
-
-
-def _int(values: TypedList, key: str, default: int) -> int:
-    v = values.get(key)
-    return v.value if v is not None and isinstance(v.value, int) else default
-
-
-def _flags(values: TypedList, key: str) -> Value | None:
-    v = values.get(key)
-    return v if v is not None and isinstance(v.value, frozenset) else None
-
-
 def _resolve(base: Path, value: Value) -> Path:
     assert isinstance(value.value, str)
     path = Path(value.value)
@@ -123,7 +72,7 @@ def read_channel_lists(
     Returns the channel's parameters, or None when any error was found; the problem list
     always carries every error and warning with file, line, key and value.
     """
-    rd = _Reader()
+    rd = ListReader()
     stup = rd.read(startup, STARTUP_KEYS, None)
     if stup is None:
         return None, rd.problems
@@ -144,21 +93,21 @@ def read_channel_lists(
     channel_values.update(chan_own)
 
     axes = _read_axes(rd, stup, base, channel_values, startup)
-    pp_ref = _flags(channel_values, "configuration.path_preparation.function") or _flags(
+    pp_ref = flags_of(channel_values, "configuration.path_preparation.function") or flags_of(
         stup, f"configuration.channel[{idx}].path_preparation.function"
     )
-    ipo_ref = _flags(channel_values, "configuration.interpolator.function") or _flags(
+    ipo_ref = flags_of(channel_values, "configuration.interpolator.function") or flags_of(
         stup, f"configuration.channel[{idx}].interpolator.function"
     )
     pp = pp_ref.value if pp_ref is not None else frozenset({"FCT_DEFAULT"})
     ipo = ipo_ref.value if ipo_ref is not None else frozenset({"FCT_IPO_DEFAULT"})
     assert isinstance(pp, frozenset) and isinstance(ipo, frozenset)
-    method = _lift_method(
+    method = lift_method_of(
         rd, pp, ipo, pp_ref, ipo_ref, channel_values.get("enable_time_based_lift")
     )
-    look_ahead = _look_ahead(rd, ipo, ipo_ref, channel_values, stup, idx)
-    m_synch = _m_synch(rd, channel_values)
-    slope = SlopeType(_int(channel_values, "prog_start.slope.profile", 0))
+    look_ahead = look_ahead_of(rd, ipo, ipo_ref, channel_values, stup, idx)
+    m_synch = m_synch_of(rd, channel_values)
+    slope = SlopeType(int_of(channel_values, "prog_start.slope.profile", 0))
     tools = _tools(rd, _list_path(base, stup, f"werkz_data[{idx}]", tool_list))
     zero = _zero_offsets(rd, _list_path(base, stup, f"nullp_data[{idx}]", zero_offset_list), axes)
     if any(p.severity is Severity.ERROR for p in rd.problems) or axes is None:
@@ -167,11 +116,11 @@ def read_channel_lists(
         channel_id=channel,
         axes=axes,
         lift_method=method,
-        lift_min_dist=units.isg_pos_to_m(_int(channel_values, "lift_min_dist", 0)),
+        lift_min_dist=units.isg_pos_to_m(int_of(channel_values, "lift_min_dist", 0)),
         slope=slope,
         look_ahead_blocks=look_ahead,
         max_radius_diff=units.isg_pos_to_m(
-            _int(channel_values, "max_radius_diff_circle", DEFAULT_MAX_RADIUS_DIFF)
+            int_of(channel_values, "max_radius_diff_circle", DEFAULT_MAX_RADIUS_DIFF)
         ),
         m_synch=m_synch,
         path_prep_flags=pp,
@@ -209,7 +158,7 @@ def startup_channels(
     if count is None or not isinstance(count.value, int):
         return (configured,), []
     n = count.value
-    rd = _Reader()
+    rd = ListReader()
     for i in range(n):
         if f"sda_mds[{i}]" not in stup:
             rd.error(count, f"{n} channels but no channel list sda_mds[{i}] for channel {i + 1}")
@@ -233,7 +182,9 @@ def _list_path(
     return (_resolve(base, ref), ref) if ref is not None else None
 
 
-def _tools(rd: _Reader, where: tuple[Path, Value | None] | None) -> tuple[tuple[int, float], ...]:
+def _tools(
+    rd: ListReader, where: tuple[Path, Value | None] | None
+) -> tuple[tuple[int, float], ...]:
     """Tool radii per tool number from the tool list (wz[i].radius, P-TOOL-00004; the D word
     selects tool i). Invalid tools (wz[i].gueltig 0) have no radius."""
     if where is None:
@@ -250,7 +201,7 @@ def _tools(rd: _Reader, where: tuple[Path, Value | None] | None) -> tuple[tuple[
         if valid is not None and not valid.value:
             continue
         inch = values.get(f"wz[{number}].mass_einheit")
-        raw = _as_int(value)
+        raw = as_int(value)
         radii[number] = (
             units.isg_inch_to_m(raw) if inch is not None and inch.value else units.isg_pos_to_m(raw)
         )
@@ -258,7 +209,7 @@ def _tools(rd: _Reader, where: tuple[Path, Value | None] | None) -> tuple[tuple[
 
 
 def _zero_offsets(
-    rd: _Reader, where: tuple[Path, Value | None] | None, axes: tuple[AxisParams, ...] | None
+    rd: ListReader, where: tuple[Path, Value | None] | None, axes: tuple[AxisParams, ...] | None
 ) -> tuple[tuple[tuple[int, tuple[float, ...]], ...], int, bool]:
     """Zero-offset groups 0..6 (G53, G54..G59) per channel axis j (np_grp[i].achse[j].versch,
     P-ZERO-00003; inaktiv hides an axis' offset, P-ZERO-00004)."""
@@ -281,9 +232,9 @@ def _zero_offsets(
         inactive = values.get(key.replace(".versch", ".inaktiv"))
         if inactive is not None and inactive.value:
             continue
-        groups.setdefault(grp, [0.0] * len(axes))[axis] = units.isg_pos_to_m(_as_int(value))
+        groups.setdefault(grp, [0.0] * len(axes))[axis] = units.isg_pos_to_m(as_int(value))
     default = values.get("default_index")
-    default_index = _as_int(default) if default is not None else 0
+    default_index = as_int(default) if default is not None else 0
     if default is not None and default_index > 6:
         rd.error(default, "liftd emulates the zero offsets G53 … G59 (index 0 … 6)")
         default_index = 0
@@ -296,7 +247,7 @@ def _zero_offsets(
 
 
 def _read_axes(
-    rd: _Reader, stup: TypedList, base: Path, chan: TypedList, startup: Path
+    rd: ListReader, stup: TypedList, base: Path, chan: TypedList, startup: Path
 ) -> tuple[AxisParams, ...] | None:
     names: list[Value] = []
     numbers: list[Value] = []
@@ -336,7 +287,7 @@ def _read_axes(
         defaults = rd.read(_resolve(base, default_ref), AXIS_KEYS, default_ref) or {}
     zahl = stup.get("zahl_mds")
     k = 0
-    while f"achs_mds[{k}]" in stup and (zahl is None or k < _as_int(zahl)):
+    while f"achs_mds[{k}]" in stup and (zahl is None or k < as_int(zahl)):
         ref = stup[f"achs_mds[{k}]"]
         own = rd.read(_resolve(base, ref), AXIS_KEYS, ref)
         k += 1
@@ -344,35 +295,35 @@ def _read_axes(
             continue
         merged = {**defaults, **own}
         nr_value = merged.get("kopf.achs_nr")
-        log_nr = _as_int(nr_value) if nr_value is not None else 1
+        log_nr = as_int(nr_value) if nr_value is not None else 1
         if log_nr in axis_lists:
             rd.error(nr_value or ref, f"logical axis number {log_nr} used by two axis lists")
         axis_lists[log_nr] = merged
-    if zahl is not None and k < _as_int(zahl):
+    if zahl is not None and k < as_int(zahl):
         rd.error(zahl, f"zahl_mds is {zahl.value} but only {k} achs_mds[i] entries exist")
 
     axes: list[AxisParams] = []
     for name, nr_v in zip(names, numbers, strict=True):
-        values = axis_lists.get(_as_int(nr_v))
+        values = axis_lists.get(as_int(nr_v))
         if values is None:
             rd.error(nr_v, f"no axis list with kopf.achs_nr {nr_v.value}")
             continue
-        axis = _axis(rd, str(name.value), _as_int(nr_v), values)
+        axis = _axis(rd, str(name.value), as_int(nr_v), values)
         if axis is not None:
             axes.append(axis)
     return tuple(axes) if len(axes) == len(names) else None
 
 
-def _axis(rd: _Reader, name: str, nr: int, v: TypedList) -> AxisParams | None:
+def _axis(rd: ListReader, name: str, nr: int, v: TypedList) -> AxisParams | None:
     typ = v.get("kenngr.achs_typ")
     if typ is not None and typ.value != 1:
         rd.error(typ, f"axis {name}: liftd emulates translatory axes only (ACHSTYP_TRANSLATOR 0x1)")
         return None
-    vb_max = _int(v, "getriebe[0].dynamik.vb_max", 200000)
-    a_max = _int(v, "getriebe[0].dynamik.a_max", 1000)
-    tr_min = _int(v, "getriebe[0].dynamik.tr_min", 10000)
-    swe_neg = _int(v, "kenngr.swe_neg", -100000000)
-    swe_pos = _int(v, "kenngr.swe_pos", 100000000)
+    vb_max = int_of(v, "getriebe[0].dynamik.vb_max", 200000)
+    a_max = int_of(v, "getriebe[0].dynamik.a_max", 1000)
+    tr_min = int_of(v, "getriebe[0].dynamik.tr_min", 10000)
+    swe_neg = int_of(v, "kenngr.swe_neg", -100000000)
+    swe_pos = int_of(v, "kenngr.swe_pos", 100000000)
     if swe_neg >= swe_pos:
         rd.error(
             v.get("kenngr.swe_neg") or v.get("kenngr.swe_pos"),
@@ -388,107 +339,6 @@ def _axis(rd: _Reader, name: str, nr: int, v: TypedList) -> AxisParams | None:
         j_max=units.jerk_from_ramp(a, units.isg_time_to_s(tr_min)),
         sw_limit_neg=units.isg_pos_to_m(swe_neg),
         sw_limit_pos=units.isg_pos_to_m(swe_pos),
-        dyn_a_warn=units.isg_permille_to_fraction(_int(v, "kenngr.dyn_monitoring_a_warn", 500)),
-        dyn_a_err=units.isg_permille_to_fraction(_int(v, "kenngr.dyn_monitoring_a_err", 1000)),
+        dyn_a_warn=units.isg_permille_to_fraction(int_of(v, "kenngr.dyn_monitoring_a_warn", 500)),
+        dyn_a_err=units.isg_permille_to_fraction(int_of(v, "kenngr.dyn_monitoring_a_err", 1000)),
     )
-
-
-def _lift_method(
-    rd: _Reader,
-    pp: frozenset[str],
-    ipo: frozenset[str],
-    pp_ref: Value | None,
-    ipo_ref: Value | None,
-    enable_time: Value | None,
-) -> LiftMethod:
-    """Activation rules (vendor text §1, §2.1.2, §2.2.2, §4.2; DESIGN.md §3.4)."""
-    time_based = bool(enable_time.value) if enable_time is not None else False
-    where = pp_ref or ipo_ref or enable_time
-    if LIFT_FLAG_TIME in pp and LIFT_FLAG_PATH in pp:
-        rd.error(pp_ref, "FCT_LIFT_UP_TIME and FCT_LIFT_UP exclude each other; choose one method")
-        return LiftMethod.NONE
-    if LIFT_FLAG_TIME in pp or LIFT_FLAG_TIME in ipo:
-        if LIFT_FLAG_TIME not in pp:
-            rd.error(
-                ipo_ref,
-                "FCT_LIFT_UP_TIME must also be set in the path-preparation "
-                "functions (P-STUP-00060 or P-CHAN-00600)",
-            )
-        elif LIFT_FLAG_TIME not in ipo:
-            rd.error(
-                pp_ref,
-                "FCT_LIFT_UP_TIME must also be set in the interpolator functions "
-                "(P-STUP-00070 or P-CHAN-00650)",
-            )
-        elif not time_based:
-            rd.error(
-                enable_time or where,
-                "FCT_LIFT_UP_TIME (Advanced Lifting) needs enable_time_based_lift 1 (P-CHAN-00345)",
-            )
-        return LiftMethod.ADVANCED
-    if LIFT_FLAG_PATH in pp:
-        if time_based:
-            rd.error(
-                enable_time,
-                "enable_time_based_lift 1 needs FCT_LIFT_UP_TIME in "
-                "P-STUP-00060 and P-STUP-00070; path-based Lifting (FCT_LIFT_UP) needs 0",
-            )
-        return LiftMethod.LIFTING
-    if time_based:
-        rd.error(
-            enable_time,
-            "enable_time_based_lift 1 without FCT_LIFT_UP_TIME in "
-            "P-STUP-00060 and P-STUP-00070 (or P-CHAN-00600/00650)",
-        )
-    return LiftMethod.NONE
-
-
-def _look_ahead(
-    rd: _Reader,
-    ipo: frozenset[str],
-    ipo_ref: Value | None,
-    chan: TypedList,
-    stup: TypedList,
-    idx: int,
-) -> int:
-    sizes = [LOOK_AHEAD_BLOCKS[f] for f in ipo if f in LOOK_AHEAD_BLOCKS]
-    custom = "FCT_LOOK_AHEAD_CUSTOM" in ipo
-    if len(sizes) + int(custom) > 1:
-        rd.error(ipo_ref, "more than one FCT_LOOK_AHEAD_* size selected")
-        return DEFAULT_LOOK_AHEAD
-    if custom:
-        value = chan.get("configuration.interpolator.number_blocks_lah") or stup.get(
-            f"configuration.channel[{idx}].interpolator.number_blocks_lah"
-        )
-        if value is None:
-            if not any(p.key and p.key.endswith(".number_blocks_lah") for p in rd.problems):
-                # (a value out of range is reported where it is written, once)
-                rd.error(ipo_ref, "FCT_LOOK_AHEAD_CUSTOM needs number_blocks_lah (P-CHAN-00653)")
-            return DEFAULT_LOOK_AHEAD
-        # 0 blocks (allowed by vendor §4.2.1, its meaning not documented): no look-ahead
-        # beyond the block being run, the path planned one block at a time -- it can stop at
-        # every block end -- which the interpolator gets as a window of one block
-        return max(1, _as_int(value))
-    return sizes[0] if sizes else DEFAULT_LOOK_AHEAD
-
-
-def _m_synch(rd: _Reader, chan: TypedList) -> tuple[tuple[int, MSync], ...]:
-    result: list[tuple[int, MSync]] = []
-    for key, value in chan.items():
-        if not key.startswith("m_synch["):
-            continue
-        number = int(key[len("m_synch[") : -1])
-        if number > 999:
-            rd.error(value, "M function numbers are 0..999")
-            continue
-        code = parse_m_synch(str(value.value))
-        kind = next((k for k in MSync if k.value == code), None)
-        if kind is None:
-            rd.error(
-                value,
-                "unknown or unsupported synchronisation; liftd emulates NO_SYNCH, MOS, MVS_SVS, "
-                "MVS_SNS, MNS_SNS and MNE_SNS",
-            )
-            continue
-        result.append((number, kind))
-    return tuple(sorted(result, key=lambda item: item[0]))
