@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from liftd.settings import ConfigError, load_settings
-from liftd.settings.load import toml_line
+from liftd.settings.config_file import toml_line
 from tests.support.paths import REPO
 from tests.support.settings import copy_two_head_machine, edit
 

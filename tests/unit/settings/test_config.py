@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from liftd.settings import ConfigError, load_settings
-from liftd.settings.load import default_config_path, find_config, parse_config_text
+from liftd.settings.config_file import default_config_path, find_config, parse_config_text
 from liftd.settings.model import LiftdConfig
 from tests.support.paths import REPO
 
