@@ -103,7 +103,7 @@ def main() -> int:
             why = f"not compiled ({exc}); the GEO core runs as Python (same results, slower)"
             print(f"{tail}compile_core: {why}; with a compiler: make core", file=sys.stderr)
             return 0
-    record = {m: source_hash(ROOT / Path(*m.split(".")).with_suffix(".py")) for m in COMPILED}
+    record = {m: source_hash(ROOT / src) for m, src in zip(COMPILED, sources(), strict=True)}
     (ROOT / "liftd" / SOURCES).write_text(json.dumps(record, indent=1) + "\n", encoding="utf-8")
     print(f"compile_core: {len(COMPILED)} modules compiled", file=sys.stderr)
     return 0
