@@ -383,7 +383,7 @@ class GeoTask:
             z, vz, az = self.lift.z, self.lift.vz, self.lift.az
             self._close_lift(t_at, rng.start.line)
         else:  # the programmed Z at the start (the decoder tracked every earlier lift's POS)
-            u_z = self.prog.direction_into(rng.k_start, self.ch.axis_names.index(rng.start.axis))
+            u_z = self.prog.entry_dir[rng.index]
             z = rng.start.z_start
             vz = crossing.v * u_z if crossing else 0.0
             az = crossing.a * u_z if crossing else 0.0
