@@ -305,14 +305,18 @@ class AdvancedLift:
             self._up(dt, t_rem)
             return
         if abs(t_rem - remaining) > TIME_TOL:
-            self._replan_down(t_rem)
+            self._replan_down(t_rem, remaining)
         self._follow(self.t + dt)
 
-    def _replan_down(self, t_rem: float) -> None:
+    def _replan_down(self, t_rem: float, remaining: float) -> None:
         """T_rem changed while descending: stretch the descent to T_rem if that stays within
-        [target, POS_LIMIT], else time-optimal (then `late` says how long the path must wait)."""
+        [target, POS_LIMIT], else time-optimal (then `late` says how long the path must wait).
+        With more time than the descent in hand needs, that descent is kept when no profile
+        from here does better: near its end (Z nanometres from POS, still decelerating)
+        ruckig's "time-optimal" one may take longer than the rest of the plan that got Z there
+        (stress seed 174: 1.45 ms instead of 0.31 ms, 7 µs after the arrival time grew when
+        the lower bound of an event's cycle became exact)."""
         best = self.prof.to_rest(self.q, self.v, self.a, self.target)
-        self.late = max(0.0, best.duration - t_rem)
         if best.duration < t_rem - TIME_TOL:
             try:
                 stretched = self.prof.to_rest(self.q, self.v, self.a, self.target, t_rem)
@@ -320,5 +324,9 @@ class AdvancedLift:
                     best = stretched
             except ProfileError:
                 pass
+        elif remaining <= t_rem + TIME_TOL and self.plan is not None:
+            self.late = 0.0
+            return  # the descent in hand lands in time; no new one would
+        self.late = max(0.0, best.duration - t_rem)
         self.plan = best
         self.plan_t0 = self.t

@@ -12,8 +12,9 @@ entries) until it is `lead` cycles ahead, so in steady state a cycle costs one t
   descent, a lift always decides against an exact time when it matters.
 * **Events cost O(1).** An input change (override, feed hold, a stop added or acknowledged,
   the resume after a wait) discards the queue and restarts the producer from the state of the
-  current cycle; it takes effect in that very cycle. Until the queue has grown again, times
-  beyond it are lower bounds.
+  current cycle; it takes effect in that very cycle. The cycle of an event makes only its own
+  entry (the re-plan is its work); the queue grows again from the next cycle on. Until then,
+  times beyond it are lower bounds.
 * **Determinism.** The quota counts entries, not seconds, so `liftd run` and `liftd simulate`
   produce the same queue and the same arrival times cycle for cycle.
 """
@@ -98,6 +99,7 @@ class Interpolator:
         self.arrivals: dict[int, float] = {}
         self.discarded = _Discarded()
         self.k_next = 1  # cycle index of the next entry the producer makes
+        self._fresh = False  # restarted since the last cycle: it fills no more than its own
         # the state of the current cycle
         self.t_state = 0.0
         self.s = table.s[0] if table.s else 0.0
@@ -148,6 +150,7 @@ class Interpolator:
         p.set_inputs(self.override, self.hold)
         p.set_state(self.t_state, self.s, self.v, self.a, self.segment, self.stopped_at)
         self.k_next = int(self.t_state / self.dt + 1e-6) + 1
+        self._fresh = True
 
     def start(self, t: float) -> None:
         """The program starts: at rest at boundary 0 from time t (its actions run first)."""
@@ -227,7 +230,10 @@ class Interpolator:
             e = self.queue.popleft()
             out.extend(e.crossings)
             self._consume(e)
-        self.fill()
+        if self._fresh:
+            self._fresh = False  # the event's re-plan was this cycle's work
+        else:
+            self.fill()
         return out
 
     def _consume(self, e: _Entry) -> None:

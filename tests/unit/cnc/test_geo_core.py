@@ -283,10 +283,31 @@ def test_what_events_discard_is_released_within_a_few_cycles() -> None:
     task.step(GeoInputs(override=0.9), 300 * dt)  # an event
     held = sum(len(b) for b in task.interp.discarded.bins)
     assert queued > 100 and held >= queued - RELEASE_PER_CYCLE  # not freed in the event's cycle
-    for k in range(301, 351):  # a new override every cycle: each discards a little more
-        task.step(GeoInputs(override=0.9 + 0.01 * (k % 20)), k * dt)
+    for k in range(301, 351):  # a new override every third cycle: each discards a little more
+        task.step(GeoInputs(override=0.9 + 0.01 * (k // 3 % 20)), k * dt)
     held = sum(len(b) for b in task.interp.discarded.bins)
     assert 0 < held < queued
     for k in range(351, 351 + held // RELEASE_PER_CYCLE + 2):  # no more events
         task.step(GeoInputs(override=1.0), k * dt)
     assert not task.interp.discarded.bins
+
+
+def test_an_event_cycle_plans_only_its_own_state() -> None:
+    """The cycle of an event re-plans the path from where it is and makes only the entry it
+    runs (the re-plan is its work); the committed future grows again from the next cycle on,
+    by `fill_per_cycle` entries a cycle, while the event has acted at once."""
+    ch = make_channel()
+    task = GeoTask(ch, "G01 X10 Y10 F6000\nG01 X900 F20000\nM30\n")
+    dt = ch.cycle_time
+    for k in range(1, 600):  # cruising
+        task.step(GeoInputs(override=1.0), k * dt)
+    ip = task.interp
+    assert len(ip.queue) > 100
+    v_before = ip.v
+    restarts = ip.restarts
+    task.step(GeoInputs(override=0.5), 600 * dt)  # an event
+    assert ip.restarts == restarts + 1
+    assert len(ip.queue) == 0 and ip.k_next == 601  # the entry of cycle 600 only
+    assert ip.v < v_before and ip.a < 0.0  # it acts in its own cycle: the path brakes
+    task.step(GeoInputs(override=0.5), 601 * dt)
+    assert len(ip.queue) == ip.fill_per_cycle  # growing again
