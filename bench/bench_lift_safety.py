@@ -11,8 +11,8 @@ may reach a_max·(1 + P442/1000·override²) by the method's design (lift/path_b
 With --wide (issue 14) the scenarios cover the whole input space: ranges of up to 400 short
 blocks (longer than every look-ahead), slightly bent polylines, ranges without path motion,
 ranges back to back, waits before and inside ranges, every look-ahead size, override steps of
-0–200 % at random moments and feed holds; a run also fails on any error of the path tracker
-(a refused profile, a run boundary passed with acceleration).
+0–200 % at random moments and feed holds. Every run (not only --wide) also fails on any error
+of the path tracker (a refused profile, a run boundary passed with acceleration).
 
 Run: .venv/bin/python bench/bench_lift_safety.py [--wide] [RUNS [FIRST_SEED [advanced|lifting]]]
 """
@@ -51,7 +51,7 @@ def main() -> None:
             cycles += len(snaps)
             lifts += len(task.lift.records)
             bad = violations(sc, snaps, task.lift.records)
-            if wide and task.interp.plan_errors:
+            if task.interp.plan_errors:
                 bad.append(
                     f"{task.interp.plan_errors} tracker errors: {task.interp.last_plan_error}"
                 )

@@ -58,6 +58,7 @@ SLACK_MARGIN = 1e-6  # m
 CHAIN_MARGIN = 2.0 * SLACK_MARGIN  # caps from a chain leave this much slack for the next one
 CAP_TOL = 1e-6  # relative: a crossing velocity within this of its cap is at the cap
 GATE_TOL = 1e-6  # m/s²: zero acceleration at a run boundary, within ruckig's precision
+V_ROUND = 1e-12  # m/s: a velocity this close above a cap is at the cap (rounding)
 CRUISE = -1
 BRAKE = -2  # the last resort: to rest (counted as an error)
 BRAKE_TO = -3  # to a constraint's cap at once, on its braking curve
@@ -139,6 +140,7 @@ class Tracker:
         self.lift_stops = lift_stops if lift_stops is not None else set()
         self.acked = acked if acked is not None else set()
         self.plan: _Plan | None = None
+        self._passed: _Plan | None = None  # the target plan of the boundary just passed
         self._beyond_key: tuple[int, int, float] | None = None
         self._beyond_val = INF
         self.errors = 0
@@ -298,8 +300,10 @@ class Tracker:
     @staticmethod
     def _need(v: float, a: float, cap: float, gate: bool, a_max: float, j_max: float) -> float:
         """Least distance after which the path can be below `cap` (with zero acceleration where
-        `gate`)."""
-        if projected_velocity(v, a, j_max) > cap:
+        `gate`). A cruise ends at v_p = cap up to rounding (3e-17 m/s above it read as a
+        violation of the cap, which hid the stop behind it the path could still make: stress
+        seed 380, lifting, passed the program end at 99 mm/s)."""
+        if projected_velocity(v, a, j_max) > cap + V_ROUND:
             return brake_below(v, a, cap, a_max, j_max)
         if not gate:
             return 0.0
@@ -313,6 +317,7 @@ class Tracker:
     # -- planning -------------------------------------------------------------------------------
     def _replan(self, dt: float, force: int | None = None) -> None:
         self._clear_s = -INF
+        passed, self._passed = self._passed, None
         tb = self.tb
         s, v, a, seg = self.s, self.v, self.a, self.seg
         a_max, j_max = self._limits(seg)
@@ -354,7 +359,10 @@ class Tracker:
         if self.hold or v > ceiling:
             v_max = max(ceiling, target, v, v_p, 1e-12)
         else:
-            v_max = max(ceiling, target)
+            # v_p too: a positive acceleration takes the path there whatever it plans (a cruise
+            # ends at v_p = ceiling up to rounding; 3e-17 m/s above it made ruckig refuse every
+            # target and the path passed the program end at 99 mm/s: stress seed 380, lifting)
+            v_max = max(ceiling, target, v_p)
         # Ruckig decides at the edge of what is feasible (rounding): the target; else the
         # value nearest to it, toward v_p (the velocity after ramping the acceleration to 0),
         # that ruckig accepts; else rest or a cap. A feed cap the path cannot get down to after
@@ -380,6 +388,15 @@ class Tracker:
         for tgt in (0.0, cap, hard):
             if self._try_target(s, v, a, s_c, tgt, max(v_max, tgt), a_max, j_max, b, w):
                 return
+        kept = passed
+        if kept is not None and kept.goal == b and kept.t0 <= self.t:
+            # the step was cut at a boundary on the way to b (a feed change) and nothing new
+            # from there is accepted, e.g. 1 µm before b while still ramping the acceleration
+            # to 0 (stress seed 396, lifting): the profile that brought the path here keeps b
+            # (a window that moved on only relaxes the constraints it was planned under)
+            kept.window = w
+            self.plan = kept
+            return
         self._count(f"target profile refused at boundary {b}")
         self._brake(a_max, j_max, w)
 
@@ -584,6 +601,9 @@ class Tracker:
         tb = self.tb
         t, v, a = self.t, self.v, self.a
         w = self.window_end
+        plan = self.plan
+        # a target beyond b: kept in case no new profile from here is accepted (`_replan`)
+        self._passed = plan if plan is not None and plan.goal > b else None
         self.plan = None
         if self.is_stop(b):
             if v > CAP_TOL:

@@ -26,12 +26,18 @@ def test_random_run_keeps_every_promise(seed: int) -> None:
     sc = scenario(seed)
     task, snaps = run_task(sc.channel, sc.text, sc.schedule, max_time=120)
     assert violations(sc, snaps, task.lift.records) == [], describe(sc)
+    assert task.interp.plan_errors == 0, (task.interp.last_plan_error, describe(sc))
 
 
 # path-based Lifting: 208, 594, 760, 769 found max |dz/ds| underestimated (an empty profile
 # phase ended the peak-velocity scan), so Z ran up to 1.86 × v_max at 186 % override;
-# 1651: a feed hold over a 0.5 mm block inside a range made the hold plan raise (ruckig)
-LIFTING_REGRESSIONS = [208, 594, 760, 769, 1651]
+# 1651: a feed hold over a 0.5 mm block inside a range made the hold plan raise (ruckig);
+# 380: a cruise ending 3e-17 m/s above the next block's feed read as a violation of that cap,
+# which hid the program end the path could still stop at: it passed it at 99 mm/s (X at 2.7 ×
+# a_max, 20 × j_max); 396: after a feed change 1 µm before a run boundary no profile from
+# there was accepted, so the path crossed it braking (X at 2.7 × j_max). Both since the
+# tracker's rewrite (issue 14), found when these runs were checked for tracker errors too.
+LIFTING_REGRESSIONS = [208, 380, 396, 594, 760, 769, 1651]
 
 
 @pytest.mark.parametrize("seed", LIFTING_REGRESSIONS + list(range(3000, 3012)))
@@ -39,6 +45,7 @@ def test_random_path_based_run_keeps_every_promise(seed: int) -> None:
     sc = scenario(seed, LiftMethod.LIFTING)
     task, snaps = run_task(sc.channel, sc.text, sc.schedule, max_time=120)
     assert violations(sc, snaps, task.lift.records) == [], describe(sc)
+    assert task.interp.plan_errors == 0, (task.interp.last_plan_error, describe(sc))
 
 
 # issue 14's input space: long ranges over short blocks, every look-ahead size, ranges back to
