@@ -336,7 +336,7 @@ class Tracker:
             b, s_c, cap, gate = c
             if force is not None and b != force:
                 continue
-            if not gate and v_p <= cap:
+            if not gate and v_p <= cap + V_ROUND:
                 # cannot bind from here; a forced one (the step would have passed it too fast)
                 # is kept by not accelerating beyond it: it may be too near for zero
                 # acceleration there, which it does not need
