@@ -49,6 +49,7 @@ from liftd.cnc.ruckig1 import ProfileError, Ruckig1
 
 INF = float("inf")
 EPS_S = 1e-12  # m: a boundary counts as reached within this distance
+TIME_AT_TOL = 1e-12  # m: a time ruckig gives for a position is taken when it is this close
 MAX_CANDIDATES = 24  # constraints considered at once; beyond, the last one counts as a stop
 SLACK_TOL = 1e-9  # m
 # A step is kept only if every constraint keeps this much slack: the profile toward it from the
@@ -108,8 +109,26 @@ class _Plan:
             if self.v_end > 0.0:
                 return self.t0 + self.dur + (s - self.p_end) / self.v_end
             return self.t0 + self.dur if s <= self.p_end + EPS_S else t_default
-        local = self.traj.get_first_time_at_position(0, s)
-        return t_default if local is None else self.t0 + float(local)
+        found = self.traj.get_first_time_at_position(0, s)
+        hi = self.dur if found is None else min(float(found), self.dur)
+        p_hi = float(self.traj.at_time(hi)[0][0])
+        if abs(p_hi - s) <= TIME_AT_TOL:
+            return self.t0 + hi
+        # ruckig's answer is off (1e-7 m ahead of 0.65 mm/s it said 1.82 ms, where the profile
+        # is 1.6e-6 m on: stress seed 2306, a jerk of 4 × j_max at the cut; early ones too):
+        # bisect on the profile itself, its position never falls (forward only)
+        lo = 0.0
+        if p_hi < s:
+            if hi >= self.dur:
+                return t_default
+            lo, hi = hi, self.dur
+        for _ in range(48):
+            mid = 0.5 * (lo + hi)
+            if float(self.traj.at_time(mid)[0][0]) < s:
+                lo = mid
+            else:
+                hi = mid
+        return self.t0 + hi
 
 
 class Tracker:
