@@ -6,7 +6,9 @@ lateness p50/p99/p99.9 and the exceed rate (cycles finished after their deadline
 loop's own histograms, cycle compute time separately, start to READY, RSS of the daemon and of
 the GEO process sampled every 10 s, and lift changes lost by the notification client against
 the run's trace. Once with the RT settings (SCHED_FIFO 80, mlockall, /dev/cpu_dma_latency) and
-once without (--mode both|rt|nort).
+once without (--mode both|rt|nort); --mode spin runs the RT settings with the loop busy-waiting
+between cycles on cpu 1 ([rt] idle = "spin", cpu = 1; liftd refuses it while the kernel limits
+the real-time share, sched_rt_runtime_us ≠ -1: measure it with -1).
 
 Issue 14 adds a PLC client writing a new override every --override-every seconds (60/80/100/
 150/200 %, each write restarts the committed path) and, in the same run, a cyclictest-style
@@ -87,12 +89,15 @@ def baseline_result(proc: subprocess.Popen[str] | None) -> dict[str, object] | N
 
 def one_run(minutes: float, rt: bool, pollers: int = 4, notifiers: int = 1,
             subscriptions: int = 10, window_s: float = 60.0,
-            override_every_s: float = 1.0) -> dict[str, object]:  # fmt: skip
-    """One daemon run under client load; exceed counts are also reported per window_s."""
+            override_every_s: float = 1.0,
+            spin: dict[str, object] | None = None) -> dict[str, object]:  # fmt: skip
+    """One daemon run under client load; exceed counts are also reported per window_s.
+    `spin`: [rt] keys of the busy-waiting loop (idle = spin, pinned)."""
     seconds = minutes * 60
     with tempfile.TemporaryDirectory() as tmp:
         tmpd = Path(tmp)
-        cfg = write_config(tmpd, program={"repeat": True}, rt=RT_ON if rt else RT_OFF)
+        rt_keys = {**(RT_ON if rt else RT_OFF), **(spin or {})}
+        cfg = write_config(tmpd, program={"repeat": True}, rt=rt_keys)
         trace = tmpd / "run.csv"
         notify = Notify(tmpd)
         t0 = time.monotonic()
@@ -168,7 +173,12 @@ def windows(samples: list[tuple[float, int]], window_s: float) -> list[int]:
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--minutes", type=float, default=10.0)
-    ap.add_argument("--mode", choices=["both", "rt", "nort"], default="both")
+    ap.add_argument(
+        "--mode",
+        choices=["both", "rt", "nort", "spin"],
+        default="both",
+        help="spin: RT with [rt] idle = spin on cpu 1 (busy-waits between cycles)",
+    )
     ap.add_argument(
         "--override-every",
         type=float,
@@ -176,9 +186,10 @@ def main() -> None:
         help="seconds between override writes (0: none)",
     )
     args = ap.parse_args()
-    for rt in {"both": (True, False), "rt": (True,), "nort": (False,)}[args.mode]:
-        print(json.dumps(one_run(args.minutes, rt, override_every_s=args.override_every)),
-              flush=True)  # fmt: skip
+    spin = {"idle": "spin", "cpu": 1} if args.mode == "spin" else None
+    for rt in {"both": (True, False), "rt": (True,), "nort": (False,), "spin": (True,)}[args.mode]:
+        rec = one_run(args.minutes, rt, override_every_s=args.override_every, spin=spin)
+        print(json.dumps(rec), flush=True)
 
 
 if __name__ == "__main__":

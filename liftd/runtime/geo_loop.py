@@ -95,6 +95,7 @@ class GeoLoop:
         self.cfg = cfg
         self.events = events
         self.control_fd = control_fd
+        self.spin = False  # busy-wait between cycles (granted by rt.apply)
         self.machine = Machine(
             [ChannelProgram(c.channel, c.program_text, c.autostart) for c in cfg.channels]
         )
@@ -165,7 +166,7 @@ class GeoLoop:
         channels = range(n)
         last: list[GeoSnapshot | None] = [None] * n
         last_overrun_event = -OVERRUN_EVENT_EVERY_NS
-        sleep_until = rt.sleep_until
+        sleep_until = rt.spin_until if self.spin else rt.sleep_until
         tags, plcs, tasks, step = self.tags, self.plcs, self.machine.tasks, self.machine.step
         send = self.events.send
         start = Command.START
@@ -256,6 +257,7 @@ def main(control_fd: int, events_fd: int, shm_fd: int) -> bool:
         loop = GeoLoop(shared, cfg, events, control_fd)
         gc.collect()
         state = rt.apply(cfg.rt)  # after preparing: mlockall locks what the loop really uses
+        loop.spin = state.spin
         for r in state.results:
             text = f"{r.setting}: {'ok' if r.ok else 'not permitted'} ({r.detail})"
             events.send(Event("geo.rt_setting", 0.0, 0, 1.0 if r.ok else 0.0, text))

@@ -121,6 +121,11 @@ class RtSection(_Section):
     lock_memory: StrictBool = True
     hold_cpu_dma_latency: StrictBool = True
     timer_slack_ns: int = Field(1, ge=0, le=1_000_000)
+    # how the loop waits for its next cycle: "sleep" (clock_nanosleep) or "spin" (busy-wait:
+    # the CPU never idles, so each cycle starts with warm caches; costs that CPU entirely, pin
+    # it with `cpu`; refused with SCHED_FIFO while the kernel limits real-time tasks'
+    # share, sched_rt_runtime_us ≠ -1, which would stop the loop 50 ms a second; README)
+    idle: Literal["sleep", "spin"] = "sleep"
     # the daemon stops serving and exits 3 when the GEO cycle counter stands still this long
     # (a stopped or hung loop; with no systemd watchdog, e.g. in Docker, this is the restart)
     stall_timeout_ms: int = Field(1000, ge=20, le=60_000)

@@ -67,13 +67,17 @@ def test_ready_watchdog_objects_and_clean_stop(tmp_path: Path) -> None:
         notify.close()
 
 
-def test_run_trace_is_identical_to_simulate(tmp_path: Path) -> None:
-    cfg = write_config(tmp_path)  # the demo once, autostart, no PLC writes
+@pytest.mark.parametrize("idle", ["sleep", "spin"])
+def test_run_trace_is_identical_to_simulate(tmp_path: Path, idle: str) -> None:
+    """Also when the loop busy-waits between cycles ([rt] idle = "spin"), which it reports."""
+    cfg = write_config(tmp_path, rt={"idle": idle})  # the demo once, autostart, no PLC writes
     trace = tmp_path / "run.csv"
     d = Daemon(cfg, "--trace", str(trace))
     try:
         d.ready()
         assert d.event("geo.program_end", 30) is not None
+        said = [r.get("text", "") for r in d.logs if r.get("event") == "geo.rt_setting"]
+        assert any(t.startswith("idle_spin: ok") for t in said) == (idle == "spin"), said
     finally:
         assert d.stop() == 0
     sim = tmp_path / "sim.csv"

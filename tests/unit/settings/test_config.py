@@ -52,6 +52,7 @@ def test_contract_keys_are_accepted_and_everything_else_defaults() -> None:
         ('[ads]\nudp_discovery = "yes"\n', 2, "ads.udp_discovery", "yes", "valid boolean"),
         ("[ads]\nfirst_frame_timeout_s = 0\n", 2, "ads.first_frame_timeout_s", "0", "greater than"),
         ("[log]\nqueue_lines = 5\n", 2, "log.queue_lines", "5", "greater than or equal"),
+        ('[rt]\nidle = "nap"\n', 2, "rt.idle", "nap", "'sleep' or 'spin'"),
     ],
 )
 def test_bad_values_name_file_line_key_value(
