@@ -115,8 +115,9 @@ class _Plan:
         if abs(p_hi - s) <= TIME_AT_TOL:
             return self.t0 + hi
         # ruckig's answer is off (1e-7 m ahead of 0.65 mm/s it said 1.82 ms, where the profile
-        # is 1.6e-6 m on: stress seed 2306, a jerk of 4 × j_max at the cut; early ones too):
-        # bisect on the profile itself, its position never falls (forward only)
+        # is 1.6e-6 m on: stress seed 2306, a jerk of 4 × j_max at the cut; early ones too;
+        # the Python binding's get_first_time_at_position is known to be off, pantor/ruckig
+        # issue 229): bisect on the profile itself, its position never falls (forward only)
         lo = 0.0
         if p_hi < s:
             if hi >= self.dur:
