@@ -74,7 +74,6 @@ class GeoProgram:
         return self.path.end_position
 
 
-
 def _direction_into(path: PathProgram, k: int, axis: int) -> float:
     """Direction cosine of an axis at the end of the segment before boundary k."""
     if k == 0 or not path.segments:
