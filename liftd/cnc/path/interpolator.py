@@ -25,9 +25,10 @@ from collections import deque
 from typing import NamedTuple
 
 from liftd.cnc.path.bounds import lower_bound_time
+from liftd.cnc.path.plan import Crossing
 from liftd.cnc.path.program import PathProgram
 from liftd.cnc.path.table import PathTable
-from liftd.cnc.path.tracker import Crossing, Tracker
+from liftd.cnc.path.tracker import Tracker
 from liftd.cnc.path.velocity import projected_velocity
 
 INF = float("inf")

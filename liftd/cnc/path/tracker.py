@@ -31,10 +31,8 @@ answered with a brake (never expected; the closed-loop tests count them).
 from __future__ import annotations
 
 from collections.abc import Iterator
-from dataclasses import dataclass
 
-from ruckig import Trajectory
-
+from liftd.cnc.path.plan import BRAKE, CRUISE, EPS_S, Crossing, Plan
 from liftd.cnc.path.table import PathTable
 from liftd.cnc.path.velocity import (
     brake_below,
@@ -48,8 +46,6 @@ from liftd.cnc.path.velocity import (
 from liftd.cnc.ruckig1 import ProfileError, Ruckig1
 
 INF = float("inf")
-EPS_S = 1e-12  # m: a boundary counts as reached within this distance
-TIME_AT_TOL = 1e-12  # m: a time ruckig gives for a position is taken when it is this close
 MAX_CANDIDATES = 24  # constraints considered at once; beyond, the last one counts as a stop
 SLACK_TOL = 1e-9  # m
 # A step is kept only if every constraint keeps this much slack: the profile toward it from the
@@ -60,76 +56,6 @@ CHAIN_MARGIN = 2.0 * SLACK_MARGIN  # caps from a chain leave this much slack for
 CAP_TOL = 1e-6  # relative: a crossing velocity within this of its cap is at the cap
 GATE_TOL = 1e-6  # m/s²: zero acceleration at a run boundary, within ruckig's precision
 V_ROUND = 1e-12  # m/s: a velocity this close above a cap is at the cap (rounding)
-CRUISE = -1
-BRAKE = -2  # the last resort: to rest (counted as an error)
-BRAKE_TO = -3  # to a constraint's cap at once, on its braking curve
-
-
-@dataclass(frozen=True, slots=True)
-class Crossing:
-    boundary: int
-    t: float  # exact time the path reaches the boundary
-    at_rest: bool  # the path stops there (a stop, or a refused plan)
-    v: float  # path velocity there (m/s)
-    a: float = 0.0  # path acceleration there (m/s²)
-
-
-class _Plan:
-    """A ruckig profile started at t0, extended at constant velocity after its end; its end
-    snaps to the goal (target position, goal velocity) it was planned for."""
-
-    __slots__ = ("dur", "goal", "p_end", "serves", "t0", "traj", "v_end", "window")
-
-    def __init__(
-        self, traj: Trajectory, t0: float, goal: int, window: int, p_goal: float | None,
-        v_goal: float,
-    ) -> None:  # fmt: skip
-        self.traj = traj
-        self.t0 = t0
-        self.goal = goal  # CRUISE, BRAKE, BRAKE_TO or the target boundary
-        self.serves = goal  # the constraint boundary the profile keeps (-1 for none)
-        self.window = window  # window end when planned
-        self.dur: float = float(traj.duration)
-        p, v, _ = traj.at_time(self.dur)
-        p_end, v_end = float(p[0]), float(v[0])
-        self.p_end = p_goal if p_goal is not None and abs(p_end - p_goal) <= 1e-9 else p_end
-        self.v_end = v_goal if abs(v_end - v_goal) <= 1e-9 else max(v_end, 0.0)
-
-    def at(self, t: float) -> tuple[float, float, float]:
-        local = t - self.t0
-        if local >= self.dur:
-            return self.p_end + self.v_end * (local - self.dur), self.v_end, 0.0
-        local = max(0.0, local)
-        p, v, a = self.traj.at_time(local)
-        return p[0], v[0], a[0]
-
-    def time_at(self, s: float, t_default: float) -> float:
-        """Absolute time the plan first reaches position s (t_default if it never does)."""
-        if s >= self.p_end:
-            if self.v_end > 0.0:
-                return self.t0 + self.dur + (s - self.p_end) / self.v_end
-            return self.t0 + self.dur if s <= self.p_end + EPS_S else t_default
-        found = self.traj.get_first_time_at_position(0, s)
-        hi = self.dur if found is None else min(float(found), self.dur)
-        p_hi = float(self.traj.at_time(hi)[0][0])
-        if abs(p_hi - s) <= TIME_AT_TOL:
-            return self.t0 + hi
-        # ruckig's answer is off (1e-7 m ahead of 0.65 mm/s it said 1.82 ms, where the profile
-        # is 1.6e-6 m on: stress seed 2306, a jerk of 4 × j_max at the cut; early ones too;
-        # the Python binding's get_first_time_at_position is known to be off, pantor/ruckig
-        # issue 229): bisect on the profile itself, its position never falls (forward only)
-        lo = 0.0
-        if p_hi < s:
-            if hi >= self.dur:
-                return t_default
-            lo, hi = hi, self.dur
-        for _ in range(48):
-            mid = 0.5 * (lo + hi)
-            if float(self.traj.at_time(mid)[0][0]) < s:
-                lo = mid
-            else:
-                hi = mid
-        return self.t0 + hi
 
 
 class Tracker:
@@ -159,8 +85,8 @@ class Tracker:
         self.hold = False
         self.lift_stops = lift_stops if lift_stops is not None else set()
         self.acked = acked if acked is not None else set()
-        self.plan: _Plan | None = None
-        self._passed: _Plan | None = None  # the target plan of the boundary just passed
+        self.plan: Plan | None = None
+        self._passed: Plan | None = None  # the target plan of the boundary just passed
         self._beyond_key: tuple[int, int, float] | None = None
         self._beyond_val = INF
         self.errors = 0
@@ -429,7 +355,7 @@ class Tracker:
         except ProfileError as exc:
             self.last_error = str(exc)
             return False
-        self.plan = _Plan(traj, self.t, b, w, s_c, tgt)
+        self.plan = Plan(traj, self.t, b, w, s_c, tgt)
         return True
 
     def _pick_target(
@@ -458,12 +384,12 @@ class Tracker:
             self._count(f"cruise profile refused: {exc}")
             self._brake(a_max, j_max, w)
             return
-        self.plan = _Plan(traj, self.t, CRUISE, w, None, ceiling)
+        self.plan = Plan(traj, self.t, CRUISE, w, None, ceiling)
 
     def _brake(self, a_max: float, j_max: float, w: int) -> None:
         """Last resort: brake to rest (never expected; counted)."""
         traj = self.calc.velocity(self.s, self.v, self.a, 0.0, a_max, j_max)
-        self.plan = _Plan(traj, self.t, BRAKE, w, None, 0.0)
+        self.plan = Plan(traj, self.t, BRAKE, w, None, 0.0)
 
     def _count(self, what: str) -> None:
         self.errors += 1
@@ -602,7 +528,7 @@ class Tracker:
         self._clear_s = tb.s[nxt] - self._horizon(top, a_max, a_max, j_max, dt)
 
     def _commit(
-        self, t: float, s: float, v: float, a: float, seg: int, cut: int, plan: _Plan,
+        self, t: float, s: float, v: float, a: float, seg: int, cut: int, plan: Plan,
         out: list[Crossing],
     ) -> None:  # fmt: skip
         """Move the state to (t, s, v, a); report the boundaries with actions passed on the way

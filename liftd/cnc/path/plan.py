@@ -1,0 +1,64 @@
+"""The profile the path tracker follows (`Plan`) and the boundaries it reports (`Crossing`):
+a ruckig profile from the moment it was planned, extended at constant velocity after its end,
+its end snapped to the goal it was planned for. Its times and positions are what the
+tracker's steps are cut at; how the tracker chooses a profile is `tracker.py`."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ruckig import Trajectory
+
+from liftd.cnc.ruckig1 import first_time_at
+
+EPS_S = 1e-12  # m: a boundary counts as reached within this distance
+CRUISE = -1
+BRAKE = -2  # the last resort: to rest (counted as an error)
+
+
+@dataclass(frozen=True, slots=True)
+class Crossing:
+    boundary: int
+    t: float  # exact time the path reaches the boundary
+    at_rest: bool  # the path stops there (a stop, or a refused plan)
+    v: float  # path velocity there (m/s)
+    a: float = 0.0  # path acceleration there (m/s²)
+
+
+class Plan:
+    """A ruckig profile started at t0, extended at constant velocity after its end; its end
+    snaps to the goal (target position, goal velocity) it was planned for."""
+
+    __slots__ = ("dur", "goal", "p_end", "serves", "t0", "traj", "v_end", "window")
+
+    def __init__(
+        self, traj: Trajectory, t0: float, goal: int, window: int, p_goal: float | None,
+        v_goal: float,
+    ) -> None:  # fmt: skip
+        self.traj = traj
+        self.t0 = t0
+        self.goal = goal  # CRUISE, BRAKE or the target boundary
+        self.serves = goal  # the constraint boundary the profile keeps (-1 for none)
+        self.window = window  # window end when planned
+        self.dur: float = float(traj.duration)
+        p, v, _ = traj.at_time(self.dur)
+        p_end, v_end = float(p[0]), float(v[0])
+        self.p_end = p_goal if p_goal is not None and abs(p_end - p_goal) <= 1e-9 else p_end
+        self.v_end = v_goal if abs(v_end - v_goal) <= 1e-9 else max(v_end, 0.0)
+
+    def at(self, t: float) -> tuple[float, float, float]:
+        local = t - self.t0
+        if local >= self.dur:
+            return self.p_end + self.v_end * (local - self.dur), self.v_end, 0.0
+        local = max(0.0, local)
+        p, v, a = self.traj.at_time(local)
+        return p[0], v[0], a[0]
+
+    def time_at(self, s: float, t_default: float) -> float:
+        """Absolute time the plan first reaches position s (t_default if it never does)."""
+        if s >= self.p_end:
+            if self.v_end > 0.0:
+                return self.t0 + self.dur + (s - self.p_end) / self.v_end
+            return self.t0 + self.dur if s <= self.p_end + EPS_S else t_default
+        local = first_time_at(self.traj, s)
+        return t_default if local is None else self.t0 + local
