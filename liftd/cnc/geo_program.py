@@ -60,9 +60,6 @@ class GeoProgram:
             raise KeyError(action.line)
         return self.ranges[i]
 
-    def stops_in(self, rng: LiftRange) -> tuple[int, ...]:
-        return self.stops[rng.index]
-
     def conditional_for(self, number: int) -> tuple[int, ...]:
         """Boundaries where an MVS_SNS M<number> waits for its acknowledge."""
         return self.conditional.get(number, ())

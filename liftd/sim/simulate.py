@@ -10,9 +10,10 @@ from __future__ import annotations
 
 import dataclasses
 import time
+from array import array
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
-from typing import Protocol, TextIO
+from typing import Final, Protocol, TextIO
 
 import numpy as np
 
@@ -24,6 +25,10 @@ from liftd.cnc.snapshot import ChannelState, GeoInputs, GeoSnapshot
 from liftd.sim.summary import ErrorEntry, LiftSummary, Limits, Overload, SimSummary, StepCpu
 from liftd.sim.trace import LimitMonitor, TraceWriter
 
+# READY or ERROR: the program has ended (a C static of the compiled module; an enum attribute is
+# two lookups a use)
+ENDED: Final = (ChannelState.READY, ChannelState.ERROR)
+
 
 class Plc(Protocol):
     """What drives a channel's inputs cycle by cycle: the simulated PLC (`SimPlc`), or a test's
@@ -34,10 +39,13 @@ class Plc(Protocol):
 
 class SeriesBuffer:
     """Decimated copy of the run for plotting, constant memory: when full, every other sample
-    is dropped and the stride doubles."""
+    is dropped and the stride doubles. Samples are kept flat in an `array` of doubles
+    (appending a row to a numpy array costs ~1 µs, extending an array ~0.1 µs)."""
 
     def __init__(self, columns: int, capacity: int = 20000) -> None:
-        self.data = np.zeros((capacity, columns))
+        self.columns = columns
+        self.capacity = capacity
+        self.data = array("d")
         self.n = 0
         self.stride = 1
         self.count = 0
@@ -49,18 +57,19 @@ class SeriesBuffer:
 
     def add(self, row: tuple[float, ...]) -> None:
         """Store a sample that `wants()` accepted."""
-        if self.n == self.data.shape[0]:
-            self.data[: self.n // 2] = self.data[: self.n : 2]
-            self.n //= 2
+        if self.n == self.capacity:
+            kept = self.rows[::2]
+            self.data = array("d", kept.tobytes())
+            self.n = kept.shape[0]
             self.stride *= 2
             if (self.count - 1) % self.stride:
                 return
-        self.data[self.n] = row
+        self.data.extend(row)
         self.n += 1
 
     @property
     def rows(self) -> np.ndarray:
-        return self.data[: self.n]
+        return np.frombuffer(self.data, dtype=float).reshape(self.n, self.columns).copy()
 
 
 @dataclass(frozen=True)
@@ -148,7 +157,7 @@ def run_cycles(
             snap = task.step(inputs, t)
         yield snap
         last = snap
-        if snap.state in (ChannelState.READY, ChannelState.ERROR) and task.runs:
+        if snap.state in ENDED and task.runs:
             return
 
 
@@ -203,7 +212,7 @@ class ChannelRun:
         if self.writer is not None:
             self.writer.flush()
         snap = self.last
-        finished = snap is not None and snap.state in (ChannelState.READY, ChannelState.ERROR)
+        finished = snap is not None and snap.state in ENDED
         summary = build_summary(self.ch, task, self.monitor, self.cycles, snap,
                                 tuple(self.errors), self.timer.summary())  # fmt: skip
         return SimResult(summary, self.series, finished)
@@ -260,7 +269,7 @@ def simulate_machine(
                 continue
             run.timer.add(ns)
             run.add(snap)
-            if snap.state in (ChannelState.READY, ChannelState.ERROR) and machine.tasks[i].runs:
+            if snap.state in ENDED and machine.tasks[i].runs:
                 active[i] = False
     results = [run.result(task) for run, task in zip(runs, machine.tasks, strict=True)]
     back = [0] * len(order)

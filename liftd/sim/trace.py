@@ -7,6 +7,7 @@ the extra columns lift_phase, vz [mm/s], az [mm/s²], state, override_max.
 
 from __future__ import annotations
 
+from array import array
 from typing import TextIO
 
 import numpy as np
@@ -92,8 +93,10 @@ class LimitMonitor:
 
     def __init__(self, n_axes: int, dt: float) -> None:
         self.dt = dt
-        self.buf = np.zeros((CHUNK + 3, n_axes))
-        self.n = 0  # rows in buf; the first `keep` rows are carried over (max is idempotent)
+        self.n_axes = n_axes
+        # the samples of a chunk, flat (extending an array is ~10× cheaper than a numpy row store)
+        self.flat = array("d")
+        self.n = 0  # rows in flat; the first `keep` rows are carried over (max is idempotent)
         self.keep = 0
         self.max_v = np.zeros(n_axes)
         self.max_a = np.zeros(n_axes)
@@ -101,14 +104,14 @@ class LimitMonitor:
         self.samples = 0
 
     def add(self, positions: tuple[float, ...]) -> None:
-        self.buf[self.n] = positions
+        self.flat.extend(positions)
         self.n += 1
         self.samples += 1
-        if self.n == self.buf.shape[0]:
+        if self.n == CHUNK + 3:
             self._reduce()
 
     def _reduce(self) -> None:
-        rows = self.buf[: self.n]
+        rows = np.frombuffer(self.flat, dtype=float).reshape(self.n, self.n_axes)
         dt = self.dt
         if self.n >= 2:
             v = np.diff(rows, axis=0) / dt
@@ -120,7 +123,7 @@ class LimitMonitor:
                     j = np.diff(a, axis=0) / dt
                     np.maximum(self.max_j, np.abs(j).max(axis=0), out=self.max_j)
         tail = min(3, self.n)
-        self.buf[:tail] = rows[self.n - tail : self.n]
+        self.flat = self.flat[(self.n - tail) * self.n_axes :]  # a new array: `rows` views the old
         self.n = self.keep = tail
 
     def result(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

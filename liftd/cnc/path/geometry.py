@@ -29,7 +29,8 @@ class LineSeg:
         return LineSeg(start, end, length, unit)
 
     def position(self, s: float) -> Vec:
-        return tuple([p + u * s for p, u in zip(self.start, self.unit, strict=True)])
+        p, u = self.start, self.unit  # indexed: a zip is ~0.4 µs of the cycle in the compiled core
+        return tuple([p[i] + u[i] * s for i in range(len(p))])
 
     def tangent(self, s: float) -> Vec:
         return self.unit

@@ -22,7 +22,6 @@ entries) until it is `lead` cycles ahead, so in steady state a cycle costs one t
 from __future__ import annotations
 
 from collections import deque
-from typing import NamedTuple
 
 from liftd.cnc.path.bounds import lower_bound_time
 from liftd.cnc.path.plan import Crossing
@@ -40,16 +39,25 @@ RELEASE_PER_CYCLE = 8
 __all__ = ["Crossing", "Interpolator"]
 
 
-class _Entry(NamedTuple):
-    k: int  # cycle index (t = k·dt)
-    t: float  # time of the state (the cycle's time, or when the path came to rest in it)
-    s: float
-    v: float
-    a: float
-    seg: int
-    crossings: tuple[Crossing, ...]
-    stopped_at: int | None
-    parked: bool
+class _Entry:
+    """One cycle's state of the committed future (a native class: a NamedTuple's __new__ is a
+    Python frame, ~0.3 µs of every cycle)."""
+
+    __slots__ = ("a", "crossings", "k", "parked", "s", "seg", "stopped_at", "t", "v")
+
+    def __init__(
+        self, k: int, t: float, s: float, v: float, a: float, seg: int,
+        crossings: tuple[Crossing, ...], stopped_at: int | None, parked: bool,
+    ) -> None:  # fmt: skip
+        self.k = k  # cycle index (t = k·dt)
+        self.t = t  # time of the state (the cycle's time, or when the path came to rest in it)
+        self.s = s
+        self.v = v
+        self.a = a
+        self.seg = seg
+        self.crossings = crossings
+        self.stopped_at = stopped_at
+        self.parked = parked
 
 
 class _Discarded:

@@ -96,7 +96,8 @@ class PathProgram:
         if k >= len(self.segments):
             return 0.0, 0.0
         seg = self.segments[k]
-        v_max = min(min(seg.feed, seg.v_lift_ov) * override, seg.v_phys, seg.v_lift)
+        # nested 2-argument min: native in the compiled core (3 arguments: a generic call)
+        v_max = min(min(min(seg.feed, seg.v_lift_ov) * override, seg.v_phys), seg.v_lift)  # noqa: PLW3301
         return v_max, min(self.boundaries[k + 1].v_cap, v_max)
 
 
