@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import enum
 from collections.abc import Callable
+from typing import Final
 
 from ruckig import Trajectory
 
@@ -43,13 +44,23 @@ class Phase(enum.IntEnum):
     HOLD_LIMIT = 5  # program error inside the range: rise to POS_LIMIT and stay
 
 
+# The members as C statics of the compiled module: `Phase.UP` is a dict and a type lookup
+# (~80 ns), several a lift cycle.
+IDLE: Final = Phase.IDLE
+UP: Final = Phase.UP
+DOWN: Final = Phase.DOWN
+DONE: Final = Phase.DONE
+DIRECT: Final = Phase.DIRECT
+HOLD_LIMIT: Final = Phase.HOLD_LIMIT
+
+
 class AdvancedLift:
     """The set-point generator of one lift range. Pure; times are absolute seconds."""
 
     def __init__(self, profiles: LiftProfiles, cycle: float) -> None:
         self.prof = profiles
         self.cycle = cycle
-        self.phase = Phase.IDLE
+        self.phase = IDLE
         self.sign = 1.0
         self.t = 0.0
         self.q = self.v = self.a = 0.0
@@ -93,16 +104,16 @@ class AdvancedLift:
         self._on_rise = False
         if direct:
             self._plan_direct(t)
-            self.phase = Phase.DIRECT
+            self.phase = DIRECT
         else:
-            self.phase = Phase.UP
+            self.phase = UP
 
     def rise_and_hold(self, t: float) -> None:
         """Program error inside the range: go to POS_LIMIT and stay (vendor §2.1.3 case 2)."""
         self.target = max(self.limit, self.q) if self.limit >= self.target else self.limit
         self._on_rise = False
         self._plan_direct(t)
-        self.phase = Phase.HOLD_LIMIT
+        self.phase = HOLD_LIMIT
 
     @property
     def z(self) -> float:
@@ -121,8 +132,8 @@ class AdvancedLift:
 
     @property
     def done(self) -> bool:
-        return self.phase is Phase.DONE or (
-            self.phase in (Phase.DIRECT, Phase.HOLD_LIMIT)
+        return self.phase is DONE or (
+            (self.phase is DIRECT or self.phase is HOLD_LIMIT)
             and self.plan is None
             and self._at_target()
         )
@@ -137,19 +148,19 @@ class AdvancedLift:
         if dt <= 0.0:
             return
         on_rise, self._on_rise = self._on_rise, False
-        if refine is not None and self.phase is not Phase.UP:
+        if refine is not None and self.phase is not UP:
             t_rem, refine = refine(), None
         try:
-            if self.phase is Phase.UP:
+            if self.phase is UP:
                 self._up(dt, t_rem, on_rise, refine)
-            elif self.phase is Phase.DOWN:
+            elif self.phase is DOWN:
                 self._down(dt, t_rem)
-            elif self.phase in (Phase.DIRECT, Phase.HOLD_LIMIT):
+            elif self.phase is DIRECT or self.phase is HOLD_LIMIT:
                 if self.plan is None and not self._at_target():
                     self._plan_direct(self.t)  # retry after a refused profile
                 self._follow(t_new)
-            elif self.phase is Phase.DONE and t_rem > 2.0 * self.cycle:
-                self.phase = Phase.UP  # the path got slower after Z landed: rise again
+            elif self.phase is DONE and t_rem > 2.0 * self.cycle:
+                self.phase = UP  # the path got slower after Z landed: rise again
                 self._up(dt, t_rem)
         except ProfileError:
             self._fallback(t_new)
@@ -163,7 +174,7 @@ class AdvancedLift:
         self.fallbacks += 1
         try:
             self._plan_direct(self.t)
-            self.phase = Phase.DIRECT
+            self.phase = DIRECT
             self._follow(t_new)
             return
         except ProfileError:
@@ -172,7 +183,7 @@ class AdvancedLift:
             self._follow(t_new)
         elif self.rise is not None:
             self._set(state_at(self.rise, t_new - self.rise_t0))
-        self.phase = Phase.DIRECT if self.plan is None else self.phase
+        self.phase = DIRECT if self.plan is None else self.phase
 
     def _set(self, state: tuple[float, float, float]) -> None:
         self.q, self.v, self.a = state
@@ -195,8 +206,8 @@ class AdvancedLift:
             self.q, self.v, self.a = self.target, 0.0, 0.0  # snap (ruckig #160 regime)
             self.landed = self.plan_t0 + self.plan.duration
             self.plan = None
-            if self.phase is Phase.DOWN:
-                self.phase = Phase.DONE
+            if self.phase is DOWN:
+                self.phase = DONE
             return
         self._set(state_at(self.plan, local))
 
@@ -261,7 +272,7 @@ class AdvancedLift:
         self.plan = plan
         self.plan_t0 = self.t + tau
         self.late = max(0.0, tau + plan.duration - t_rem)
-        self.phase = Phase.DOWN
+        self.phase = DOWN
         self._follow(self.t + dt)
 
     def _switch_time(
@@ -300,7 +311,7 @@ class AdvancedLift:
         assert self.plan is not None
         remaining = self.plan_t0 + self.plan.duration - self.t
         if t_rem == INF or t_rem > remaining + 2.0 * self.cycle:
-            self.phase = Phase.UP  # more time than planned: use it to rise again
+            self.phase = UP  # more time than planned: use it to rise again
             self.plan = None
             self._up(dt, t_rem)
             return

@@ -12,10 +12,9 @@ The GEO task holds the active one; it never asks which kind it is.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Protocol
 
-from liftd.cnc.lift.advanced import AdvancedLift, Phase, Refine
+from liftd.cnc.lift.advanced import DONE, DOWN, HOLD_LIMIT, IDLE, UP, AdvancedLift, Phase, Refine
 from liftd.cnc.lift.guard import GuardFinding, LiftGuard
 from liftd.cnc.lift.path_based import RangePlan
 from liftd.cnc.lift.ranges import LiftRange
@@ -39,14 +38,19 @@ class PathTimes(Protocol):
     def lower_bound(self, k: int, override: float) -> float: ...
 
 
-@dataclass(slots=True)
 class OverrideVerdict:
-    """What the lift makes of a requested override."""
+    """What the lift makes of a requested override (a plain class: native in the compiled
+    core, where a dataclass's generated __init__ is a Python frame in every lift cycle)."""
 
-    override: float  # in effect
-    override_max: float  # the highest the lift accepts now (for the display)
-    limited: bool = False  # an increase was cut (event lift.override_limited)
-    path_waits: bool = False  # not even a crawl gives Z the time: the path waits at k
+    __slots__ = ("limited", "override", "override_max", "path_waits")
+
+    def __init__(
+        self, override: float, override_max: float, limited: bool = False, path_waits: bool = False
+    ) -> None:
+        self.override = override  # in effect
+        self.override_max = override_max  # the highest the lift accepts now (for the display)
+        self.limited = limited  # an increase was cut (event lift.override_limited)
+        self.path_waits = path_waits  # not even a crawl gives Z the time: the path waits at k
 
 
 class LiftMotion(Protocol):
@@ -154,7 +158,7 @@ class TimeBasedLift:
         refine: Refine | None = None,
     ) -> None:  # fmt: skip
         gen = self.gen
-        was_down = gen.phase is Phase.DOWN
+        was_down = gen.phase is DOWN
         gen.step(t_new, t_rem, refine)
         z, findings = self.guard.check(gen.z, gen.fallbacks)
         if findings:
@@ -163,16 +167,16 @@ class TimeBasedLift:
                 # never expected: stop at the bound and go straight (time-optimally) to POS
                 spec = self.rng.start
                 gen.start(t_new, z, 0.0, 0.0, spec.target, spec.pos_limit, spec.down, True)
-        if gen.phase is Phase.DOWN and not was_down:
+        if gen.phase is DOWN and not was_down:
             self.ov_at_descent = override  # the descent clamps the override to this
-        elif gen.phase is Phase.UP:
+        elif gen.phase is UP:
             self.ov_at_descent = None
 
     def needed_time(self) -> float:
         gen = self.gen
         if gen.done:
             return 0.0
-        if gen.phase is Phase.UP:
+        if gen.phase is UP:
             return gen.t_need
         plan = gen.plan
         return 0.0 if plan is None else max(0.0, gen.plan_t0 + plan.duration - gen.t)
@@ -202,9 +206,9 @@ class TimeBasedLift:
         of the path's arrival at the horizon k at the candidate override (bounded work):
         granting an override that passes it can never make Z late."""
         phase = self.gen.phase
-        if phase in (Phase.DONE, Phase.HOLD_LIMIT, Phase.IDLE):
+        if phase is DONE or phase is HOLD_LIMIT or phase is IDLE:
             return OverrideVerdict(ov_req, MAX_OVERRIDE)
-        if phase is Phase.DOWN and self.ov_at_descent is not None:
+        if phase is DOWN and self.ov_at_descent is not None:
             return OverrideVerdict(min(ov_req, self.ov_at_descent), self.ov_at_descent)
         if k < 0:
             return OverrideVerdict(ov_req, MAX_OVERRIDE)
