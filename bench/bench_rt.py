@@ -60,7 +60,9 @@ def baseline_start(seconds: float, rt: bool) -> subprocess.Popen[str] | None:
 
 
 def baseline_result(proc: subprocess.Popen[str] | None) -> dict[str, object] | None:
-    """Wake-up lateness percentiles (µs) from cyclictest's histogram."""
+    """Wake-up lateness percentiles (µs) from cyclictest's histogram, and how many wake-ups
+    were more than 250 µs (25 % of the period) late: the rate at which this VM stalls a
+    real-time task that long, to set beside the loop's `compute_over_25pct`."""
     if proc is None:
         return None
     out, _ = proc.communicate(timeout=120)
@@ -83,8 +85,10 @@ def baseline_result(proc: subprocess.Popen[str] | None) -> dict[str, object] | N
                 return us
         return worst
 
+    over = sum(counts[251:]) + overflows
     return {"tool": "cyclictest", "samples": total, "p50": pct(0.5), "p99": pct(0.99),
-            "p99.9": pct(0.999), "max": worst}  # fmt: skip
+            "p99.9": pct(0.999), "max": worst, "over_250us": over,
+            "over_250us_pct": round(100 * over / max(total, 1), 4)}  # fmt: skip
 
 
 def one_run(minutes: float, rt: bool, pollers: int = 4, notifiers: int = 1,
