@@ -26,7 +26,7 @@ from liftd.cnc.lift.ranges import LiftRange
 from liftd.cnc.nc.blocks import ErrorId
 from liftd.cnc.params import ChannelParams, LiftMethod, MSync
 from liftd.cnc.path.interpolator import Crossing, Interpolator
-from liftd.cnc.path.program import Action, ActionKind
+from liftd.cnc.path.program import Action, ActionKind, PathProgram
 from liftd.cnc.plc import MAX_OVERRIDE
 from liftd.cnc.snapshot import (
     ChannelState,
@@ -68,6 +68,7 @@ class GeoTask:
         start_position: tuple[float, ...] | None = None,
     ) -> None:
         self.ch = channel
+        self.dt = channel.cycle_time  # read every cycle: a native attribute
         self.autostart = autostart
         self.z_index = channel.lift_axis_index
         self.home = start_position or tuple(0.0 for _ in channel.axes)
@@ -91,6 +92,7 @@ class GeoTask:
         self.ack_time = 0.0
         self.runs = 0
         self.prog: GeoProgram
+        self.path: PathProgram  # self.prog.path
         self.interp: Interpolator
         self.lift: LiftController
         # the IPO acceleration monitor of every axis that lifts (the configured lift axis and
@@ -110,6 +112,7 @@ class GeoTask:
 
     def _load(self, start: tuple[float, ...]) -> None:
         self.prog = self.programs.from_start(start)
+        self.path = self.prog.path  # read every cycle: a native attribute, not GeoProgram's
         lifting = {self.ch.lift_axis} | {rng.start.axis for rng in self.prog.ranges}
         self.interp = Interpolator(
             self.prog.path, self.prog.table, self.ch.look_ahead_blocks, self.ch.cycle_time,
@@ -196,8 +199,8 @@ class GeoTask:
             return self.waiting[0].line
         k = self.interp.stopped_at
         if k is not None:
-            return self.prog.path.boundaries[k].line or self.prog.first_line
-        segs = self.prog.path.segments
+            return self.path.boundaries[k].line or self.prog.first_line
+        segs = self.path.segments
         return segs[min(self.interp.segment, len(segs) - 1)].line if segs else 0
 
     def _positions(self) -> tuple[float, ...]:
@@ -206,7 +209,7 @@ class GeoTask:
         of the next block: the decoder puts a lift's POS there, which Z reaches only through the
         lift (a range without path motion after a wait made Z jump, issue 15)."""
         k = self.interp.stopped_at
-        segs = self.prog.path.segments
+        segs = self.path.segments
         if k is not None and 0 < k <= len(segs):
             pos = segs[k - 1].geom.end
             if self.z_rest is not None:
@@ -258,7 +261,7 @@ class GeoTask:
         self.cycle += 1
         # inputs take effect at the start of the cycle; a task's first cycle (which may come
         # mid-run, after a reload) starts at the previous cycle's t = (k − 1)·dt, not at 0
-        dt = self.ch.cycle_time
+        dt = self.dt
         t_in = self.t_cycle if self.cycle > 1 else (round(t / dt) - 1) * dt
         self.t_cycle = t
         self.events = []
@@ -521,7 +524,7 @@ class GeoTask:
                 self.error_id,
                 self.error_line,
                 tuple(self.events),
-                *self.prog.path.block_velocities(self.interp.segment, self.ov_eff),
+                *self.path.block_velocities(self.interp.segment, self.ov_eff),
                 lift.axis_index,
                 lift.counts,
             )
