@@ -6,6 +6,7 @@ the build recorded (`liftd/_core_sources.json`), nothing is imported; the daemon
 from __future__ import annotations
 
 import hashlib
+import importlib.machinery
 import importlib.util
 import json
 from pathlib import Path
@@ -25,6 +26,19 @@ def core_build() -> str:
     return build_state(COMPILED)
 
 
+def _origin(name: str) -> str | None:
+    """The file the import system finds for module `name`, by a fresh search of its package's
+    path. Not `find_spec(name)`: for a module already imported it returns the module's own
+    spec, and a module a compiled module imported (mypyc's shared group initialises it) has a
+    wrong one (`liftd/liftd/cnc/…`), which read as a stale build once `liftd.sim` was
+    imported first."""
+    parent = name.rpartition(".")[0]
+    package = importlib.util.find_spec(parent) if parent else None
+    search = package.submodule_search_locations if package is not None else None
+    spec = importlib.machinery.PathFinder.find_spec(name, None if search is None else list(search))
+    return spec.origin if spec is not None else None
+
+
 def build_state(modules: tuple[str, ...]) -> str:
     """`compiled` (every module an extension built from the source next to it), `stale` (an
     extension built from another source than the one next to it, or without a record: Python
@@ -33,8 +47,7 @@ def build_state(modules: tuple[str, ...]) -> str:
     compiled = 0
     recorded: dict[str, str] | None = None
     for name in modules:
-        spec = importlib.util.find_spec(name)
-        origin = spec.origin if spec is not None else None
+        origin = _origin(name)
         if origin is None or not origin.endswith(EXTENSION):
             continue
         ext = Path(origin)

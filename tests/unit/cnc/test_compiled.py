@@ -58,3 +58,14 @@ def test_an_edited_source_makes_the_build_stale(tmp_path: Path) -> None:
     machine = tmp_path / "liftd" / "cnc" / "machine.py"
     machine.write_text(machine.read_text() + "# an edit\n")
     assert state() == "stale"
+
+
+@pytest.mark.skipif(core_build() != "compiled", reason="core not compiled (no C compiler)")
+def test_the_build_reads_the_same_whatever_was_imported_first() -> None:
+    """A compiled module imported by another compiled one carries a wrong spec (mypyc's shared
+    group names liftd/liftd/cnc/…): the build is read from the import path, not from it."""
+    for first in ("liftd.sim.simulate", "liftd.sim.compare", "liftd.cnc.geo_task"):
+        code = f"import {first}; from liftd.runtime.core import core_build; print(core_build())"
+        out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                             check=True, cwd=REPO).stdout.strip()  # fmt: skip
+        assert out == "compiled", first
