@@ -15,10 +15,10 @@ $(STAMP): pyproject.toml
 	$(BIN)/python -m pip install --quiet -e '.[dev,plot]'
 	touch $(STAMP)
 
-# The GEO cycle's modules and simulate's per-cycle part compiled with mypyc (liftd.cnc.COMPILED,
-# liftd.sim.COMPILED), rebuilt when one changes;
+# The GEO cycle's modules, simulate's per-cycle part and the GEO loop compiled with mypyc
+# (liftd.cnc.COMPILED, liftd.sim.COMPILED, liftd.runtime.COMPILED), rebuilt when one changes;
 # without a C compiler the core runs as Python (the script says so and exits 0).
-CORE_LISTS := liftd/cnc/__init__.py liftd/sim/__init__.py
+CORE_LISTS := liftd/cnc/__init__.py liftd/sim/__init__.py liftd/runtime/__init__.py
 CORE_SRC   := $(shell $(PYTHON) -c "import ast,sys; print(' '.join(v.value.replace('.','/')+'.py' for f in sys.argv[1:] for n in ast.parse(open(f).read()).body if isinstance(n,ast.AnnAssign) for v in n.value.elts))" $(CORE_LISTS))
 CORE_STAMP := build/mypyc/.compiled
 

@@ -19,10 +19,10 @@ settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 
 def pytest_sessionstart(session: pytest.Session) -> None:
     """An edited core module whose old extension would run instead: test nothing."""
-    from liftd import cnc, sim  # noqa: PLC0415
+    from liftd import cnc, runtime, sim  # noqa: PLC0415
     from liftd.runtime.core import build_state  # noqa: PLC0415
 
-    if build_state(cnc.COMPILED + sim.COMPILED) == "stale":
+    if build_state(cnc.COMPILED + sim.COMPILED + runtime.COMPILED) == "stale":
         pytest.exit("a compiled module was built from another source: run `make core`", 2)
 
 

@@ -1,5 +1,6 @@
 """Compile the GEO cycle's modules (`liftd.cnc.COMPILED`) and the per-cycle part of `simulate`
-(`liftd.sim.COMPILED`) to C extensions with mypyc, in place.
+(`liftd.sim.COMPILED`) and the GEO process's loop (`liftd.runtime.COMPILED`) to C extensions
+with mypyc, in place.
 
 `make` runs it before `run` and `test`; the extension (`*.so`) sits next to its source and
 Python imports it first. Same source, same results bit for bit (tests/unit/cnc/
@@ -25,10 +26,10 @@ from typing import IO
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from liftd import cnc, sim  # noqa: E402
+from liftd import cnc, runtime, sim  # noqa: E402
 from liftd.runtime.core import SOURCES, source_hash  # noqa: E402
 
-COMPILED = cnc.COMPILED + sim.COMPILED
+COMPILED = cnc.COMPILED + sim.COMPILED + runtime.COMPILED
 
 BUILD = ROOT / "build" / "mypyc"
 

@@ -12,6 +12,7 @@ import json
 from pathlib import Path
 
 from liftd.cnc import COMPILED
+from liftd.runtime import COMPILED as RUNTIME
 
 EXTENSION = (".so", ".pyd")
 SOURCES = "_core_sources.json"  # {module: sha256 of its source when it was compiled}
@@ -22,8 +23,9 @@ def source_hash(path: Path) -> str:
 
 
 def core_build() -> str:
-    """How the GEO core's cycle runs: `build_state(liftd.cnc.COMPILED)`."""
-    return build_state(COMPILED)
+    """How the GEO core's cycle runs: `build_state` of the core's modules (`liftd.cnc.COMPILED`)
+    and the GEO loop's (`liftd.runtime.COMPILED`)."""
+    return build_state(COMPILED + RUNTIME)
 
 
 def _origin(name: str) -> str | None:

@@ -18,14 +18,13 @@ import gc
 import os
 import signal
 import time
-from dataclasses import dataclass, field
 
 from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.machine import ChannelProgram, Machine
-from liftd.cnc.params import ChannelParams
 from liftd.cnc.snapshot import ChannelState, Command, Event, GeoSnapshot, LoopStats
 from liftd.runtime import rt
 from liftd.runtime.cycle import CycleClock, bucket
+from liftd.runtime.loop_config import ChannelConfig, LoopConfig
 from liftd.runtime.plc_inputs import PlcInputs
 from liftd.runtime.records import pack_event, read_message, unpack_input
 from liftd.runtime.shared import (
@@ -46,34 +45,6 @@ from liftd.runtime.shared import (
 )
 
 OVERRUN_EVENT_EVERY_NS = 1_000_000_000  # at most one geo.overrun event per second
-
-
-@dataclass(frozen=True, slots=True)
-class ChannelConfig:
-    """One channel of the loop and its program; plain picklable data."""
-
-    channel: ChannelParams
-    program_text: str
-    program_name: str
-    autostart: bool = True
-    repeat: bool = False
-
-
-@dataclass(frozen=True, slots=True)
-class LoopConfig:
-    """Everything the loop needs; plain picklable data (no pydantic, no files). `channels`
-    in channel order (ascending channel id), the order of their snapshots in shared memory
-    and of the PLC inputs' channel index."""
-
-    channels: tuple[ChannelConfig, ...]
-    m_ack_auto: bool = True
-    m_ack_delay_s: float = 0.02
-    rt: rt.RtRequest = field(default_factory=rt.RtRequest)
-    max_behind: int = 100
-
-    @property
-    def cycle_time(self) -> float:
-        return self.channels[0].channel.cycle_time
 
 
 class _Events:

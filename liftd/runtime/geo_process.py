@@ -21,7 +21,7 @@ from typing import NamedTuple
 
 from liftd.cnc.snapshot import Event, LoopStats
 from liftd.runtime.cycle import percentile_us
-from liftd.runtime.geo_loop import LoopConfig
+from liftd.runtime.loop_config import LoopConfig
 from liftd.runtime.records import EventReader, pack_message
 from liftd.runtime.shared import Shared
 

@@ -37,8 +37,8 @@ from liftd.cnc.snapshot import PlcWrite
 from liftd.objects.catalog import AdsStats, Catalog, GeoView
 from liftd.objects.provider import CncProvider
 from liftd.runtime.core import core_build
-from liftd.runtime.geo_loop import ChannelConfig, LoopConfig
 from liftd.runtime.geo_process import GeoFailure, GeoGone, GeoProcess, GeoStartError, rss_mb
+from liftd.runtime.loop_config import ChannelConfig, LoopConfig
 from liftd.runtime.records import pack_input
 from liftd.runtime.rt import RtRequest
 from liftd.runtime.shared import Shared
