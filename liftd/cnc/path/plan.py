@@ -29,7 +29,7 @@ class Plan:
     """A ruckig profile started at t0, extended at constant velocity after its end; its end
     snaps to the goal (target position, goal velocity) it was planned for."""
 
-    __slots__ = ("dur", "goal", "p_end", "serves", "t0", "traj", "v_end", "window")
+    __slots__ = ("dur", "goal", "p_end", "serves", "soft_from", "t0", "traj", "v_end", "window")
 
     def __init__(
         self, traj: Trajectory, t0: float, goal: int, window: int, p_goal: float | None,
@@ -39,6 +39,10 @@ class Plan:
         self.t0 = t0
         self.goal = goal  # CRUISE, BRAKE or the target boundary
         self.serves = goal  # the constraint boundary the profile keeps (-1 for none)
+        # constraint boundaries from here up to the goal are passed above their feed caps (only
+        # their hard caps are kept): a feed cap the path cannot get down to (an override drop)
+        # where zero acceleration would lose the goal (`Tracker._replan`)
+        self.soft_from = goal
         self.window = window  # window end when planned
         self.dur: float = float(traj.duration)
         p, v, _ = traj.at_time(self.dur)

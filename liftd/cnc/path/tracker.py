@@ -91,6 +91,7 @@ class Tracker:
         self._beyond_val = INF
         self.errors = 0
         self.last_error = ""
+        self._soft_from = -1  # the target's Plan.soft_from (`_replan`)
 
     # -- control --------------------------------------------------------------------------------
     def set_state(
@@ -299,6 +300,33 @@ class Tracker:
         cap = self._target_cap(cands, best_i)
         d = s_c - s
         target = self._pick_target(v, a, v_p, d, cap, ceiling, a_max, j_max)
+        soft_from = b
+        shifted = False
+        # Zero acceleration at a boundary that does not need it, below a feed cap the path can
+        # no longer get down to (an override drop), is at a velocity from which the next
+        # candidate may be lost too, although the path could still keep it by braking through
+        # this one (a feed drop 5 mm before a corner: stress seed 1777, lifting). Then the path
+        # aims at the next candidate, passing this one as it brakes (only its hard cap kept).
+        while not gate and best_i + 1 < len(cands):
+            own = cands[best_i][2]
+            hard = min(tb.point_cap[b], tb.cap[b])
+            if (
+                own >= hard
+                or self._need(v, a, own, False, a_max, j_max) <= d + SLACK_TOL
+                or self._need(v, a, hard, False, a_max, j_max) > d - SLACK_MARGIN
+            ):
+                break  # its feed cap is reachable, or its hard cap binds (kept as it is)
+            nb, ns, _, ngate = cands[best_i + 1]
+            ncap = self._target_cap(cands, best_i + 1)
+            e = reach_below(ncap, max(ns - s_c - CHAIN_MARGIN, 0.0), a_max, j_max)
+            if self._need(v, a, e, False, a_max, j_max) <= d + SLACK_TOL:
+                break  # zero acceleration at b, at most e there, loses nothing after it
+            best_i += 1
+            b, s_c, gate, cap = nb, ns, ngate, ncap
+            d = s_c - s
+            target = self._pick_target(v, a, v_p, d, cap, ceiling, a_max, j_max)
+            shifted = True
+        self._soft_from = soft_from
         # above the ceiling (the override just dropped, or a hold): no acceleration, but the
         # brake toward the target may start from the current velocity
         # (a positive acceleration still lifts it to v_p while it is ramped down)
@@ -309,6 +337,8 @@ class Tracker:
             # ends at v_p = ceiling up to rounding; 3e-17 m/s above it made ruckig refuse every
             # target and the path passed the program end at 99 mm/s: stress seed 380, lifting)
             v_max = max(ceiling, target, v_p)
+        if shifted:
+            v_max = max(min(v_max, max(v, v_p)), target, 1e-12)  # no speeding up through them
         # Ruckig decides at the edge of what is feasible (rounding): the target; else the
         # value nearest to it, toward v_p (the velocity after ramping the acceleration to 0),
         # that ruckig accepts; else rest or a cap. A feed cap the path cannot get down to after
@@ -355,7 +385,8 @@ class Tracker:
         except ProfileError as exc:
             self.last_error = str(exc)
             return False
-        self.plan = Plan(traj, self.t, b, w, s_c, tgt)
+        plan = self.plan = Plan(traj, self.t, b, w, s_c, tgt)
+        plan.soft_from = min(self._soft_from, b)
         return True
 
     def _pick_target(
@@ -450,10 +481,14 @@ class Tracker:
             v1 = max(v1, 0.0)
             if forced < 4:
                 violated = None
-                if cut >= 0 and cut != plan.serves and not self._passable(cut, v1, a1, w):
+                if (
+                    cut >= 0
+                    and cut != plan.serves
+                    and not self._passable(cut, v1, a1, w, plan.soft_from <= cut < plan.goal)
+                ):
                     violated = cut  # the step ends on a constraint it does not keep
                 if violated is None:
-                    violated = self._violated(s1, v1, a1, seg1, dt, plan.serves)
+                    violated = self._violated(s1, v1, a1, seg1, dt, plan.serves, plan.soft_from)
                 if violated is not None:
                     forced += 1
                     # the window end seen from the end state lies beyond the one seen now
@@ -468,17 +503,22 @@ class Tracker:
         self._count("advance did not converge")
         return out
 
-    def _passable(self, b: int, v: float, a: float, w: int) -> bool:
-        """Whether the path may reach constraint boundary b at (v, a)."""
+    def _passable(self, b: int, v: float, a: float, w: int, soft: bool = False) -> bool:
+        """Whether the path may reach constraint boundary b at (v, a) (only its hard cap when
+        `soft`: a plan passes its feed cap, `Plan.soft_from`)."""
         tb = self.tb
         if not tb.constraint[b] and b != w and b not in self.lift_stops:
             return True
         cap, gate, _ = self._cap(b, w)
+        if soft and not gate:
+            cap = min(tb.point_cap[b], tb.cap[b])
         if v > cap * (1.0 + CAP_TOL) + 1e-12:
             return False
         return not gate or abs(a) <= GATE_TOL
 
-    def _violated(self, s: float, v: float, a: float, seg: int, dt: float, goal: int) -> int | None:
+    def _violated(
+        self, s: float, v: float, a: float, seg: int, dt: float, goal: int, soft_from: int
+    ) -> int | None:
         """The first constraint that could no longer be kept from (s, v, a), if any."""
         if s <= self._clear_s:
             return None
@@ -504,12 +544,17 @@ class Tracker:
             self._clear(s, projected_velocity(v, max(a, 0.0), j_max), seg, a_max, j_max, dt)
             return None
         v_p = projected_velocity(v, a, j_max)
-        for b, s_c, cap, gate in cands:
-            if b == goal or (not gate and v_p <= cap + V_ROUND):
-                # the goal is kept by the profile; a cap the path is already below once its
-                # acceleration is ramped to 0 cannot bind, however near (as in `_replan`):
-                # read as a violation 0.76 µm before a feed change, its forced cruise dropped
-                # the target of the stop behind it and made that stop unreachable (seed 1537)
+        for b, s_c, c, gate in cands:
+            if b == goal:
+                continue  # kept by the profile
+            # a candidate the plan passes above its feed cap (Plan.soft_from): only its hard cap
+            soft = soft_from <= b < goal and not gate
+            cap = min(self.tb.point_cap[b], self.tb.cap[b]) if soft else c
+            if not gate and v_p <= cap + V_ROUND:
+                # a cap the path is already below once its acceleration is ramped to 0 cannot
+                # bind, however near (as in `_replan`): read as a violation 0.76 µm before a
+                # feed change, its forced cruise dropped the target of the stop behind it and
+                # made that stop unreachable (seed 1537)
                 continue
             slack = s_c - s - self._need(v, a, cap, gate, a_max, j_max)
             if slack < SLACK_MARGIN:

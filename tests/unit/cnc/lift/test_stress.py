@@ -44,8 +44,13 @@ def test_random_run_keeps_every_promise(seed: int) -> None:
 # a_max, 20 × j_max); 396: after a feed change 1 µm before a run boundary no profile from
 # there was accepted, so the path crossed it braking (X at 2.7 × j_max). Both since the
 # tracker's rewrite (issue 14), found when these runs were checked for tracker errors too;
-# 586, 917: the same rounding at a feed cap a replan was asked to keep.
-LIFTING_REGRESSIONS = [208, 380, 396, 586, 594, 760, 769, 917, 1651]
+# 586, 917: the same rounding at a feed cap a replan was asked to keep; 1777: after an
+# override drop the path braked to zero acceleration at a feed cap it could no longer get down
+# to, 5 mm before a corner it then could not stop for (X at 11.9 × a_max): it now aims past
+# such a cap at the corner and brakes through it (diagnosed and fixed by a helper session);
+# 438, 1208, 1661: what an earlier attempt at 1777 (aiming at the corner whenever a target was
+# refused) broke.
+LIFTING_REGRESSIONS = [208, 380, 396, 438, 586, 594, 760, 769, 917, 1208, 1651, 1661, 1777]
 
 
 @pytest.mark.parametrize("seed", LIFTING_REGRESSIONS + list(range(3000, 3012)))
@@ -54,24 +59,6 @@ def test_random_path_based_run_keeps_every_promise(seed: int) -> None:
     task, snaps = run_task(sc.channel, sc.text, sc.schedule, max_time=120)
     assert violations(sc, snaps, task.lift.records) == [], describe(sc)
     assert task.interp.plan_errors == 0, (task.interp.last_plan_error, describe(sc))
-
-
-# Open (issue 14), older than the tracker-error check that found it (it fails at
-# 3fe6a43 too): 1777 of path-based Lifting, X at 11.9 × a_max: a target's cap is lowered for
-# the constraints after it as if the path had zero acceleration there, so a feed drop 5 mm
-# before a corner left the corner unreachable after an override drop (aiming at the corner
-# directly when that target is refused fixed this run but broke 438, 1208 and 1661).
-KNOWN_FAILURES = [(1777, LiftMethod.LIFTING)]
-
-
-@pytest.mark.xfail(strict=True, reason="open (issue 14), see KNOWN_FAILURES")
-@pytest.mark.parametrize(("seed", "method"), KNOWN_FAILURES)
-def test_known_failures_still_fail(seed: int, method: LiftMethod) -> None:
-    """Kept failing on purpose (strict): the day one passes, move it to the regressions."""
-    sc = scenario(seed, method)
-    task, snaps = run_task(sc.channel, sc.text, sc.schedule, max_time=120)
-    assert violations(sc, snaps, task.lift.records) == [], describe(sc)
-    assert task.interp.plan_errors == 0
 
 
 # issue 14's input space: long ranges over short blocks, every look-ahead size, ranges back to
