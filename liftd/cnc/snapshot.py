@@ -115,6 +115,13 @@ class LoopStats(NamedTuple):
     compute_over: int = 0  # cycles whose compute took more than 25 % of the period (runtime)
 
 
+# the GEO loop's per-cycle constructor (runtime/geo_loop.py), as `new_snapshot`
+new_loop_stats = cast(
+    Callable[[tuple[int, int, float, float, float, float, int]], LoopStats],
+    functools.partial(tuple.__new__, LoopStats),
+)
+
+
 class PlcSignal(enum.IntEnum):
     """A PLC input of the GEO task, written over ADS (objects/) and applied by the runtime."""
 

@@ -18,10 +18,11 @@ import gc
 import os
 import signal
 import time
+from typing import Final
 
 from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.machine import ChannelProgram, Machine
-from liftd.cnc.snapshot import ChannelState, Command, Event, GeoSnapshot, LoopStats
+from liftd.cnc.snapshot import ChannelState, Command, Event, GeoSnapshot, new_loop_stats
 from liftd.runtime import rt
 from liftd.runtime.cycle import CycleClock, bucket
 from liftd.runtime.loop_config import ChannelConfig, LoopConfig
@@ -45,6 +46,7 @@ from liftd.runtime.shared import (
 )
 
 OVERRUN_EVENT_EVERY_NS = 1_000_000_000  # at most one geo.overrun event per second
+READY: Final = ChannelState.READY  # a C static: `ChannelState.READY` is two lookups a use
 
 
 class _Events:
@@ -162,8 +164,8 @@ class GeoLoop:
             snaps = step(inputs, t)
             if starting:
                 words[LOADING] += 1
-            stats = LoopStats(k, exceeded, compute_ns / 1e3, compute_max / 1e3, late / 1e3,
-                              late_max / 1e3, over)  # fmt: skip
+            stats = new_loop_stats((k, exceeded, compute_ns / 1e3, compute_max / 1e3, late / 1e3,
+                                    late_max / 1e3, over))  # fmt: skip
             record = codec.pack(snaps, stats)
             publish(record)
             if trace is not None:
@@ -172,9 +174,7 @@ class GeoLoop:
                 snap, before = snaps[i], last[i]
                 for ev in snap.events:
                     send(ev, tags[i])
-                ended = snap.state is ChannelState.READY and (
-                    before is None or before.state is not ChannelState.READY
-                )
+                ended = snap.state is READY and (before is None or before.state is not READY)
                 if ended and self.current[i].repeat and tasks[i].runs:
                     plcs[i].request(start)
             self._check_reload(snaps)

@@ -11,7 +11,15 @@ from __future__ import annotations
 from collections import deque
 
 from liftd.cnc.plc import MAX_OVERRIDE, Schedule, SimPlc
-from liftd.cnc.snapshot import ChannelState, Command, GeoInputs, GeoSnapshot, PlcSignal, PlcWrite
+from liftd.cnc.snapshot import (
+    ChannelState,
+    Command,
+    GeoInputs,
+    GeoSnapshot,
+    PlcSignal,
+    PlcWrite,
+    new_inputs,
+)
 
 _COMMANDS = {PlcSignal.START: Command.START, PlcSignal.STOP: Command.STOP,
              PlcSignal.RESET: Command.RESET}  # fmt: skip
@@ -61,4 +69,4 @@ class PlcInputs:
         command = self.commands.popleft() if self.commands else base.command
         ack = self.m_ack or base.m_ack
         self.m_ack = False
-        return GeoInputs(self.override, self.feed_hold, command, ack)
+        return new_inputs((self.override, self.feed_hold, command, ack))
