@@ -12,6 +12,7 @@ import time
 import urllib.request
 from itertools import pairwise
 from pathlib import Path
+from typing import Any
 
 import pyads
 import pytest
@@ -67,6 +68,16 @@ def test_ready_watchdog_objects_and_clean_stop(tmp_path: Path) -> None:
         notify.close()
 
 
+def missing_cycles(rows: list[str]) -> list[tuple[int, int]]:
+    """(cycle before, cycle after) wherever a trace skips cycles (rows after the header)."""
+    ks = [round(float(r.split(",", 1)[0]) * 1000) for r in rows[1:]]
+    return [(a, b) for a, b in pairwise(ks) if b != a + 1]
+
+
+def trace_logs(logs: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    return [r for r in logs if str(r.get("event", "")).startswith(("trace.", "geo.regrid"))]
+
+
 @pytest.mark.parametrize("idle", ["sleep", "spin"])
 def test_run_trace_is_identical_to_simulate(tmp_path: Path, idle: str) -> None:
     """Also when the loop busy-waits between cycles ([rt] idle = "spin"), which it reports."""
@@ -88,7 +99,9 @@ def test_run_trace_is_identical_to_simulate(tmp_path: Path, idle: str) -> None:
     expected = sim.read_text().splitlines()
     got = trace.read_text().splitlines()
     assert len(got) >= len(expected) > 14000
-    assert got[: len(expected)] == expected  # every cycle, bit for bit (9 decimals of mm)
+    # every cycle, bit for bit (9 decimals of mm); on a mismatch, say which cycles the run's
+    # trace lacks and what the daemon said about its trace (a rare lost row is open, issue 14)
+    assert got[: len(expected)] == expected, (missing_cycles(got), trace_logs(d.logs))
 
 
 def test_run_with_plc_writes_is_identical_to_simulate_with_their_schedule(tmp_path: Path) -> None:
@@ -139,7 +152,8 @@ def test_run_with_plc_writes_is_identical_to_simulate_with_their_schedule(tmp_pa
         (i for i, (a, b) in enumerate(zip(got[: len(expected)], expected, strict=True)) if a != b),
         None,
     )
-    assert first_diff is None, (first_diff, got[first_diff], expected[first_diff])
+    assert first_diff is None, (first_diff, got[first_diff], expected[first_diff],
+                                missing_cycles(got), trace_logs(d.logs))  # fmt: skip
 
 
 def test_plc_inputs_reach_the_loop_and_bad_values_are_refused(tmp_path: Path) -> None:
