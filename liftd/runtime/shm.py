@@ -10,6 +10,13 @@
 
 Both rely on stores becoming visible in program order, which x86-64 (TSO) guarantees for the
 interpreter's byte copies; an ARM target needs a helper with barriers (rt-python.md §5).
+
+The u64 indices (sequence, head, tail) are read and written through the block's one `cast("Q")`
+view: a single aligned 8-byte load or store each (memoryview's pack/unpack is a `memcpy` of the
+item). Never through `struct.pack_into`: CPython zeroes the target bytes before it packs
+(Modules/_struct.c, `s_pack_internal`: `memset(buf, '\0', soself->s_size)`), so the other
+process could read a head or tail of 0 — a ring that looked full (a trace record dropped
+in the ring's second lap) or empty (a PLC input a cycle late).
 """
 
 from __future__ import annotations
@@ -17,9 +24,7 @@ from __future__ import annotations
 import contextlib
 import mmap
 import os
-import struct
 
-U64 = struct.Struct("<Q")
 MAX_RETRIES = 100
 SHM_DIR = "/dev/shm"  # where POSIX shm_open(3) keeps its names on Linux
 
@@ -42,7 +47,7 @@ class Block:
             self.name = f"liftd-{os.getpid()}-{os.urandom(6).hex()}"
             fd = os.open(self.path, flags | os.O_CREAT | os.O_EXCL, 0o600)
             try:
-                os.ftruncate(fd, max(size, 8))
+                os.ftruncate(fd, -(-max(size, 8) // 8) * 8)  # whole u64 words: `words` below
             except OSError:
                 os.close(fd)
                 os.unlink(self.path)
@@ -53,6 +58,7 @@ class Block:
         self._linked = self.owner
         self._map = mmap.mmap(fd, os.fstat(fd).st_size)
         self.buf: memoryview = memoryview(self._map)
+        self.words: memoryview = self.buf.cast("Q")  # the u64 at byte offset 8 i is words[i]
 
     @property
     def path(self) -> str:
@@ -69,6 +75,7 @@ class Block:
         """Unmap, close the descriptor and (owner) remove the name. The caller has released
         every view it took of `buf`."""
         self.unlink()
+        self.words.release()
         self.buf.release()
         self.buf = memoryview(b"")
         with contextlib.suppress(BufferError):  # a view still held elsewhere: unmapped at exit
@@ -83,7 +90,9 @@ class Seqlock:
 
     def __init__(self, block: Block, offset: int, size: int) -> None:
         self.buf = block.buf
+        self.words = block.words
         self.seq_at = offset
+        self.seq_i = _word(offset)
         self.data_at = offset + 8
         self.size = size
         self._seq = 0
@@ -97,23 +106,23 @@ class Seqlock:
 
     def write(self, record: bytes) -> None:
         """Writer side (one process only)."""
-        buf = self.buf
+        words, i = self.words, self.seq_i
         self._seq += 1
-        U64.pack_into(buf, self.seq_at, self._seq)  # odd: writing
-        buf[self.data_at : self.data_at + self.size] = record
+        words[i] = self._seq  # odd: writing
+        self.buf[self.data_at : self.data_at + self.size] = record
         self._seq += 1
-        U64.pack_into(buf, self.seq_at, self._seq)  # even: consistent
+        words[i] = self._seq  # even: consistent
 
     def read(self) -> bytes:
         """Reader side: a consistent copy, or the last one if the writer kept it busy."""
-        buf = self.buf
+        buf, words, i = self.buf, self.words, self.seq_i
         for _ in range(MAX_RETRIES):
-            s1 = U64.unpack_from(buf, self.seq_at)[0]
+            s1 = words[i]
             if s1 & 1:
                 self.retries += 1
                 continue
             data = bytes(buf[self.data_at : self.data_at + self.size])
-            if U64.unpack_from(buf, self.seq_at)[0] == s1:
+            if words[i] == s1:
                 if s1:
                     self.last = data
                 return self.last
@@ -123,7 +132,7 @@ class Seqlock:
 
     @property
     def sequence(self) -> int:
-        return int(U64.unpack_from(self.buf, self.seq_at)[0])
+        return int(self.words[self.seq_i])
 
 
 class Ring:
@@ -131,7 +140,11 @@ class Ring:
 
     def __init__(self, block: Block, offset: int, size: int, capacity: int) -> None:
         self.buf = block.buf
+        self.words = block.words
         self.at = offset
+        self.head_i = _word(offset)
+        self.tail_i = self.head_i + 1
+        self.dropped_i = self.head_i + 2
         self.size = size
         self.capacity = capacity
         self.data_at = offset + 24
@@ -140,33 +153,49 @@ class Ring:
     def space(size: int, capacity: int) -> int:
         return 24 + size * capacity
 
-    def _get(self, i: int) -> int:
-        return int(U64.unpack_from(self.buf, self.at + 8 * i)[0])
-
     def put(self, record: bytes) -> bool:
         """Producer side; False (and counted) when the ring is full."""
-        head = self._get(0)
-        if head - self._get(1) >= self.capacity:
-            U64.pack_into(self.buf, self.at + 16, self._get(2) + 1)
+        words = self.words
+        head = words[self.head_i]
+        if head - words[self.tail_i] >= self.capacity:
+            words[self.dropped_i] += 1
             return False
         pos = self.data_at + (head % self.capacity) * self.size
         self.buf[pos : pos + self.size] = record
-        U64.pack_into(self.buf, self.at, head + 1)  # publish after the record
+        words[self.head_i] = head + 1  # publish after the record
         return True
 
     def get(self) -> bytes | None:
         """Consumer side; None when empty."""
-        tail = self._get(1)
-        if tail >= self._get(0):
+        words = self.words
+        tail = words[self.tail_i]
+        if tail >= words[self.head_i]:
             return None
         pos = self.data_at + (tail % self.capacity) * self.size
         record = bytes(self.buf[pos : pos + self.size])
-        U64.pack_into(self.buf, self.at + 8, tail + 1)  # free the slot after reading it
+        words[self.tail_i] = tail + 1  # free the slot after reading it
         return record
 
     def __len__(self) -> int:
-        return self._get(0) - self._get(1)
+        tail = self.words[self.tail_i]  # first: the head read after it is never behind it
+        return int(self.words[self.head_i] - tail)
+
+    @property
+    def head(self) -> int:
+        """Records ever put."""
+        return int(self.words[self.head_i])
+
+    @property
+    def tail(self) -> int:
+        """Records ever taken."""
+        return int(self.words[self.tail_i])
 
     @property
     def dropped(self) -> int:
-        return self._get(2)
+        return int(self.words[self.dropped_i])
+
+
+def _word(offset: int) -> int:
+    if offset % 8:
+        raise ValueError(f"a u64 index at byte {offset} is not 8-byte aligned")
+    return offset // 8

@@ -40,9 +40,17 @@ class TraceRecorder:
 
     def _drain(self) -> None:
         ring, ok = self.ring, True
+        rows = backlog_max = 0
+        gap_max = 0.0
+        last = time.monotonic()
         while True:
             stop = self._stop.is_set()
+            now = time.monotonic()
+            gap_max = max(gap_max, now - last)
+            last = now
+            backlog_max = max(backlog_max, len(ring))
             while (raw := ring.get()) is not None:
+                rows += 1
                 if ok:
                     try:
                         snaps = self.codec.unpack(raw)[0]
@@ -62,5 +70,8 @@ class TraceRecorder:
             except OSError as exc:
                 ok = False
                 self.log.error("trace.stopped", reason=exc.strerror)
+        # the ring's margin as used: how far the writer fell behind, its longest pause
+        self.log.info("trace.closed", rows=rows, backlog_max=backlog_max,
+                      capacity=ring.capacity, pause_max_ms=round(gap_max * 1e3, 1))  # fmt: skip
         if ring.dropped:
             self.log.warning("trace.dropped", records=ring.dropped)

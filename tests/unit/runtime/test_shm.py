@@ -6,11 +6,13 @@ from __future__ import annotations
 
 import multiprocessing as mp
 import struct
+import time
 from collections.abc import Iterator
+from typing import Any
 
 import pytest
 
-from liftd.runtime.shm import MAX_RETRIES, U64, Block, Ring, Seqlock
+from liftd.runtime.shm import MAX_RETRIES, Block, Ring, Seqlock
 
 SIZE = 64
 
@@ -41,7 +43,7 @@ def test_seqlock_reader_gives_up_with_the_last_good_copy_while_a_write_is_in_fli
     writer, reader = Seqlock(block, 0, SIZE), Seqlock(block, 0, SIZE)
     writer.write(record(7))
     assert reader.read() == record(7)
-    U64.pack_into(block.buf, 0, writer.sequence + 1)  # odd: the writer is mid-copy …
+    block.words[0] = writer.sequence + 1  # odd: the writer is mid-copy …
     block.buf[8 : 8 + SIZE // 2] = record(8)[: SIZE // 2]  # … half of the new record is in
     assert reader.read() == record(7)  # bounded retries, then the last consistent copy
     assert reader.retries == MAX_RETRIES and reader.given_up == 1
@@ -83,3 +85,41 @@ def test_ring_is_fifo_bounded_and_wraps(block: Block) -> None:
         assert ring.get() == struct.pack("<3I", i - 3, i - 3, i - 3)
     assert [ring.get() for _ in range(3)][-1] == struct.pack("<3I", 49, 49, 49)
     assert ring.get() is None and ring.dropped == 1
+
+
+def _index_watcher(name: str, seconds: float, out: Any) -> None:
+    """Reads the ring's head and tail as fast as it can; both only ever grow."""
+    b = Block(0, name)
+    ring = Ring(b, 0, SIZE, 8)
+    backwards = reads = head = tail = 0
+    t_end = time.monotonic() + seconds
+    while time.monotonic() < t_end:
+        for _ in range(1000):
+            h, t = ring.head, ring.tail
+            backwards += (h < head) + (t < tail)
+            head, tail, reads = h, t, reads + 2
+    out.put((backwards, reads))
+    ring.words = ring.buf = memoryview(b"")
+    b.close()
+
+
+def test_ring_indices_read_by_the_other_process_never_go_backwards(block: Block) -> None:
+    """The other process reads each index either before or after a store, never in between:
+    struct.pack_into zeroes the bytes before it packs, which another process read as a head or
+    tail of 0 (about a thousand times a second here) — past the ring's first lap a tail of 0
+    is a full ring, and the GEO loop dropped a trace record."""
+    ctx = mp.get_context("spawn")
+    ring = Ring(block, 0, SIZE, 8)
+    out = ctx.Queue()
+    proc = ctx.Process(target=_index_watcher, args=(block.name, 0.5, out))
+    proc.start()
+    rec, stores = record(1), 0
+    while out.empty() and proc.is_alive():  # producer and consumer in one process: a put and
+        # a get are two stores
+        for _ in range(1000):
+            assert ring.put(rec) and ring.get() == rec
+        stores += 2000
+    backwards, reads = out.get(timeout=30)
+    proc.join(30)
+    assert proc.exitcode == 0 and reads > 100_000 and stores > 100_000  # they did overlap
+    assert backwards == 0
