@@ -23,6 +23,7 @@ COMPILED: tuple[str, ...] = (
     "liftd.cnc.lift.motion",
     "liftd.cnc.lift.path_based",
     "liftd.cnc.path.bounds",
+    "liftd.cnc.path.constraints",
     "liftd.cnc.path.geometry",
     "liftd.cnc.path.interpolator",
     "liftd.cnc.path.limits",

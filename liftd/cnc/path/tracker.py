@@ -8,19 +8,16 @@ The motion is always the time-optimal ruckig profile (`liftd.cnc.ruckig1`) towar
   and zero acceleration.
 
 Each step proposes the state at the end of the step along the current profile and checks every
-constraint within the braking horizon: its *slack* = distance left − least distance the path
-needs to get below its cap (closed forms in `velocity.py`). If a slack would become negative,
-the step is re-planned from its start toward that constraint: the time-optimal profile then
-switches from accelerating or cruising to braking at the exact instant inside the cycle. Steps
-are cut where the path reaches a boundary that changes the ceiling or the run, or a constraint,
-or where a target profile ends; there the profile is re-planned from the exact state.
+constraint within the braking horizon by its *slack* (`constraints.py`: the queries and the
+effective caps). If a slack would become negative, the step is re-planned from its start toward
+that constraint: the time-optimal profile then switches from accelerating or cruising to
+braking at the exact instant inside the cycle. Steps are cut where the path reaches a boundary
+that changes the ceiling or the run, or a constraint, or where a target profile ends; there the
+profile is re-planned from the exact state.
 
-Effective caps come from a backward pass over the constraints up to the next run boundary (and,
-for that boundary, beyond it as far as they can matter): a cap that a later constraint makes
-unreachable is lowered, so arriving at a constraint with zero acceleration below its effective
-cap leaves every later one reachable. The look-ahead window ends `look_ahead` segments after the
-current one with a stop the path must be able to make; it moves with the path, so the path
-never actually stops there (except when the window is a single block).
+The look-ahead window ends `look_ahead` segments after the current one with a stop the path must
+be able to make; it moves with the path, so the path never actually stops there (except when
+the window is a single block).
 
 Hard constraints (transition caps, axis caps, stops, zero acceleration at run boundaries) are
 never violated; a feed ceiling (F × override) that a sudden override decrease makes unreachable
@@ -30,12 +27,19 @@ answered with a brake (never expected; the closed-loop tests count them).
 
 from __future__ import annotations
 
-from collections.abc import Iterator
-
+from liftd.cnc.path.constraints import (
+    CAP_TOL,
+    CHAIN_MARGIN,
+    GATE_TOL,
+    INF,
+    SLACK_MARGIN,
+    SLACK_TOL,
+    V_ROUND,
+    Constraints,
+)
 from liftd.cnc.path.plan import BRAKE, CRUISE, EPS_S, Crossing, Plan
 from liftd.cnc.path.table import PathTable
 from liftd.cnc.path.velocity import (
-    brake_below,
     brake_distance,
     lowest_reachable_from,
     projected_velocity,
@@ -45,20 +49,8 @@ from liftd.cnc.path.velocity import (
 )
 from liftd.cnc.ruckig1 import ProfileError, Ruckig1
 
-INF = float("inf")
-MAX_CANDIDATES = 24  # constraints considered at once; beyond, the last one counts as a stop
-SLACK_TOL = 1e-9  # m
-# A step is kept only if every constraint keeps this much slack: the profile toward it from the
-# step's start is then comfortably feasible for ruckig (at the very edge it may refuse by
-# rounding). 1 µm of path costs nothing measurable.
-SLACK_MARGIN = 1e-6  # m
-CHAIN_MARGIN = 2.0 * SLACK_MARGIN  # caps from a chain leave this much slack for the next one
-CAP_TOL = 1e-6  # relative: a crossing velocity within this of its cap is at the cap
-GATE_TOL = 1e-6  # m/s²: zero acceleration at a run boundary, within ruckig's precision
-V_ROUND = 1e-12  # m/s: a velocity this close above a cap is at the cap (rounding)
 
-
-class Tracker:
+class Tracker(Constraints):
     """Path state (t, s, v, a, seg) over one table; drive with `advance(t, dt)`."""
 
     def __init__(
@@ -68,27 +60,16 @@ class Tracker:
         lift_stops: set[int] | None = None,
         acked: set[int] | None = None,
     ) -> None:
-        self.tb = table
-        self.n = table.n
-        self.look_ahead = max(1, look_ahead)
-        # up to this path position no constraint can bind within a step (no checks needed)
-        self._clear_s = -INF
+        super().__init__(table, look_ahead, lift_stops, acked)
         self.calc = Ruckig1()
         self.t = 0.0
         self.s = table.s[0] if table.s else 0.0
         self.v = 0.0
         self.a = 0.0
-        self.seg = 0  # segment containing s (its start boundary is behind the path)
         self.stopped_at: int | None = 0  # resting at this boundary until `resume`
         self.parked = False  # at rest under a hold, not at a stop
-        self.ov = 1.0
-        self.hold = False
-        self.lift_stops = lift_stops if lift_stops is not None else set()
-        self.acked = acked if acked is not None else set()
         self.plan: Plan | None = None
         self._passed: Plan | None = None  # the target plan of the boundary just passed
-        self._beyond_key: tuple[int, int, float] | None = None
-        self._beyond_val = INF
         self.errors = 0
         self.last_error = ""
         self._soft_from = -1  # the target's Plan.soft_from (`_replan`)
@@ -123,143 +104,6 @@ class Tracker:
         self.stopped_at = None
         self.t = max(self.t, t)
         self.plan = None
-
-    def is_stop(self, b: int) -> bool:
-        tb = self.tb
-        return (
-            b >= tb.n
-            or tb.stop[b]
-            or b in self.lift_stops
-            or (tb.conditional[b] and b not in self.acked)
-        )
-
-    @property
-    def window_end(self) -> int:
-        w = self.seg + self.look_ahead
-        return w if w < self.n else self.n
-
-    # -- constraints ----------------------------------------------------------------------------
-    def _limits(self, seg: int) -> tuple[float, float]:
-        tb = self.tb
-        r = tb.run[seg if seg < tb.n else tb.n - 1]
-        return tb.run_a[r], tb.run_j[r]
-
-    @staticmethod
-    def _horizon(v: float, a: float, a_max: float, j_max: float, dt: float) -> float:
-        """Distance beyond which no constraint can bind within the next step."""
-        stop = 0.0
-        if projected_velocity(v, a, j_max) > 0.0:
-            stop = brake_distance(v, a, 0.0, a_max, j_max)
-        return stop + 2.0 * dt * (v + a_max * dt) + 1e-9
-
-    def _ahead(self, b: int, w: int) -> Iterator[int]:
-        """Constraint boundaries from b on (static ones, lift stops, the window end w)."""
-        tb = self.tb
-        n = tb.n
-        lifts = sorted(k for k in self.lift_stops if b <= k <= w) if self.lift_stops else []
-        i = 0
-        nxt = tb.next_constraint[b] if b <= n else n + 1
-        while True:
-            k = nxt
-            if i < len(lifts) and lifts[i] < k:
-                k = lifts[i]
-            if k >= w:
-                yield w
-                return
-            yield k
-            if i < len(lifts) and lifts[i] == k:
-                i += 1
-            if nxt == k:
-                nxt = tb.next_constraint[k + 1] if k + 1 <= n else n + 1
-
-    def _cap(self, b: int, w: int) -> tuple[float, bool, bool]:
-        """(cap, zero acceleration required, stop) of constraint boundary b."""
-        if b == w or self.is_stop(b):
-            return 0.0, True, True
-        return self.tb.entry_cap(b, self.ov), self.tb.gate[b], False
-
-    def _collect(self, s: float, seg: int, reach: float) -> list[tuple[int, float, float, bool]]:
-        """Constraints within `reach` of (s, seg), up to and including the first run boundary or
-        stop: (boundary, position, cap, zero acceleration required). The run boundary's cap is
-        lowered so that everything after it stays reachable (`_beyond`): the constraints after
-        it are not in the list. The others keep their own caps: every later one up to the run
-        boundary is in the list and checked by itself."""
-        tb = self.tb
-        n = tb.n
-        out: list[tuple[int, float, float, bool]] = []
-        if seg >= n:
-            return out
-        w = min(seg + self.look_ahead, n)
-        limit = s + reach
-        for b in self._ahead(seg + 1, w):
-            s_b = tb.s[b]
-            if s_b > limit:
-                break
-            cap, gate, stop = self._cap(b, w)
-            if len(out) == MAX_CANDIDATES - 1:  # too many at once: the last counts as a stop
-                cap, gate, stop = 0.0, True, True
-            if gate and not stop and cap > 0.0:
-                cap = min(cap, self._beyond(b, cap, w))
-            out.append((b, s_b, cap, gate))
-            if gate:
-                break
-        return out
-
-    def _target_cap(self, cands: list[tuple[int, float, float, bool]], i: int) -> float:
-        """The velocity to plan for at candidate i (zero acceleration there): its cap, lowered
-        so that the later candidates in the list stay reachable from it."""
-        e = cands[-1][2]
-        for k in range(len(cands) - 2, i - 1, -1):
-            _, sk, ck, _ = cands[k]
-            bn, sn, _, _ = cands[k + 1]
-            a_max, j_max = self._limits(bn - 1)
-            e = min(ck, reach_below(e, max(sn - sk - CHAIN_MARGIN, 0.0), a_max, j_max))
-        return e
-
-    def _beyond(self, g: int, cap: float, w: int) -> float:
-        """Velocity at run boundary g (zero acceleration) from which every constraint after it
-        up to the window end stays reachable. Braking does not compose across run boundaries
-        (each one wants zero acceleration), so far constraints matter through the chain: it is
-        followed up to MAX_CANDIDATES constraints, the last counting as a stop (conservative).
-        Cached per (g, window end, override, stop set): a step within one segment asks again."""
-        key = (g, w, self.ov)
-        if self._beyond_key == key:
-            return self._beyond_val
-        tb = self.tb
-        s_g = tb.s[g]
-        chain: list[tuple[float, float, int]] = []
-        for b in self._ahead(g + 1, w):
-            c, _, stop = self._cap(b, w)
-            chain.append((tb.s[b], c, b))
-            if stop or len(chain) == MAX_CANDIDATES:
-                chain[-1] = (tb.s[b], 0.0, b)
-                break
-        e = INF
-        for i in range(len(chain) - 1, -1, -1):
-            s_i, c_i, b_i = chain[i]
-            e = min(c_i, e)
-            s_prev = chain[i - 1][0] if i > 0 else s_g
-            a_max, j_max = self._limits(b_i - 1)
-            e = reach_below(e, max(s_i - s_prev - CHAIN_MARGIN, 0.0), a_max, j_max)
-        self._beyond_key, self._beyond_val = key, e
-        return e
-
-    @staticmethod
-    def _need(v: float, a: float, cap: float, gate: bool, a_max: float, j_max: float) -> float:
-        """Least distance after which the path can be below `cap` (with zero acceleration where
-        `gate`). A cruise ends at v_p = cap up to rounding (3e-17 m/s above it read as a
-        violation of the cap, which hid the stop behind it the path could still make: stress
-        seed 380, lifting, passed the program end at 99 mm/s)."""
-        if projected_velocity(v, a, j_max) > cap + V_ROUND:
-            return brake_below(v, a, cap, a_max, j_max)
-        if not gate:
-            return 0.0
-        # zero acceleration there: ramp it to 0 now, or (shorter when already braking hard)
-        # brake to rest
-        ramp = ramp_distance(v, a, j_max)
-        if a < 0.0 and v > 0.0:
-            ramp = min(ramp, brake_distance(v, a, 0.0, a_max, j_max))
-        return ramp
 
     # -- planning -------------------------------------------------------------------------------
     def _replan(self, dt: float, force: int | None = None) -> None:
@@ -502,80 +346,6 @@ class Tracker:
                 self.plan = None  # a goal reached between boundaries: plan the next one
         self._count("advance did not converge")
         return out
-
-    def _passable(self, b: int, v: float, a: float, w: int, soft: bool = False) -> bool:
-        """Whether the path may reach constraint boundary b at (v, a) (only its hard cap when
-        `soft`: a plan passes its feed cap, `Plan.soft_from`)."""
-        tb = self.tb
-        if not tb.constraint[b] and b != w and b not in self.lift_stops:
-            return True
-        cap, gate, _ = self._cap(b, w)
-        if soft and not gate:
-            cap = min(tb.point_cap[b], tb.cap[b])
-        if v > cap * (1.0 + CAP_TOL) + 1e-12:
-            return False
-        return not gate or abs(a) <= GATE_TOL
-
-    def _violated(
-        self, s: float, v: float, a: float, seg: int, dt: float, goal: int, soft_from: int
-    ) -> int | None:
-        """The first constraint that could no longer be kept from (s, v, a), if any."""
-        if s <= self._clear_s:
-            return None
-        if goal >= 0:
-            # the profile keeps `goal`; if it is the first constraint ahead and a run boundary,
-            # everything after it is kept through its cap (no other constraint to check)
-            tb = self.tb
-            n = self.n
-            nxt = tb.next_constraint[seg + 1] if seg + 1 <= n else n
-            w = min(seg + self.look_ahead, n)
-            nxt = min(nxt, w)
-            if (
-                nxt == goal
-                and (tb.gate[goal] or goal == w or self.is_stop(goal))
-                and not (self.lift_stops and any(seg < k < goal for k in self.lift_stops))
-            ):
-                return None
-        a_max, j_max = self._limits(seg)
-        if v == 0.0 and a <= 0.0:
-            return None
-        cands = self._collect(s, seg, self._horizon(v, a, a_max, j_max, dt))
-        if not cands:
-            self._clear(s, projected_velocity(v, max(a, 0.0), j_max), seg, a_max, j_max, dt)
-            return None
-        v_p = projected_velocity(v, a, j_max)
-        for b, s_c, c, gate in cands:
-            if b == goal:
-                continue  # kept by the profile
-            # a candidate the plan passes above its feed cap (Plan.soft_from): only its hard cap
-            soft = soft_from <= b < goal and not gate
-            cap = min(self.tb.point_cap[b], self.tb.cap[b]) if soft else c
-            if not gate and v_p <= cap + V_ROUND:
-                # a cap the path is already below once its acceleration is ramped to 0 cannot
-                # bind, however near (as in `_replan`): read as a violation 0.76 µm before a
-                # feed change, its forced cruise dropped the target of the stop behind it and
-                # made that stop unreachable (seed 1537)
-                continue
-            slack = s_c - s - self._need(v, a, cap, gate, a_max, j_max)
-            if slack < SLACK_MARGIN:
-                return b
-        return None
-
-    def _clear(self, s: float, v: float, seg: int, a_max: float, j_max: float, dt: float) -> None:
-        """No constraint within the horizon: up to where none can be, whatever the step (the
-        velocity stays below max(v, ceiling) and the acceleration below a_max until the next
-        re-plan, which resets this)."""
-        tb = self.tb
-        n = self.n
-        w = min(seg + self.look_ahead, n)
-        nxt = w
-        if seg + 1 <= n:
-            nxt = min(nxt, tb.next_constraint[seg + 1])
-        for k in self.lift_stops:
-            if seg < k < nxt:
-                nxt = k
-        top = max(v, 0.0 if self.hold else tb.ceiling(seg if seg < n else n - 1, self.ov))
-        self._clear_s = tb.s[nxt] - self._horizon(top, a_max, a_max, j_max, dt)
 
     def _commit(
         self, t: float, s: float, v: float, a: float, seg: int, cut: int, plan: Plan,
