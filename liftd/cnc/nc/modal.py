@@ -1,0 +1,513 @@
+"""One NC block against the decoder's modal state: the G groups, F, R, D, zero offsets (G54..G59,
+G53, G92), inch/metric, the motion target, dwell, M functions, the lift commands and the tool
+radius compensation's selection. Every part of a block that can be applied is applied, so a
+rejected word does not take the block's modal state with it; the first problem is raised as an
+`NcFault` at the end of the block. `ModalDecoder` is the base of the program decoder
+(`decoder.py`), which runs the lines, the subroutines and the reporting.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import TypeVar
+
+from liftd.cnc import units
+from liftd.cnc.nc import lift_rules
+from liftd.cnc.nc.arcs import build_arc
+from liftd.cnc.nc.blocks import (
+    Block,
+    ErrorId,
+    LiftEnd,
+    LiftEndCause,
+    LiftStart,
+    Motion,
+    MotionKind,
+    NcError,
+    NcFault,
+)
+from liftd.cnc.nc.context import DecoderContext
+from liftd.cnc.nc.expr import Params
+from liftd.cnc.nc.lift_words import LiftKeyword, LiftWords
+from liftd.cnc.nc.trc import Trc
+from liftd.cnc.nc.words import Words
+from liftd.cnc.params import LiftMethod
+from liftd.cnc.path.geometry import ArcSeg
+
+# M functions the ISG kernel handles internally when m_synch does not configure them
+# (P-CHAN-00041 default NO_SYNCH for M0/1/2/17/29/30/3/4/19, isg-cnc.md §3.3); any other
+# unconfigured M function is an error.
+INTERNAL_M = frozenset({0, 1, 2, 3, 4, 17, 19, 29, 30})
+MOTION_G = {0: MotionKind.RAPID, 1: MotionKind.LINEAR, 2: MotionKind.ARC_CW, 3: MotionKind.ARC_CCW}
+INF = float("inf")
+# G groups a block holds one of, with the ISG id for a second one (TF5200 diagnosis: 20108
+# .../tf5200_diagnosis/250789259.html, 20114 …/250815371, 20118 …/250832779, 20127 …/250871947)
+G_GROUPS = {
+    **dict.fromkeys((0, 1, 2, 3), ErrorId.MOTION_G_TWICE),
+    **dict.fromkeys((40, 41, 42), ErrorId.TRC_G_TWICE),
+    **dict.fromkeys((70, 71), ErrorId.UNIT_G_TWICE),
+    **dict.fromkeys((161, 162), ErrorId.CENTRE_G_TWICE),
+}
+MODE_G = frozenset({17, 94, 163})  # XY plane, F in mm/min, radius programming
+ZERO_OFFSET_G = {53: 0, 54: 1, 55: 2, 56: 3, 57: 4, 58: 5, 59: 6}
+# Smoothing the decoder accepts and runs unsmoothed: G code -> (kind, selects (True) or
+# deselects (False)). G61/G261/G260 polynomial contouring, G151/G150 spline (FCT_SPLINE /
+# FCT_POLY of P-STUP-00060, vendor §4.2.1; programming manual 206307595).
+SMOOTHING_G = {
+    61: ("G61 (polynomial contouring)", True),
+    261: ("G261 (polynomial contouring)", True),
+    260: ("G261 (polynomial contouring)", False),
+    151: ("G151 (spline)", True),
+    150: ("G151 (spline)", False),
+}
+SMOOTHING_CMD = {
+    "#HSC": "#HSC ON (HSC smoothing)",
+    "#SPLINE": "#SPLINE ON",
+    "#CONTOUR MODE": "G261 (polynomial contouring)",
+}
+NO_RADIUS = "G41/G42 without a tool radius (programmed contour)"
+_T = TypeVar("_T")
+
+
+class ModalDecoder:
+    """The modal state of one channel's decoder and the interpretation of one block."""
+
+    def __init__(self, ctx: DecoderContext) -> None:
+        self.ctx = ctx
+        self.pos = tuple(ctx.start_position)
+        self.z = ctx.axis_names.index(ctx.lift_axis)
+        self.axes = frozenset(ctx.axis_names)
+        self.axis_index = {name: k for k, name in enumerate(ctx.axis_names)}
+        self.lift_axis = ctx.lift_axis
+        self.limits = tuple((lo - 1e-12, hi + 1e-12) for lo, hi in ctx.sw_limits)
+        self.motion = MotionKind.LINEAR
+        self.incremental = False
+        self.center_absolute = False  # G161 absolute, G162 (default) relative centre
+        self.feed: float | None = None  # m/s
+        self.radius: float | None = None  # m, modal R
+        self.unit = units.M_PER_MM  # G71 (initial); G70: inch
+        self.slope = ctx.slope
+        self.params: Params = {}
+        self.zero_group = ctx.zero_offset_default
+        self.g92 = tuple(0.0 for _ in ctx.axis_names)
+        self.offset = self._offsets()
+        self.trc = Trc()
+        self.tool_configured = False  # the active D has a radius in the tool table
+        self.open_lift: LiftStart | None = None
+        self.ended = False  # M02/M30 seen
+        self.return_after = False  # M17/M29 in this block
+        self.tag = ""  # Block.file of the line being decoded
+
+    # -- what the program decoder provides -----------------------------------------------------
+    def _depth(self) -> int:
+        """Sections on the call stack: 1 in the main program."""
+        raise NotImplementedError
+
+    def _warn(self, eid: ErrorId, column: int, message: str) -> None:
+        raise NotImplementedError
+
+    def _count(
+        self, kind: str, column: int, message: str, eid: ErrorId = ErrorId.NOT_EMULATED
+    ) -> None:
+        """Something accepted but run approximated: one warning per kind, counted per block."""
+        raise NotImplementedError
+
+    # -- modal state ---------------------------------------------------------------------------
+    def _close_lift(self, cause: LiftEndCause) -> LiftEnd:
+        assert self.open_lift is not None
+        start = self.open_lift
+        pos = list(self.pos)
+        pos[self.axis_index[start.axis]] = start.target
+        self.pos = tuple(pos)
+        self.open_lift = None
+        return LiftEnd(start.axis, cause, start.line)
+
+    def _offsets(self) -> tuple[float, ...]:
+        """The zero offset in effect per axis: the selected group (G53 only with
+        P-ZERO-00001) plus the G92 reference point offset."""
+        group = self.zero_group
+        values = self.ctx.zero_offsets.get(group) if group or self.ctx.g53_offsets else None
+        if values is None:
+            return self.g92
+        return tuple(a + b for a, b in zip(values, self.g92, strict=True))
+
+    def _block(self, lineno: int, w: Words) -> Block | None:
+        """Interpret one block's words: every part that can be applied is applied (modal G
+        functions, F, R, D, the motion, the lift command), so that a rejected word does not
+        take the block's modal state with it; the first problem is raised at the end."""
+        values = w.values
+        faults: list[NcFault] = []
+        dwell = g92 = False
+        if w.gcodes:
+            dwell, g92 = self._gcodes(w, faults)
+        feed_word = values.get("F")
+        if feed_word is not None:
+            if feed_word[0] <= 0.0:
+                faults.append(NcFault(ErrorId.FEED_ZERO, feed_word[1], "feed rate F must be > 0"))
+            else:
+                self.feed = feed_word[0] * self.unit / 60.0  # mm/min (G71) or inch/min (G70)
+        if "R" in values:
+            self.radius = values["R"][0] * self.unit
+        if "D" in values:
+            attempt(faults, self._tool, values["D"])
+        if "K" in values:
+            faults.append(
+                NcFault(
+                    ErrorId.UNSUPPORTED,
+                    values["K"][1],
+                    "K (G18/G19 circles) is not emulated; liftd circles are in the G17 plane",
+                )
+            )
+        block: Block | None = None
+        if g92:
+            self._g92(w)
+        elif dwell:
+            seconds = attempt(faults, self._dwell, lineno, w)
+            if seconds is not None:
+                block = Block(lineno, w.n, dwell=seconds, file=self._file_tag())
+        else:
+            block = self._motion_block(lineno, w, faults)
+        if faults:
+            raise faults[0]
+        return block
+
+    def _motion_block(self, lineno: int, w: Words, faults: list[NcFault]) -> Block:
+        m = attempt(faults, self._m_functions, w) if w.m else None
+        m_funcs, program_end = m if m is not None else ((), False)
+        lift = w.lift[1] if w.lift is not None else None
+        start: LiftStart | None = None
+        if lift is not None and lift.keyword in (LiftKeyword.START, LiftKeyword.SINGLE):
+            assert w.lift is not None
+            start = attempt(faults, self._lift_start, lineno, w.lift[0], lift, w.lift[2])
+        motion: Motion | None = None
+        try:
+            motion = self._motion(lineno, w)
+        except NcFault as fault:
+            faults.append(fault)
+        end: LiftEnd | None = None
+        if lift is not None and lift.keyword is LiftKeyword.SINGLE:
+            if self.open_lift is not None:
+                end = self._close_lift(LiftEndCause.SINGLE_BLOCK)
+        elif lift is not None and lift.keyword is LiftKeyword.END:
+            assert w.lift is not None
+            end = attempt(faults, self._lift_end, w.lift[0], w.lift[2])
+        if program_end and self.open_lift is not None and end is None:
+            end = self._close_lift(LiftEndCause.PROGRAM_END)  # vendor §2.4
+        self.ended = program_end
+        return Block(
+            lineno,
+            w.n,
+            motion=motion,
+            m_functions=m_funcs,
+            lift_start=start,
+            lift_end=end,
+            program_end=program_end,
+            file=self.tag,
+        )
+
+    def _file_tag(self) -> str:
+        return self.tag
+
+    def _gcodes(self, w: Words, faults: list[NcFault]) -> tuple[bool, bool]:
+        dwell = g92 = False
+        groups: set[ErrorId] = set()
+        side: int | None = None
+        for code, col in w.gcodes:
+            twice = G_GROUPS.get(code)
+            if twice is not None:
+                if twice in groups:
+                    message = f"G{code:02d}: a second G function of its group in one block"
+                    faults.append(NcFault(twice, col, message + " (the first one counts)"))
+                    continue
+                groups.add(twice)
+            if code in MOTION_G:
+                self.motion = MOTION_G[code]
+            elif code == 4:
+                dwell = True
+            elif code in (90, 91):
+                self.incremental = code == 91
+            elif code in (161, 162):
+                self.center_absolute = code == 161
+            elif code in (70, 71):
+                # G70 inch / G71 metric (TF5200 G-code list, isg-cnc.md §5 [S98])
+                self.unit = units.program_length_factor(code == 70)
+            elif code in ZERO_OFFSET_G:
+                self.zero_group = ZERO_OFFSET_G[code]
+                self.offset = self._offsets()
+            elif code == 92:
+                g92 = True
+            elif code in (40, 41, 42):
+                side = {40: 0, 41: 1, 42: -1}[code]
+            elif code in (138, 139):
+                self.trc.direct = code == 138
+            elif code in SMOOTHING_G:
+                kind, selects = SMOOTHING_G[code]
+                fault = self._smoothing(kind, selects, col)
+                if fault is not None:
+                    faults.append(fault)
+            elif code not in MODE_G:
+                faults.append(
+                    NcFault(ErrorId.UNSUPPORTED, col, f"G{code:02d} is not emulated by liftd")
+                )
+        if side is not None:
+            fault = self._select_trc(side, w.gcodes[0][1])
+            if fault is not None:
+                faults.append(fault)
+        return dwell, g92
+
+    def _smoothing(self, kind: str, selects: bool, column: int) -> NcFault | None:
+        """Smoothing is accepted and runs unsmoothed (one warning per kind). Inside a lift
+        range no smoothing may be selected (vendor §2.4: "additional contour smoothing of the
+        lift axis (contouring, G61/G261, G151, #SPLINE ON, #HSC ON) is not possible in the
+        lifting range"); with path-based Lifting not deselected either (§2.2.1: "between
+        LIFT_START and LIFT_END smoothing can not be selected or deselected")."""
+        rng = self.open_lift
+        if rng is not None and (selects or self.ctx.lift_method is LiftMethod.LIFTING):
+            what = "selected" if selects else "deselected"
+            return NcFault(
+                ErrorId.SMOOTHING_IN_LIFT_RANGE,
+                column,
+                f"{kind.split(' (', 1)[0]}: smoothing {what} inside the lift range started in "
+                f"line {rng.line} (vendor §2.4)",
+            )
+        if selects:
+            self._count(kind, column, f"{kind}: smoothing is not emulated by liftd; the path "
+                        "runs unsmoothed (exact contour, corners as programmed)")  # fmt: skip
+        return None
+
+    def _tool(self, word: tuple[float, int]) -> None:
+        """D selects the tool radius for TRC (tool data wz[i].radius, P-TOOL-00004)."""
+        number, col = word
+        if number != int(number) or number < 0:
+            raise NcFault(ErrorId.NUMBER, col, "D needs a tool number >= 0")
+        radius = self.ctx.tool_radii.get(int(number))
+        self.tool_configured = radius is not None or number == 0
+        self.trc.set_radius(radius or 0.0)
+
+    def _select_trc(self, side: int, column: int) -> NcFault | None:
+        if side != 0 and not self.tool_configured and self.trc.side == 0:
+            self._count(NO_RADIUS, column, "G41/G42: no tool radius configured for the selected "
+                        "D (liftd.toml [nc.tools] or the ISG tool list): the programmed "
+                        "contour runs uncompensated", ErrorId.TRC_NO_RADIUS)  # fmt: skip
+        if (
+            side != 0
+            and self.open_lift is not None
+            and self.axis_index.get(self.open_lift.axis, self.z) in (0, 1)
+        ):
+            return NcFault(
+                ErrorId.TRC_LIFT_AXIS,
+                column,
+                f"tool radius compensation in the plane of the lift axis {self.open_lift.axis} "
+                f"inside the lift range started in line {self.open_lift.line} (vendor §2.4)",
+            )
+        self.trc.set_side(side)
+        return None
+
+    def _g92(self, w: Words) -> None:
+        """G92 reference point offset in the programmed axes: absolute under G90, added under
+        G91; takes effect with the next absolute coordinate of the axis (programming manual
+        https://infosys.beckhoff.com/content/1033/tf5200_programming_manual/206145291.html)."""
+        g92 = list(self.g92)
+        for k, name in enumerate(self.ctx.axis_names):
+            word = w.values.get(name)
+            if word is not None:
+                value = word[0] * self.unit
+                g92[k] = g92[k] + value if self.incremental else value
+        self.g92 = tuple(g92)
+        self.offset = self._offsets()
+
+    def _dwell(self, lineno: int, w: Words) -> float:
+        """G04 X<s> (first main axis), G04 <s>, lenient G04 F<s> (isg-cnc.md §4.9)."""
+        first_axis = self.ctx.axis_names[0]
+        direct = w.bare[0] if w.bare else None
+        by_axis = w.values.get(first_axis) or w.values.get("F")
+        if direct is not None and by_axis is not None:
+            raise NcFault(
+                ErrorId.DWELL_VALUE_AND_AXIS, by_axis[1], "G04 with both a direct time and an axis"
+            )
+        chosen = direct or by_axis
+        if chosen is None or chosen[0] < 0.0:
+            raise NcFault(ErrorId.DWELL_MISSING, 1, "G04 needs a time in seconds")
+        for letter, (_, col) in w.values.items():
+            if letter not in (first_axis, "F"):
+                self._warn(ErrorId.DWELL_WITH_AXES, col, f"{letter} in a G04 block is ignored")
+        return chosen[0]
+
+    def _m_functions(self, w: Words) -> tuple[tuple[int, ...], bool]:
+        numbers = []
+        end = False
+        for number, col in w.m:
+            if number in (17, 29):
+                if self._depth() <= 1:
+                    raise NcFault(
+                        ErrorId.SUBROUTINE_END_OUTSIDE,
+                        col,
+                        f"M{number} ends a subroutine, but the main program is running",
+                    )
+                self.return_after = True
+                continue
+            if number >= 1000:  # beyond m_synch[0..999]: taken as internal, unknown
+                raise NcFault(
+                    ErrorId.M_NUMBER_TOO_LARGE,
+                    col,
+                    f"M{number}: unknown internal M function (M functions are 0..999, "
+                    "P-CHAN-00041)",
+                )
+            if number not in INTERNAL_M and number not in self.ctx.configured_m:
+                raise NcFault(
+                    ErrorId.M_NOT_CONFIGURED,
+                    col,
+                    f"M{number} has no synchronisation "
+                    "configured (m_synch[...] in the channel list, P-CHAN-00041)",
+                )
+            if number in (2, 30):
+                end = True
+                if self._depth() > 1:
+                    # the manual: a program abort with M02/M30 in a subroutine gives a warning
+                    self._warn(ErrorId.PROGRAM_END_IN_SUBROUTINE, col,
+                               f"M{number:02d} in a subroutine ends the whole program")  # fmt: skip
+            numbers.append(number)
+        return tuple(numbers), end
+
+    def _motion(self, lineno: int, w: Words) -> Motion | None:
+        values = w.values
+        start = self.pos
+        end = list(start)
+        column = 0  # column of the first axis word, for messages
+        unit = self.unit
+        offset = self.offset
+        incremental = self.incremental
+        axis_index = self.axis_index
+        limits = self.limits
+        beyond = -1  # an axis beyond its software limit (reported after the other checks)
+        for letter, (word, col) in values.items():
+            k = axis_index.get(letter)
+            if k is not None:
+                value = word * unit
+                v = end[k] = start[k] + value if incremental else value + offset[k]
+                lo, hi = limits[k]
+                if not lo <= v <= hi:
+                    beyond = k
+                if not column or col < column:
+                    column = col
+        kind = self.motion
+        is_arc = kind is MotionKind.ARC_CW or kind is MotionKind.ARC_CCW
+        if not column:
+            if not (is_arc and ("I" in values or "J" in values)):
+                return None
+            column = min(col for _, col in values.values())
+        lift_word = values.get(self.open_lift.axis) if self.open_lift is not None else None
+        if lift_word is not None:
+            assert self.open_lift is not None
+            raise NcFault(
+                ErrorId.LIFT_AXIS_PROGRAMMED,
+                lift_word[1],
+                f"the lift axis {self.open_lift.axis} must not be programmed inside a lift range",
+            )
+        feed = INF
+        if kind is not MotionKind.RAPID:
+            if self.feed is None:
+                raise NcFault(
+                    ErrorId.FEED_ZERO,
+                    column,
+                    "no feed rate: program F before the first G01/G02/G03",
+                )
+            feed = self.feed
+        end_t = tuple(end)
+        if is_arc:
+            i = values.get("I")
+            j = values.get("J")
+            ij = (i[0] * unit if i else None, j[0] * unit if j else None)
+            if self.center_absolute:  # G161: the centre is a position, offsets apply
+                ij = (
+                    None if ij[0] is None else ij[0] + offset[0],
+                    None if ij[1] is None else ij[1] + offset[1],
+                )
+            self.pos = end_t  # the position advances even if the circle is refused
+            center, sweep = build_arc(
+                start,
+                end_t,
+                kind is MotionKind.ARC_CCW,
+                ij,
+                self.center_absolute,
+                self.radius,
+                self.ctx.max_radius_diff,
+                column,
+            )
+            motion = Motion(kind, start, end_t, feed, center, sweep)
+        elif start == end_t:
+            self._warn(ErrorId.ZERO_LENGTH, column, "motion block without motion, skipped")
+            return None
+        else:
+            motion = Motion(kind, start, end_t, feed)
+        self.pos = end_t
+        if not self.trc.engaged:  # under TRC the compensated path is checked (_output)
+            if beyond >= 0:
+                self.ctx.check_position(beyond, end_t[beyond], column)
+            if is_arc:
+                self._check_limits(motion, column)
+        return motion
+
+    def _check_limits(self, motion: Motion, column: int) -> None:
+        # the start was checked as the previous end
+        limits = self.ctx.sw_limits
+        for k, (value, (neg, pos)) in enumerate(zip(motion.end, limits, strict=True)):
+            if not neg - 1e-12 <= value <= pos + 1e-12:
+                self.ctx.check_position(k, value, column)
+        center = motion.center
+        if center is not None:
+            r = math.hypot(motion.start[0] - center[0], motion.start[1] - center[1])
+            (n0, p0), (n1, p1) = limits[0], limits[1]
+            if (
+                n0 <= center[0] - r
+                and center[0] + r <= p0
+                and n1 <= center[1] - r
+                and (center[1] + r <= p1)
+            ):
+                return  # the whole circle is inside: no need for the arc's extent
+            arc = ArcSeg.make(motion.start, motion.end, center, motion.sweep)
+            for k, (lo, hi) in enumerate(arc.axis_extent()):
+                self.ctx.check_position(k, lo, column)
+                self.ctx.check_position(k, hi, column)
+
+    # -- lift commands -------------------------------------------------------------------------
+    def _lift_start(self, lineno: int, axis: str, words: LiftWords, column: int) -> LiftStart:
+        warnings: list[NcError] = []
+        zi = self.axis_index.get(axis, self.z)  # any axis of the channel may lift (issue 18)
+        self.open_lift = lift_rules.open_range(
+            self.ctx, words, axis=axis, z0=self.pos[zi], slope=self.slope,
+            open_lift=self.open_lift, lineno=lineno, column=column, warnings=warnings,
+            unit=self.unit, offset=self.offset[zi],
+        )  # fmt: skip
+        for warning in warnings:
+            self._warn(ErrorId(warning.id), warning.column, warning.message)
+        if self.trc.side != 0 and zi in (0, 1):
+            raise NcFault(
+                ErrorId.TRC_LIFT_AXIS,
+                column,
+                f"the lift axis {axis} lies in the plane of the active tool radius "
+                "compensation (vendor §2.4: it must not take part in TRC)",
+            )
+        return self.open_lift
+
+    def _lift_end(self, axis: str, column: int) -> LiftEnd:
+        lift_rules.check_end(self.ctx, axis, self.open_lift, column)
+        return self._close_lift(LiftEndCause.PROGRAMMED)
+
+
+class AlreadyReported(NcFault):
+    """An error that was reported where it was found (raised to reject its block only)."""
+
+    def __init__(self) -> None:
+        super().__init__(ErrorId.FILE_NOT_FOUND, 1, "")
+
+
+def attempt(faults: list[NcFault], fn: Callable[..., _T], *args: object) -> _T | None:
+    """Run one part of a block; its NcFault is kept for the end of the block."""
+    try:
+        return fn(*args)
+    except AlreadyReported:
+        faults.append(AlreadyReported())
+    except NcFault as fault:
+        faults.append(fault)
+    return None
