@@ -8,7 +8,12 @@ p50/p99/p999/max of the machine step and of one channel's share (step / channels
 the share of cycles above 25 % of the cycle (what the loop counts as compute_over_25pct), for
 the best of --repeats runs and, as `noise_free`, for each cycle's minimum over them.
 
-Run: .venv/bin/python bench/bench_channels.py [--parts 60] [--repeats 3]
+The same job in every channel is the worst case: the channels run in lockstep, so every
+channel's costly cycles (a re-plan at a block boundary, a rising lift) fall in the same machine
+cycle. With --distinct, channel c runs the job cut with 6 + c lines per part instead (the same
+parts, a different cut length each), as channels started together on different jobs would.
+
+Run: .venv/bin/python bench/bench_channels.py [--parts 60] [--repeats 3] [--distinct]
 """
 
 from __future__ import annotations
@@ -45,8 +50,8 @@ def channels(base: ChannelParams, n: int) -> list[ChannelParams]:
     return out
 
 
-def run(base: ChannelParams, text: str, n: int) -> tuple[np.ndarray, int]:
-    machine = Machine([ChannelProgram(ch, text) for ch in channels(base, n)])
+def run(base: ChannelParams, texts: list[str], n: int) -> tuple[np.ndarray, int]:
+    machine = Machine([ChannelProgram(ch, texts[c]) for c, ch in enumerate(channels(base, n))])
     plcs = [SimPlc(0.02) for _ in range(n)]
     last: list[GeoSnapshot | None] = [None] * n
     schedule = Schedule()
@@ -96,14 +101,18 @@ def main() -> None:
     parser.add_argument("--parts", type=int, default=60, help="parts of the nesting job")
     parser.add_argument("--repeats", type=int, default=3, help="runs per channel count (best)")
     parser.add_argument("--channels", default="1,2,4", help="channel counts")
+    parser.add_argument("--distinct", action="store_true",
+                        help="channel c runs the job with 6 + c lines per part (not in lockstep)")  # fmt: skip
     args = parser.parse_args()
     base = load_settings(str(ROOT / "config" / "liftd.toml")).channel
-    text = nesting_program(args.parts)
-    for n in (int(c) for c in args.channels.split(",")):
+    counts = [int(c) for c in args.channels.split(",")]
+    texts = [nesting_program(args.parts, lines_per_part=6 + c if args.distinct else 6)
+             for c in range(max(counts))]  # fmt: skip
+    for n in counts:
         best: dict[str, float] | None = None
         runs = []
         for _ in range(args.repeats):
-            us, cycles = run(base, text, n)
+            us, cycles = run(base, texts, n)
             runs.append(us)
             fig = figures(us, base.cycle_time)
             if best is None or fig["p99_us"] < best["p99_us"]:
@@ -115,7 +124,9 @@ def main() -> None:
         share = {f"per_channel_{k}": round(v / n, 1) for k, v in best.items() if k.endswith("_us")}
         print(json.dumps({
             "bench": "channels", "channels": n, "cycle_time_ms": base.cycle_time * 1e3,
-            "program": f"nesting_program({args.parts})", "blocks": count_blocks(text),
+            "program": f"nesting_program({args.parts})", "distinct": args.distinct,
+            "blocks": count_blocks(texts[0]),
+            "blocks_per_channel": [count_blocks(texts[c]) for c in range(n)],
             **best, **share,
             "budget_share_p99": round(best["p99_us"] / (base.cycle_time * 1e6), 3),
             "noise_free": noise_free,
