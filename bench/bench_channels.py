@@ -10,8 +10,9 @@ the best of --repeats runs and, as `noise_free`, for each cycle's minimum over t
 
 The same job in every channel is the worst case: the channels run in lockstep, so every
 channel's costly cycles (a re-plan at a block boundary, a rising lift) fall in the same machine
-cycle. With --distinct, channel c runs the job cut with 6 + c lines per part instead (the same
-parts, a different cut length each), as channels started together on different jobs would.
+cycle. With --distinct, channel c cuts its parts at F(6000 − 600 c) in 6 + c lines each, so
+its lifts and block boundaries fall in other cycles, as with channels started together on
+different jobs.
 
 Run: .venv/bin/python bench/bench_channels.py [--parts 60] [--repeats 3] [--distinct]
 """
@@ -102,12 +103,15 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=3, help="runs per channel count (best)")
     parser.add_argument("--channels", default="1,2,4", help="channel counts")
     parser.add_argument("--distinct", action="store_true",
-                        help="channel c runs the job with 6 + c lines per part (not in lockstep)")  # fmt: skip
+                        help="channel c cuts at F(6000 - 600 c), 6 + c lines per part")  # fmt: skip
     args = parser.parse_args()
     base = load_settings(str(ROOT / "config" / "liftd.toml")).channel
     counts = [int(c) for c in args.channels.split(",")]
-    texts = [nesting_program(args.parts, lines_per_part=6 + c if args.distinct else 6)
-             for c in range(max(counts))]  # fmt: skip
+    texts = [
+        nesting_program(args.parts, lines_per_part=6 + c, cut_feed=6000 - 600 * c)
+        if args.distinct else nesting_program(args.parts)
+        for c in range(max(counts))
+    ]  # fmt: skip
     for n in counts:
         best: dict[str, float] | None = None
         runs = []

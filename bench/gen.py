@@ -5,9 +5,12 @@ from __future__ import annotations
 import math
 
 
-def nesting_program(parts: int, lines_per_part: int = 6, arcs: bool = True) -> str:
-    """A job of `parts` small parts on a grid: each part is cut (G01/G03), then Z lifts over a
-    cross-block travel of two blocks to the next part. Roughly (lines_per_part + 6) blocks/part."""
+def nesting_program(
+    parts: int, lines_per_part: int = 6, arcs: bool = True, cut_feed: int = 6000
+) -> str:
+    """A job of `parts` small parts on a grid: each part is cut (G01/G03, F`cut_feed` mm/min),
+    then Z lifts over a cross-block travel of two blocks to the next part. Roughly
+    (lines_per_part + 6) blocks/part."""
     out = ["%gen", "N1 G90 G17 G94", "#SLOPE[TYPE=TRAPEZ]", "G00 X10 Y10 Z1"]
     cols = max(1, min(160, int(math.sqrt(parts * 3))))
     pitch = 18.0
@@ -23,7 +26,7 @@ def nesting_program(parts: int, lines_per_part: int = 6, arcs: bool = True) -> s
         out.append("M04")
         step = 12.0 / lines_per_part
         for i in range(1, lines_per_part + 1):
-            out.append(f"G01 X{x0 + i * step:.3f} Y{y0:.3f} F6000")
+            out.append(f"G01 X{x0 + i * step:.3f} Y{y0:.3f} F{cut_feed}")
         if arcs:
             out.append(f"G03 X{x0 + 12:.3f} Y{y0 + 10:.3f} R5")
         else:
