@@ -55,7 +55,8 @@ def run(
     for _ in range(repeat):
         sink = Sink() if trace else None
         t0 = time.perf_counter()
-        res = simulate(settings.channel, text, schedule or Schedule(), 0.02, sink)  # type: ignore[arg-type]
+        # as `liftd simulate` without --plot: no decimated series for a figure
+        res = simulate(settings.channel, text, schedule or Schedule(), 0.02, sink, series=False)  # type: ignore[arg-type]
         walls.append(time.perf_counter() - t0)
     rss1 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     wall = min(walls)

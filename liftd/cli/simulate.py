@@ -98,7 +98,7 @@ def _simulate(
 
     ch = channel_for(settings.channel, args.method)
     delay = settings.config.plc.m_ack_delay_ms * 1e-3
-    result = simulate(ch, text, schedule, delay, trace, args.max_time)
+    result = simulate(ch, text, schedule, delay, trace, args.max_time, series=bool(args.plot))
     _report_run(program, result, args.max_time)
     summary = result.summary
     if args.plot:
@@ -141,7 +141,8 @@ def _simulate_machine(
             traces[i] = stack.enter_context(open(name, "w", encoding="utf-8", newline=""))  # noqa: SIM115
     schedules = [schedule if i == primary else Schedule() for i in range(len(channels))]
     delay = settings.config.plc.m_ack_delay_ms * 1e-3
-    results = simulate_machine(channels, schedules, delay, traces, args.max_time)
+    results = simulate_machine(channels, schedules, delay, traces, args.max_time,
+                               series=bool(args.plot))  # fmt: skip
     entries = []
     for c, (ch, _), result in zip(settings.machine, channels, results, strict=True):
         name = str(c.program) if c.program is not None else ""

@@ -173,11 +173,15 @@ class ChannelRun:
         trace: TextIO | None = None,
         on_cycle: Callable[[GeoSnapshot], None] | None = None,
         step_clock: Callable[[], int] = time.perf_counter_ns,
+        series: bool = True,
     ) -> None:
+        """`series`: keep the decimated samples for a figure (--plot); without, `series` stays
+        empty (~0.3 µs a cycle saved)."""
         self.ch = ch
         self.writer = TraceWriter(trace, ch.axis_names) if trace is not None else None
         self.monitor = LimitMonitor(len(ch.axes), ch.cycle_time)
         self.series = SeriesBuffer(len(ch.axes) + 6)
+        self.keep_series = series
         self.errors: list[ErrorEntry] = []
         self.last: GeoSnapshot | None = None
         self.cycles = 0
@@ -192,7 +196,7 @@ class ChannelRun:
         self.monitor.add(snap.positions)
         if self.on_cycle is not None:
             self.on_cycle(snap)
-        if self.series.wants():
+        if self.keep_series and self.series.wants():
             self.series.add(
                 (
                     snap.t,
@@ -245,9 +249,10 @@ def simulate(
     max_time: float = 3600.0,
     on_cycle: Callable[[GeoSnapshot], None] | None = None,
     step_clock: Callable[[], int] = time.perf_counter_ns,
+    series: bool = True,
 ) -> SimResult:
     task = GeoTask(ch, text)
-    run = ChannelRun(ch, trace, on_cycle, step_clock)
+    run = ChannelRun(ch, trace, on_cycle, step_clock, series)
     plc = SimPlc(m_ack_delay)
     with collector_off():
         for snap in run_cycles(task, plc, schedule, ch.cycle_time, max_time, run.timer):
@@ -261,6 +266,7 @@ def simulate_machine(
     m_ack_delay: float,
     traces: Sequence[TextIO | None],
     max_time: float = 3600.0,
+    series: bool = True,
 ) -> list[SimResult]:
     """All channels in one GEO task (`Machine`), each with its program ("" : it idles), its
     own automatic PLC and schedule, and its trace; in channel order. Runs until every channel
@@ -268,7 +274,7 @@ def simulate_machine(
     end with its program, so each channel's result is what it would be alone."""
     machine = Machine([ChannelProgram(ch, text) for ch, text in channels])
     order = sorted(range(len(channels)), key=lambda i: channels[i][0].channel_id)
-    runs = [ChannelRun(channels[i][0], traces[i]) for i in order]
+    runs = [ChannelRun(channels[i][0], traces[i], series=series) for i in order]
     plcs = [SimPlc(m_ack_delay) for _ in order]
     sched = [schedules[i] for i in order]
     active = [bool(channels[i][1].strip()) for i in order]

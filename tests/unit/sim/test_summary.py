@@ -93,3 +93,18 @@ def test_a_run_stopped_early_leaves_its_partner_unpaired() -> None:
         (True, False),
     ]
     assert s.lifts[1].clearance_ratio is None and s.lifts[1].ref is s.lifts[1].advanced
+
+
+def test_a_run_without_a_figure_keeps_no_series_and_the_same_summary() -> None:
+    """`liftd simulate` without --plot skips the decimated series; nothing else changes."""
+    plotted = simulate(make_channel(), TWO_LIFTS, Schedule(), 0.02)
+    bare = simulate(make_channel(), TWO_LIFTS, Schedule(), 0.02, series=False)
+    rows = plotted.series.rows
+    assert rows.shape == (plotted.summary.cycles, 3 + 6)  # every cycle, below the capacity
+    assert rows[-1][0] == plotted.summary.duration_s
+    assert bare.series.rows.shape == (0, 9)
+
+    def same(s: dict) -> dict:
+        return {k: v for k, v in s.items() if k != "step_cpu_us"}  # a clock, not the run
+
+    assert same(bare.summary.to_json()) == same(plotted.summary.to_json())
