@@ -500,6 +500,9 @@ class GeoTask:
             phase, vz, az = NO_PHASE, 0.0, 0.0
         else:
             phase, vz, az = lift.phase, lift.vz, lift.az
+        # unpacked into locals: a native tuple of two C doubles (starred into the field tuple it
+        # went through a list)
+        v_block_max, v_block_end = self.path.block_velocities(self.interp.segment, self.ov_eff)
         # positional, GeoSnapshot field order, built by tuple.__new__ (keywords cost ~2 µs per
         # cycle here, NamedTuple.__new__ is a Python frame: ~0.3 µs)
         return new_snapshot(
@@ -524,7 +527,8 @@ class GeoTask:
                 self.error_id,
                 self.error_line,
                 tuple(self.events),
-                *self.path.block_velocities(self.interp.segment, self.ov_eff),
+                v_block_max,
+                v_block_end,
                 lift.axis_index,
                 lift.counts,
             )
