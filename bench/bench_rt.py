@@ -47,7 +47,7 @@ def geo_pid(daemon_pid: int) -> int | None:
     return int(out[0]) if out else None
 
 
-def baseline_start(seconds: float, rt: bool) -> subprocess.Popen[str] | None:
+def baseline_start(seconds: float, rt: bool, cpu: int = -1) -> subprocess.Popen[str] | None:
     """cyclictest at 1 ms for `seconds` (SCHED_FIFO 80 with RT, else SCHED_OTHER), memory
     locked, a histogram of 1 µs buckets up to 5 ms; None when rt-tests is not installed."""
     exe = shutil.which("cyclictest")
@@ -56,6 +56,8 @@ def baseline_start(seconds: float, rt: bool) -> subprocess.Popen[str] | None:
     cmd = [exe, "-q", "-m", "-i", "1000", "-l", str(round(seconds * 1000)), "-h", "5000"]
     if rt:
         cmd += ["-p", "80"]
+    if cpu >= 0:
+        cmd += ["-a", str(cpu)]  # the GEO loop's cpu: its noise, not the other one's
     return subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
 
 
@@ -114,7 +116,8 @@ def one_run(minutes: float, rt: bool, pollers: int = 4, notifiers: int = 1,
             geo = geo_pid(d.proc.pid)
             procs, out = load.start(d.net_id, d.address, seconds, pollers, 1000.0, notifiers, 10,
                                     subscriptions, override_every_s)  # fmt: skip
-            baseline = baseline_start(seconds, rt)
+            cpu = spin.get("cpu", -1) if spin else -1
+            baseline = baseline_start(seconds, rt, cpu if isinstance(cpu, int) else -1)
             rss: list[tuple[float | None, float | None]] = []
             exceeded: list[tuple[float, int]] = []
             end = time.monotonic() + seconds
@@ -179,9 +182,11 @@ def main() -> None:
     ap.add_argument("--minutes", type=float, default=10.0)
     ap.add_argument(
         "--mode",
-        choices=["both", "rt", "nort", "spin"],
+        choices=["both", "rt", "nort", "spin", "pinned"],
         default="both",
-        help="spin: RT with [rt] idle = spin on cpu 1 (busy-waits between cycles)",
+        help="spin: RT with [rt] idle = spin on cpu 1 (busy-waits between cycles); pinned: RT "
+        "with the loop on cpu 1 (run the bench under `taskset -c 0` to keep the daemon and "
+        "the clients off it)",
     )
     ap.add_argument(
         "--override-every",
@@ -190,8 +195,17 @@ def main() -> None:
         help="seconds between override writes (0: none)",
     )
     args = ap.parse_args()
-    spin = {"idle": "spin", "cpu": 1} if args.mode == "spin" else None
-    for rt in {"both": (True, False), "rt": (True,), "nort": (False,), "spin": (True,)}[args.mode]:
+    spin: dict[str, object] | None = {"spin": {"idle": "spin", "cpu": 1}, "pinned": {"cpu": 1}}.get(
+        args.mode
+    )
+    runs = {
+        "both": (True, False),
+        "rt": (True,),
+        "nort": (False,),
+        "spin": (True,),
+        "pinned": (True,),
+    }
+    for rt in runs[args.mode]:
         rec = one_run(args.minutes, rt, override_every_s=args.override_every, spin=spin)
         print(json.dumps(rec), flush=True)
 
