@@ -128,6 +128,23 @@ class CallSite:
         return f"{self.file}:{self.line} {self.call}"
 
 
+def chain_text(chain: tuple[CallSite, ...]) -> str:
+    """`a.nc:3 LL x > b.nc:7 L y`, repeated calls folded: `b.nc:4 LL again (×20)`."""
+    parts: list[str] = []
+    last = ""
+    count = 0
+    for site in chain:
+        text = str(site)
+        if text == last:
+            count += 1
+            continue
+        if last:
+            parts.append(last if count == 1 else f"{last} (×{count})")
+        last, count = text, 1
+    parts.append(last if count == 1 else f"{last} (×{count})")
+    return " > ".join(parts)
+
+
 @dataclass(frozen=True, slots=True)
 class NcError:
     id: int

@@ -4,10 +4,12 @@ subroutine files the caller read for the program (SI units)."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
-from liftd.cnc.nc.blocks import ErrorId, NcFault
+from liftd.cnc.nc.blocks import ErrorId, Motion, NcFault
 from liftd.cnc.params import ChannelParams, LiftMethod, NcSources, SlopeType
+from liftd.cnc.path.geometry import ArcSeg
 
 # Subroutine nesting: the TF5200 subroutine page says the depth is "fixed" by the system
 # (https://infosys.beckhoff.com/content/1033/tf5200_programming_manual/206822155.html) without
@@ -72,3 +74,26 @@ class DecoderContext:
                 f"{name} {value * 1e3:.4f} mm beyond the "
                 f"negative software limit {neg * 1e3:.4f} mm (P-AXIS-00177)",
             )
+
+    def check_motion(self, motion: Motion, column: int) -> None:
+        """NcFault 50041 / 50042 if the end of a motion, or an arc's extent, is beyond a software
+        limit (the start was checked as the previous end)."""
+        limits = self.sw_limits
+        for k, (value, (neg, pos)) in enumerate(zip(motion.end, limits, strict=True)):
+            if not neg - 1e-12 <= value <= pos + 1e-12:
+                self.check_position(k, value, column)
+        center = motion.center
+        if center is not None:
+            r = math.hypot(motion.start[0] - center[0], motion.start[1] - center[1])
+            (n0, p0), (n1, p1) = limits[0], limits[1]
+            if (
+                n0 <= center[0] - r
+                and center[0] + r <= p0
+                and n1 <= center[1] - r
+                and (center[1] + r <= p1)
+            ):
+                return  # the whole circle is inside: no need for the arc's extent
+            arc = ArcSeg.make(motion.start, motion.end, center, motion.sweep)
+            for k, (lo, hi) in enumerate(arc.axis_extent()):
+                self.check_position(k, lo, column)
+                self.check_position(k, hi, column)

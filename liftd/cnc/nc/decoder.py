@@ -30,42 +30,18 @@ from liftd.cnc.nc.blocks import (
     NcError,
     NcFault,
     Severity,
+    chain_text,
 )
 from liftd.cnc.nc.commands import CommandKind, CommandResult, parse_command
 from liftd.cnc.nc.context import DecoderContext
 from liftd.cnc.nc.lexer import LexError, Token, tokenize
 from liftd.cnc.nc.modal import MOTION_G, SMOOTHING_CMD, AlreadyReported, ModalDecoder, attempt
-from liftd.cnc.nc.sources import Section, Source, parse_source
+from liftd.cnc.nc.sources import Frame, Section, Source, parse_source, sequence_args, sequence_range
 from liftd.cnc.nc.trc import TrcFault
 from liftd.cnc.nc.words import Template, Words, collect_plain, template
 from liftd.cnc.params import LiftMethod, SlopeType
 
 LINE_CACHE = 4096  # distinct lines prepared once and reused by their text (bounded memory)
-
-
-class _Frame:
-    """One level of the call stack: a section of a file being run."""
-
-    __slots__ = ("cached", "comment", "end", "pos", "reps", "site", "source", "start", "tag")
-
-    def __init__(
-        self,
-        source: Source,
-        start: int,
-        end: int,
-        site: CallSite | None,
-        reps: int = 0,
-        tag: str = "",
-    ) -> None:
-        self.source = source
-        self.tag = tag  # Block.file of its lines: "" in the program's own file
-        self.start = start
-        self.end = end
-        self.pos = start
-        self.site = site
-        self.reps = reps  # further runs of the section after this one (L SEQUENCE REPEAT)
-        self.cached = site is not None  # subroutine lines run again: keep their words
-        self.comment: int | None = None  # line of an open #COMMENT BEGIN
 
 
 def decode(text: str, ctx: DecoderContext) -> DecodeResult:
@@ -90,7 +66,7 @@ class _Decoder(ModalDecoder):
         self.seen: set[tuple[str, int, int, int]] = set()
         self.stopped = False  # an error was found: no further blocks are executed
         self.open_at_error: LiftStart | None = None  # lift range open at the first error
-        self.stack: list[_Frame] = []
+        self.stack: list[Frame] = []
         self.files: dict[str, Source] = {}
         self.line_cache: dict[str, Words | Template] = {}  # prepared lines by their text
         self.missing: set[str] = set()
@@ -111,7 +87,7 @@ class _Decoder(ModalDecoder):
                 "subroutines)", line=1,
             )  # fmt: skip
         else:
-            self.stack.append(_Frame(main, main.main.start, main.main.end, None))
+            self.stack.append(Frame(main, main.main.start, main.main.end, None))
         limit = self.ctx.max_executed_blocks
         out = self.out
         while self.stack and not self.ended:
@@ -154,7 +130,7 @@ class _Decoder(ModalDecoder):
             self.executed,
         )
 
-    def _run_line(self, frame: _Frame, idx: int) -> None:
+    def _run_line(self, frame: Frame, idx: int) -> None:
         line = frame.source.lines[idx]
         lineno = idx + 1
         self.line = lineno
@@ -191,7 +167,7 @@ class _Decoder(ModalDecoder):
             return
         self._error(err.error_id, err.column, err.message)
 
-    def _leave(self, frame: _Frame) -> None:
+    def _leave(self, frame: Frame) -> None:
         """The end of a section: M17 was left out (allowed), or the file ends."""
         if frame.comment is not None:
             line = frame.comment
@@ -200,14 +176,14 @@ class _Decoder(ModalDecoder):
                         line=line, file=frame.source.name)  # fmt: skip
         self._return(frame)
 
-    def _return(self, frame: _Frame) -> None:
+    def _return(self, frame: Frame) -> None:
         if frame.reps > 0:
             frame.reps -= 1
             frame.pos = frame.start
             return
         self.stack.pop()
 
-    def _file(self, frame: _Frame | None = None) -> str:
+    def _file(self, frame: Frame | None = None) -> str:
         f = frame or (self.stack[-1] if self.stack else None)
         return f.source.name if f is not None else self.ctx.sources.program
 
@@ -241,7 +217,7 @@ class _Decoder(ModalDecoder):
             return
         self.seen.add(key)
         if chain:
-            message += f" (call chain: {_chain_text(chain)})"
+            message += f" (call chain: {chain_text(chain)})"
         main = self.ctx.sources.program
         file_tag = "" if where == main else where
         self.errors.append(NcError(int(eid), lineno, column, message, severity, file_tag, chain))
@@ -275,7 +251,7 @@ class _Decoder(ModalDecoder):
         if motion is not None:
             if checked:  # the compensated path
                 try:
-                    self._check_limits(motion, 1)
+                    self.ctx.check_motion(motion, 1)
                 except NcFault as err:
                     self._error(err.error_id, err.column, err.message, line=block.line,
                                 file=block.file or self.ctx.sources.program)  # fmt: skip
@@ -296,7 +272,7 @@ class _Decoder(ModalDecoder):
         self.out.append(block)
 
     # -- one line ----------------------------------------------------------------------------
-    def _words(self, frame: _Frame, idx: int, line: str) -> Words:
+    def _words(self, frame: Frame, idx: int, line: str) -> Words:
         cache = frame.source.cache if frame.cached else None
         if cache is not None:
             hit = cache.get(idx)
@@ -324,7 +300,7 @@ class _Decoder(ModalDecoder):
             return prepared
         return prepared.words(self.axes, self.params)
 
-    def _line(self, frame: _Frame, idx: int, line: str) -> None:
+    def _line(self, frame: Frame, idx: int, line: str) -> None:
         w = self._words(frame, idx, line)
         lineno = idx + 1
         if w.simple:  # the common block: axis words only (the fast path, same semantics)
@@ -374,7 +350,7 @@ class _Decoder(ModalDecoder):
             self._call(frame, w.call, lineno)
 
     # -- subroutines ---------------------------------------------------------------------------
-    def _call(self, frame: _Frame, tok: Token, lineno: int) -> None:
+    def _call(self, frame: Frame, tok: Token, lineno: int) -> None:
         kind, name, col = tok.letter, tok.text, tok.column
         written = (
             f"{'LL ' if kind == 'LL' else 'L '}{name}"
@@ -403,13 +379,13 @@ class _Decoder(ModalDecoder):
         else:
             target = name
             if kind == "SEQ":
-                target, first, last, reps = self._sequence_args(name, col)
+                target, first, last, reps = sequence_args(name, col)
             source = frame.source if kind == "SEQ" and not target else self._global(target, col)
             if kind == "SEQ":
                 # without NAME the sequence runs in the current program part, else in the
                 # named file's main program part
                 own = (frame.start, frame.end) if not target else None
-                start, end = self._sequence_range(source, first, last, col, own)
+                start, end = sequence_range(source, first, last, col, own)
             else:
                 if source.main is None:
                     raise NcFault(
@@ -426,7 +402,7 @@ class _Decoder(ModalDecoder):
             reps = 0
         site = CallSite(self._file(frame) or "(program)", lineno, written)
         tag = "" if source.name == self.ctx.sources.program else source.name
-        self.stack.append(_Frame(source, start, end, site, reps, tag))
+        self.stack.append(Frame(source, start, end, site, reps, tag))
 
     def _global(self, name: str, col: int) -> Source:
         cached = self.files.get(name)
@@ -448,51 +424,6 @@ class _Decoder(ModalDecoder):
     def _source_problems(self, source: Source) -> None:
         for p in source.problems:
             self._error(p.error_id, 1, p.message, line=p.line, file=source.name)
-
-    def _sequence_args(self, content: str, col: int) -> tuple[str, int, int, int]:
-        """L SEQUENCE [ [NAME=<file>] N.. [N..] [REPEAT=..] ] (programming manual
-        https://infosys.beckhoff.com/content/1033/tf5200_programming_manual/206866443.html);
-        REPEAT is read as the number of runs. String labels and ENDTAG are not emulated."""
-        name = ""
-        numbers: list[int] = []
-        repeat = 1
-        for item in content.replace(",", " ").split():
-            upper = item.upper()
-            if upper.startswith("NAME="):
-                name = item[5:].strip("\"'")
-            elif upper.startswith("REPEAT="):
-                try:
-                    repeat = int(float(upper[7:]))
-                except ValueError:
-                    raise NcFault(ErrorId.NUMBER, col, "REPEAT= needs a number") from None
-                if repeat < 1:
-                    raise NcFault(ErrorId.NUMBER, col, "REPEAT= must be at least 1")
-            elif upper.startswith("N") and upper[1:].isdigit():
-                numbers.append(int(upper[1:]))
-            else:
-                raise NcFault(
-                    ErrorId.UNSUPPORTED, col, f"L SEQUENCE: {item} is not emulated by liftd"
-                )
-        if not 1 <= len(numbers) <= 2:
-            raise NcFault(ErrorId.SYNTAX, col, "L SEQUENCE needs one or two block numbers N..")
-        return name, numbers[0], numbers[-1], repeat - 1
-
-    def _sequence_range(
-        self, source: Source, first: int, last: int, col: int, within: tuple[int, int] | None
-    ) -> tuple[int, int]:
-        if within is None:
-            main = source.main
-            within = (main.start, main.end) if main is not None else (0, len(source.lines))
-        lo, hi = within
-        start = source.block_number_line(first, lo, hi)
-        if start is None:
-            raise NcFault(ErrorId.SEQUENCE_NOT_FOUND, col, f"L SEQUENCE: no block N{first}")
-        stop = source.block_number_line(last, start, hi)
-        if stop is None:
-            raise NcFault(
-                ErrorId.SEQUENCE_NOT_FOUND, col, f"L SEQUENCE: no block N{last} after N{first}"
-            )
-        return start, stop + 1
 
     # -- # commands ----------------------------------------------------------------------------
     def _command(self, lineno: int, n: int | None, cmd: CommandResult) -> None:
@@ -552,23 +483,6 @@ class _Decoder(ModalDecoder):
                 cmd.column,
                 f"{cmd.text.split()[0]}: coordinate transformations are not emulated",
             )
-
-
-def _chain_text(chain: tuple[CallSite, ...]) -> str:
-    """`a.nc:3 LL x > b.nc:7 L y`, repeated calls folded: `b.nc:4 LL again (×20)`."""
-    parts: list[str] = []
-    last = ""
-    count = 0
-    for site in chain:
-        text = str(site)
-        if text == last:
-            count += 1
-            continue
-        if last:
-            parts.append(last if count == 1 else f"{last} (×{count})")
-        last, count = text, 1
-    parts.append(last if count == 1 else f"{last} (×{count})")
-    return " > ".join(parts)
 
 
 def _lex_fault(err: LexError) -> NcFault:

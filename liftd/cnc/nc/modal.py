@@ -8,7 +8,6 @@ rejected word does not take the block's modal state with it; the first problem i
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from typing import TypeVar
 
@@ -32,7 +31,6 @@ from liftd.cnc.nc.lift_words import LiftKeyword, LiftWords
 from liftd.cnc.nc.trc import Trc
 from liftd.cnc.nc.words import Words
 from liftd.cnc.params import LiftMethod
-from liftd.cnc.path.geometry import ArcSeg
 
 # M functions the ISG kernel handles internally when m_synch does not configure them
 # (P-CHAN-00041 default NO_SYNCH for M0/1/2/17/29/30/3/4/19, isg-cnc.md §3.3); any other
@@ -445,30 +443,8 @@ class ModalDecoder:
             if beyond >= 0:
                 self.ctx.check_position(beyond, end_t[beyond], column)
             if is_arc:
-                self._check_limits(motion, column)
+                self.ctx.check_motion(motion, column)
         return motion
-
-    def _check_limits(self, motion: Motion, column: int) -> None:
-        # the start was checked as the previous end
-        limits = self.ctx.sw_limits
-        for k, (value, (neg, pos)) in enumerate(zip(motion.end, limits, strict=True)):
-            if not neg - 1e-12 <= value <= pos + 1e-12:
-                self.ctx.check_position(k, value, column)
-        center = motion.center
-        if center is not None:
-            r = math.hypot(motion.start[0] - center[0], motion.start[1] - center[1])
-            (n0, p0), (n1, p1) = limits[0], limits[1]
-            if (
-                n0 <= center[0] - r
-                and center[0] + r <= p0
-                and n1 <= center[1] - r
-                and (center[1] + r <= p1)
-            ):
-                return  # the whole circle is inside: no need for the arc's extent
-            arc = ArcSeg.make(motion.start, motion.end, center, motion.sweep)
-            for k, (lo, hi) in enumerate(arc.axis_extent()):
-                self.ctx.check_position(k, lo, column)
-                self.ctx.check_position(k, hi, column)
 
     # -- lift commands -------------------------------------------------------------------------
     def _lift_start(self, lineno: int, axis: str, words: LiftWords, column: int) -> LiftStart:

@@ -1,5 +1,7 @@
 """The structure of one NC file: local subroutines (``%L name`` … ``M17``/``M29``) and the main
-program part (``%name``), split once into lines; the decoder runs sections of it.
+program part (``%name``), split once into lines; the decoder runs sections of it, one `Frame`
+per level of its call stack, and ``L SEQUENCE`` selects a section by block numbers
+(`sequence_args`, `sequence_range`).
 
 TF5200 programming manual:
 * local subroutines: "%L" + separator + name; all of them before the main program; ended by
@@ -18,7 +20,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass, field
 
-from liftd.cnc.nc.blocks import ErrorId
+from liftd.cnc.nc.blocks import CallSite, ErrorId, NcFault
 from liftd.cnc.nc.lexer import strip_comments
 
 MAX_LOCAL_SUBROUTINES = 50  # P-STUP-00053 default
@@ -139,3 +141,75 @@ def parse_source(name: str, text: str, called: bool = False) -> Source:
             continue
         locals_[key] = Section(sub, h + 1, end, True)
     return Source(name, lines, locals_, main, problems)
+
+
+class Frame:
+    """One level of the call stack: a section of a file being run."""
+
+    __slots__ = ("cached", "comment", "end", "pos", "reps", "site", "source", "start", "tag")
+
+    def __init__(
+        self,
+        source: Source,
+        start: int,
+        end: int,
+        site: CallSite | None,
+        reps: int = 0,
+        tag: str = "",
+    ) -> None:
+        self.source = source
+        self.tag = tag  # Block.file of its lines: "" in the program's own file
+        self.start = start
+        self.end = end
+        self.pos = start
+        self.site = site
+        self.reps = reps  # further runs of the section after this one (L SEQUENCE REPEAT)
+        self.cached = site is not None  # subroutine lines run again: keep their words
+        self.comment: int | None = None  # line of an open #COMMENT BEGIN
+
+
+def sequence_args(content: str, col: int) -> tuple[str, int, int, int]:
+    """L SEQUENCE [ [NAME=<file>] N.. [N..] [REPEAT=..] ] (programming manual
+    https://infosys.beckhoff.com/content/1033/tf5200_programming_manual/206866443.html);
+    REPEAT is read as the number of runs. String labels and ENDTAG are not emulated."""
+    name = ""
+    numbers: list[int] = []
+    repeat = 1
+    for item in content.replace(",", " ").split():
+        upper = item.upper()
+        if upper.startswith("NAME="):
+            name = item[5:].strip("\"'")
+        elif upper.startswith("REPEAT="):
+            try:
+                repeat = int(float(upper[7:]))
+            except ValueError:
+                raise NcFault(ErrorId.NUMBER, col, "REPEAT= needs a number") from None
+            if repeat < 1:
+                raise NcFault(ErrorId.NUMBER, col, "REPEAT= must be at least 1")
+        elif upper.startswith("N") and upper[1:].isdigit():
+            numbers.append(int(upper[1:]))
+        else:
+            raise NcFault(ErrorId.UNSUPPORTED, col, f"L SEQUENCE: {item} is not emulated by liftd")
+    if not 1 <= len(numbers) <= 2:
+        raise NcFault(ErrorId.SYNTAX, col, "L SEQUENCE needs one or two block numbers N..")
+    return name, numbers[0], numbers[-1], repeat - 1
+
+
+def sequence_range(
+    source: Source, first: int, last: int, col: int, within: tuple[int, int] | None
+) -> tuple[int, int]:
+    """Lines [start, end) from block N`first` to block N`last` inside `within` (default: the
+    file's main program part)."""
+    if within is None:
+        main = source.main
+        within = (main.start, main.end) if main is not None else (0, len(source.lines))
+    lo, hi = within
+    start = source.block_number_line(first, lo, hi)
+    if start is None:
+        raise NcFault(ErrorId.SEQUENCE_NOT_FOUND, col, f"L SEQUENCE: no block N{first}")
+    stop = source.block_number_line(last, start, hi)
+    if stop is None:
+        raise NcFault(
+            ErrorId.SEQUENCE_NOT_FOUND, col, f"L SEQUENCE: no block N{last} after N{first}"
+        )
+    return start, stop + 1
