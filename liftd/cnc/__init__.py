@@ -12,6 +12,7 @@ CPU per cycle, bit-identical results. Without a C compiler they run as Python.
 # `simulate`. Not compiled: preparation (nc/, geo_program, the lists), and `lift/profile.py`,
 # the thin wrapper tests use to inject ruckig failures (a compiled class cannot be patched).
 COMPILED: tuple[str, ...] = (
+    "liftd.cnc.actions",
     "liftd.cnc.geo_task",
     "liftd.cnc.machine",
     "liftd.cnc.plc",

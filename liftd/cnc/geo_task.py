@@ -18,20 +18,19 @@ from __future__ import annotations
 import functools
 from typing import Final
 
-from liftd.cnc.geo_program import GeoProgram, PreparedPrograms
-from liftd.cnc.lift.controller import LiftController, LiftRecord
+from liftd.cnc.actions import BoundaryActions
+from liftd.cnc.geo_program import PreparedPrograms
+from liftd.cnc.lift.controller import LiftController
 from liftd.cnc.lift.monitor import AccelMonitor
 from liftd.cnc.lift.profile import LiftProfiles, ProfileError
-from liftd.cnc.lift.ranges import LiftRange
 from liftd.cnc.nc.blocks import ErrorId
-from liftd.cnc.params import ChannelParams, LiftMethod, MSync
-from liftd.cnc.path.interpolator import Crossing, Interpolator
-from liftd.cnc.path.program import Action, ActionKind, PathProgram
+from liftd.cnc.params import ChannelParams, LiftMethod
+from liftd.cnc.path.interpolator import Interpolator
+from liftd.cnc.path.program import ActionKind, PathProgram
 from liftd.cnc.plc import MAX_OVERRIDE
 from liftd.cnc.snapshot import (
     ChannelState,
     Command,
-    Event,
     GeoInputs,
     GeoSnapshot,
     LiftPhase,
@@ -39,10 +38,7 @@ from liftd.cnc.snapshot import (
 )
 
 INF = float("inf")
-LANDING_TOL = 1e-6  # m: Z counts as at POS when the path passes LIFT_END (1 µm)
-LANDING_TIME_TOL = 1e-6  # s: … and as at rest when its descent ends within 1 µs of that
 LIFT_LATE_ID = int(ErrorId.LIFT_LATE)  # the path passed LIFT_END with Z not at POS
-ACK_SYNCS = (MSync.MVS_SVS, MSync.MVS_SNS, MSync.MNS_SNS, MSync.MNE_SNS)
 
 # Enum members as C statics of the compiled module: `ChannelState.ACTIVE` is a dict and a type
 # lookup each time (~80 ns), about ten a cycle.
@@ -56,7 +52,7 @@ RESET: Final = Command.RESET
 NO_PHASE: Final = LiftPhase.NONE
 
 
-class GeoTask:
+class GeoTask(BoundaryActions):
     """One CNC channel's GEO task running one NC program."""
 
     def __init__(
@@ -82,19 +78,16 @@ class GeoTask:
         self.stop_requested = False
         self.reset_requested = False
         self.m_pending = -1
-        self.m_acked: set[int] = set()
+        self.m_acked = set()
         self.error_id = 0
         self.error_line = 0
-        self.events: list[Event] = []
-        self.waiting: list[Action] = []  # actions left at the boundary where the path rests
-        self.z_rest: tuple[int, float] | None = None  # (axis, Z) after a lift that ended here
-        self.wait_since = 0.0  # time from which the current wait counts
+        self.events = []
+        self.waiting = []
+        self.z_rest = None
+        self.wait_since = 0.0
         self.ack_time = 0.0
         self.runs = 0
-        self.prog: GeoProgram
         self.path: PathProgram  # self.prog.path
-        self.interp: Interpolator
-        self.lift: LiftController
         # the IPO acceleration monitor of every axis that lifts (the configured lift axis and
         # any other a program lifts); `z_monitor` is the configured one's, for the summary
         self.monitors: dict[int, AccelMonitor] = {}
@@ -190,9 +183,6 @@ class GeoTask:
         self.waiting = []
 
     # -- helpers ----------------------------------------------------------------------------------
-    def _emit(self, name: str, t: float, line: int, value: float = 0.0, text: str = "") -> None:
-        self.events.append(Event(name, t, line, value, text))
-
     @property
     def line(self) -> int:
         if self.waiting:
@@ -347,152 +337,6 @@ class GeoTask:
                 self._cross(crossing)
             if self.interp.stopped_at is None or self.state is not ACTIVE:
                 return
-
-    def _cross(self, c: Crossing) -> None:
-        actions = self.prog.path.boundaries[c.boundary].actions
-        if c.at_rest:
-            self.waiting = list(actions)
-            self.wait_since = c.t
-            return
-        for action in actions:  # passing without a stop: nothing here waits
-            self._do(action, c.t, c)
-
-    def _work_waiting(self, now: float) -> bool:
-        """Run the actions where the path rests; True when it may go on."""
-        while self.waiting:
-            if not self._do(self.waiting[0], self.wait_since, None, now):
-                return False
-            self.waiting.pop(0)
-        k = self.interp.stopped_at
-        if k is not None and k >= len(self.prog.path.segments):
-            self._end_of_program(self.wait_since, self.prog.path.boundaries[k].line)
-            return False
-        return self.state is ACTIVE
-
-    def _do(self, action: Action, t_at: float, crossing: Crossing | None, now: float = 0.0) -> bool:
-        """Execute one action at time t_at; False while it still waits (only where the path
-        rests, `now` being the cycle time)."""
-        kind = action.kind
-        if kind is ActionKind.LIFT_START:
-            self._lift_start(self.prog.range_at(action), t_at, crossing)
-        elif kind is ActionKind.LIFT_END:
-            return self._lift_end(action, t_at, crossing, now)
-        elif kind is ActionKind.M_OUTPUT:
-            self._emit("geo.m_output", t_at, action.line, float(action.m_number))
-            if action.sync in ACK_SYNCS:
-                self.m_pending = action.m_number
-                self.m_acked.discard(action.m_number)
-        elif kind is ActionKind.M_WAIT:
-            if action.m_number not in self.m_acked:
-                return False
-            self.m_acked.discard(action.m_number)
-            if crossing is None:
-                self.wait_since = max(self.wait_since, self.ack_time)
-        elif kind is ActionKind.M00:
-            self._emit("geo.m00", t_at, action.line)
-            self.state = HOLD
-            return False
-        elif kind is ActionKind.DWELL:
-            if now < t_at + action.seconds:
-                return False
-            self.wait_since = t_at + action.seconds
-        elif kind is ActionKind.PROGRAM_END:
-            self._end_of_program(t_at, action.line)
-            return False
-        return True
-
-    def _lift_start(self, rng: LiftRange, t_at: float, crossing: Crossing | None) -> None:
-        if self.lift.current is not None:  # the last lift is still finishing (late): go on from Z
-            z, vz, az = self.lift.z, self.lift.vz, self.lift.az
-            self._close_lift(t_at, rng.start.line)
-        else:  # the programmed Z at the start (the decoder tracked every earlier lift's POS)
-            u_z = self.prog.entry_dir[rng.index]
-            z = rng.start.z_start
-            vz = crossing.v * u_z if crossing else 0.0
-            az = crossing.a * u_z if crossing else 0.0
-        self.lift.start(rng, t_at, z, vz, az)
-        m = self.lift.motion
-        if m is not None and not m.uses_time:  # coupled: Z at z(s) from the range's start
-            s = self.prog.path.boundaries[rng.k_start].s
-            self.lift.step(t_at, s, crossing.v if crossing else 0.0, 0.0, 0.0, self.ov_eff)
-        rec = self.lift.record
-        if rec is not None and crossing is not None:  # passing: the path leaves at once
-            self._departure(rec, t_at, crossing)
-        self._emit(
-            "lift.start",
-            t_at,
-            rng.start.line,
-            rng.start.target,
-            "suppressed" if rng.suppressed else "",
-        )
-
-    def _departure(self, rec: LiftRecord, t: float, crossing: Crossing | None) -> None:
-        """The path leaves the start of the lift range: the nominal run starts with it."""
-        rng = rec.range
-        rec.departure = t
-        if rng.k_end > rng.k_start:
-            b = self.prog.path.boundaries[rng.k_start]
-            v, a = (crossing.v, crossing.a) if crossing is not None else (0.0, 0.0)
-            differs = self.prog.nominal_differs[rng.index]
-            self.interp.nominal_start(
-                self.prog.nominal, rng.k_end, t, b.s, v, a, rng.k_start, differs
-            )
-
-    def _lift_end(self, action: Action, t_at: float, crossing: Crossing | None, now: float) -> bool:
-        lift = self.lift
-        m = lift.motion
-        if lift.current is None or m is None:
-            return True
-        s_end = self.prog.path.boundaries[lift.current.k_end].s
-        if not m.uses_time:  # Z to where the path got
-            lift.step(t_at, s_end, crossing.v if crossing else 0.0, 0.0, 0.0, self.ov_eff)
-        elif lift.t < t_at:  # Z to the time the path got here
-            lift.step(t_at, s_end, 0.0, 0.0, t_at - lift.t, self.ov_eff)
-        if crossing is None and not lift.z_done:
-            lift.step(now, s_end, 0.0, 0.0, 0.0, self.ov_eff)  # the path waits here for Z
-            if not self._z_landed():  # (a call: mypy keeps the narrowing of lift.z_done)
-                return False
-            t_at = self.wait_since = max(t_at, lift.landed)
-        rec = lift.record
-        error = abs(lift.z - lift.current.start.target)
-        # Z at POS but its descent ends a rounding later than the path's crossing (≤ 1 µs; wide
-        # seed 1965: 2e-17 m, 0.5 µs): landed. It finishes that descent as planned, and the
-        # lift closes when it has (snapping it to rest here would be a jerk).
-        settling = m.uses_time and not lift.z_done and m.needed_time() <= LANDING_TIME_TOL
-        if error <= LANDING_TOL and settling:
-            lift.ending = True
-            return True
-        if not lift.z_done or error > LANDING_TOL:
-            # Never expected (the path is limited and waits so that Z makes it): the path passes
-            # LIFT_END with Z not at POS. Reported as it is: the error is |Z − POS| now.
-            if rec is not None:
-                rec.arrival_error, rec.late = error, True
-            text = f"Z {error * 1e3:.6f} mm from POS when the path passed LIFT_END"
-            self._emit("lift.late", t_at, action.line, error, text)
-            lift.ending = True
-            return True
-        self._close_lift(t_at, action.line)
-        return True
-
-    def _z_landed(self) -> bool:
-        return self.lift.z_done
-
-    def _close_lift(self, t: float, line: int) -> None:
-        rng = self.lift.current
-        if rng is not None:
-            self.interp.drop_lift_stop(rng.k_end)
-        self.z_rest = (self.lift.axis_index, self.lift.z)  # Z while the path rests here
-        rec = self.lift.finish(t)
-        if rec is not None:
-            nominal = self.interp.nominal_arrival
-            start = rec.departure if rec.departure is not None else rec.t_start
-            if rng is not None and rng.k_end > rng.k_start and nominal is not None:
-                rec.nominal_time = nominal - start
-                rec.path_delay = max(0.0, rec.t_end - start - rec.waits - rec.nominal_time)
-            else:  # no path motion: all the time is the path waiting for Z
-                rec.path_delay = max(0.0, rec.t_end - rec.t_start - rec.waits)
-            self.interp.nominal_stop()
-            self._emit("lift.end", rec.t_end, line, rec.peak)
 
     def _snapshot(self, t: float, inputs: GeoInputs, positions: tuple[float, ...]) -> GeoSnapshot:
         lift = self.lift
