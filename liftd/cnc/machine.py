@@ -74,7 +74,12 @@ class Machine:
 
     def step(self, inputs: Sequence[GeoInputs], t: float) -> list[GeoSnapshot]:
         """One GEO cycle: every channel to time t with its own inputs, in channel order."""
-        return [task.step(inp, t) for task, inp in zip(self.tasks, inputs, strict=True)]
+        tasks = self.tasks
+        if len(inputs) != len(tasks):
+            raise ValueError(f"{len(inputs)} inputs for {len(tasks)} channels")
+        # an index loop: zip(..., strict=True) parses its keyword in every call (~1 µs cold,
+        # 7 % of the GEO process's CPU, perf of `liftd run`, 2026-12-01)
+        return [tasks[i].step(inputs[i], t) for i in range(len(tasks))]
 
     def step_channel(self, index: int, inputs: GeoInputs, t: float) -> GeoSnapshot:
         """One channel's share of a cycle (a driver that times each channel on its own);

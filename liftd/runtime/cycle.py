@@ -11,15 +11,21 @@ stay on the grid without a burst of catch-up; the GEO timeline is never cut.
 
 from __future__ import annotations
 
-import bisect
 from collections.abc import MutableSequence
 
 US = 1000
 
 
+FINE, FINE_NS = 200, 5 * US  # 5 µs steps to 1 ms
+FINE_TOP_NS = FINE * FINE_NS
+COARSE, COARSE_NS = 90, 100 * US  # then 100 µs steps to 10 ms
+
+
 def _edges() -> list[int]:
     """Histogram bucket upper edges (ns): 5 µs steps to 1 ms, 100 µs steps to 10 ms."""
-    return [k * 5 * US for k in range(1, 201)] + [1000 * US + k * 100 * US for k in range(1, 91)]
+    return [k * FINE_NS for k in range(1, FINE + 1)] + [
+        FINE_TOP_NS + k * COARSE_NS for k in range(1, COARSE + 1)
+    ]
 
 
 EDGES = _edges()
@@ -45,7 +51,11 @@ class CycleClock:
 
 
 def bucket(ns: int) -> int:
-    return bisect.bisect_left(EDGES, ns)
+    """The bucket of `ns` (= bisect_left(EDGES, ns)), by arithmetic: a bisection over the
+    edges touches a dozen int objects, cache misses in the loop's cold cycles."""
+    if ns <= FINE_TOP_NS:
+        return (ns - 1) // FINE_NS if ns > 0 else 0
+    return FINE + min(COARSE, (ns - FINE_TOP_NS - 1) // COARSE_NS)
 
 
 def percentile_us(counts: MutableSequence[int], q: float) -> float:

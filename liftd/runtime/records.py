@@ -54,6 +54,13 @@ EVENT_NAMES = (
 EVENT_IDS = {name: i for i, name in enumerate(EVENT_NAMES)}
 
 
+def _fields(s: GeoSnapshot, n_axes: int) -> tuple[Any, ...]:
+    """The snapshot's packed fields: the tuple without its events, positions and lift counts
+    flattened. Slices of the tuple, not 25 attribute reads and a starred display: packing
+    was 12.6 % of the GEO process's CPU samples (perf of `liftd run` on the demo, 2026-12-01)."""
+    return s[:5] + s[5] + s[6:19] + s[20:23] + (s[23] or (0,) * n_axes)
+
+
 class SnapshotCodec:
     """GeoSnapshot (without its events) + LoopStats ↔ bytes, for a channel of `n_axes`."""
 
@@ -63,12 +70,7 @@ class SnapshotCodec:
         self.size = self.fmt.size
 
     def pack(self, s: GeoSnapshot, st: LoopStats) -> bytes:
-        return self.fmt.pack(
-            s.cycle, s.t, s.state, s.line, s.segment, *s.positions, s.v_path, s.override,
-            s.override_requested, s.override_max, s.feed_hold, s.lift_active, s.lift_suppressed,
-            s.lift_phase, s.lift_vz, s.lift_az, s.m_pending, s.error_id, s.error_line,
-            s.v_block_max, s.v_block_end, s.lift_axis, *(s.lift_counts or (0,) * self.n), *st,
-        )  # fmt: skip
+        return self.fmt.pack(*(_fields(s, self.n) + st))
 
     def unpack(self, raw: bytes) -> tuple[GeoSnapshot, LoopStats]:
         v = self.fmt.unpack(raw)
@@ -101,16 +103,13 @@ class MachineCodec:
         self._fields = [21 + 2 * n for n in self.axes]
 
     def pack(self, snaps: Sequence[GeoSnapshot], st: LoopStats) -> bytes:
-        values: list[Any] = []
-        for s, n in zip(snaps, self.axes, strict=True):
-            values += (
-                s.cycle, s.t, s.state, s.line, s.segment, *s.positions, s.v_path, s.override,
-                s.override_requested, s.override_max, s.feed_hold, s.lift_active,
-                s.lift_suppressed, s.lift_phase, s.lift_vz, s.lift_az, s.m_pending, s.error_id,
-                s.error_line, s.v_block_max, s.v_block_end, s.lift_axis,
-                *(s.lift_counts or (0,) * n),
-            )  # fmt: skip
-        return self.fmt.pack(*values, *st)
+        axes = self.axes
+        if len(snaps) != len(axes):
+            raise ValueError(f"{len(snaps)} snapshots for {len(axes)} channels")
+        values: tuple[Any, ...] = ()
+        for i in range(len(axes)):
+            values += _fields(snaps[i], axes[i])
+        return self.fmt.pack(*(values + st))
 
     def unpack(self, raw: bytes) -> tuple[tuple[GeoSnapshot, ...], LoopStats]:
         v = self.fmt.unpack(raw)

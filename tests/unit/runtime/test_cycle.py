@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import bisect
+
 from liftd.runtime.cycle import BUCKETS, EDGES, CycleClock, bucket, percentile_us
 
 P = 1_000_000  # 1 ms in ns
@@ -43,6 +45,9 @@ def test_histogram_buckets_and_percentiles() -> None:
     assert bucket(0) == 0 and bucket(5_000) == 0 and bucket(5_001) == 1
     assert bucket(1_000_000) == 199 and bucket(1_000_001) == 200  # 5 µs steps up to 1 ms
     assert bucket(10_000_000) == BUCKETS - 2 and bucket(10_000_001) == BUCKETS - 1  # overflow
+    # the arithmetic is the bisection, at every edge and beside it
+    for ns in [-1, 10**9, *(e + d for e in EDGES for d in (-1, 0, 1))]:
+        assert bucket(ns) == bisect.bisect_left(EDGES, ns), ns
     counts = [0] * BUCKETS
     assert percentile_us(counts, 0.99) == 0.0
     for ns in [12_000] * 990 + [480_000] * 9 + [20_000_000]:
