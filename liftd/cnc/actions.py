@@ -13,7 +13,7 @@ from liftd.cnc.lift.ranges import LiftRange
 from liftd.cnc.params import MSync
 from liftd.cnc.path.interpolator import Crossing, Interpolator
 from liftd.cnc.path.program import Action, ActionKind
-from liftd.cnc.snapshot import ChannelState, Event
+from liftd.cnc.snapshot import ChannelState, Event, new_event
 
 LANDING_TOL = 1e-6  # m: Z counts as at POS when the path passes LIFT_END (1 µm)
 LANDING_TIME_TOL = 1e-6  # s: … and as at rest when its descent ends within 1 µs of that
@@ -44,7 +44,7 @@ class BoundaryActions:
         raise NotImplementedError
 
     def _emit(self, name: str, t: float, line: int, value: float = 0.0, text: str = "") -> None:
-        self.events.append(Event(name, t, line, value, text))
+        self.events.append(new_event((name, t, line, value, text, 0)))
 
     def _cross(self, c: Crossing) -> None:
         actions = self.prog.path.boundaries[c.boundary].actions

@@ -56,9 +56,11 @@ class Ruckig1:
         *,
         forward_only: bool = True,
         min_duration: float | None = None,
+        into: Trajectory | None = None,
     ) -> Trajectory:
         """Time-optimal (or at least `min_duration` long) profile from (p0, v0, a0) to (p1, v1, 0).
-        `forward_only`: the velocity never becomes negative (a path never moves backwards)."""
+        `forward_only`: the velocity never becomes negative (a path never moves backwards).
+        `into`: a trajectory to overwrite (a throwaway profile saves its allocation)."""
         inp = self._pos
         inp.current_position = [p0]
         inp.current_velocity = [v0]
@@ -79,7 +81,7 @@ class Ruckig1:
             if last is None or last[5] != min_duration:
                 inp.minimum_duration = min_duration
             self._last_pos = (v1, v_max, forward_only, a_max, j_max, min_duration)
-        return self._solve(inp)
+        return self._solve(inp, into)
 
     def velocity(
         self, p0: float, v0: float, a0: float, v1: float, a_max: float, j_max: float
@@ -102,8 +104,8 @@ class Ruckig1:
             self._last_vel = limits
         return self._solve(inp)
 
-    def _solve(self, inp: InputParameter) -> Trajectory:
-        traj = Trajectory(1)
+    def _solve(self, inp: InputParameter, into: Trajectory | None = None) -> Trajectory:
+        traj = Trajectory(1) if into is None else into
         self.calls += 1
         try:
             self._r.calculate(inp, traj)

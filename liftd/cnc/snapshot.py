@@ -101,6 +101,10 @@ new_inputs = cast(
     Callable[[tuple[float, bool, Command, bool]], GeoInputs],
     functools.partial(tuple.__new__, GeoInputs),
 )
+new_event = cast(
+    Callable[[tuple[str, float, int, float, str, int]], Event],
+    functools.partial(tuple.__new__, Event),
+)
 
 
 class LoopStats(NamedTuple):

@@ -75,10 +75,14 @@ class AdvancedLift:
         self.landed = 0.0  # exact time Z reached the target
         self.rise: Trajectory | None = None  # last rise profile (fallback)
         self.rise_t0 = 0.0
+        self.rise_dur = 0.0
         # the state is the rise's at (t − rise_t0): the next cycle follows it without a new
         # profile (from a state on a time-optimal profile toward the same goal, ruckig would
         # plan its own remainder again; one ruckig call per rising cycle saved)
         self._on_rise = False
+        # the descent from the next rising state is asked only for its duration and extent:
+        # each rising cycle solves it into this one trajectory (no allocation per cycle)
+        self._desc = Trajectory(1)
 
     # -- lifecycle -------------------------------------------------------------------------------
     def start(
@@ -222,22 +226,22 @@ class AdvancedLift:
             up = self.rise
         else:
             up = self.prof.to_rest(self.q, self.v, self.a, max(self.limit, self.target))
-            self.rise, self.rise_t0 = up, self.t
+            self.rise, self.rise_t0, self.rise_dur = up, self.t, up.duration
         base = self.t - self.rise_t0  # the rise's local time of the current state
         goal = max(self.limit, self.target)
-        if base + dt >= up.duration - TIME_TOL:
+        if base + dt >= self.rise_dur - TIME_TOL:
             nxt = (goal, 0.0, 0.0)  # at rest at the goal (ruckig's end may round a bit past it)
         else:
             nxt = state_at(up, base + dt)
             if nxt[0] > goal:
                 nxt = (goal, nxt[1], nxt[2])
-        desc = self.prof.to_rest(nxt[0], nxt[1], nxt[2], self.target)
-        self.t_need = desc.duration  # also while holding: the restart is limited by it
+        desc = self.prof.to_rest(nxt[0], nxt[1], nxt[2], self.target, into=self._desc)
+        need = self.t_need = desc.duration  # also while holding: the restart is limited by it
         if t_rem == INF:
             self._set(nxt)
             self._on_rise = True
             return
-        if desc.duration <= t_rem - dt + TIME_TOL and self._descent_fits(desc, nxt[0]):
+        if need <= t_rem - dt + TIME_TOL and self._descent_fits(desc, nxt[0]):
             self._set(nxt)
             self._on_rise = True
             return
@@ -246,7 +250,7 @@ class AdvancedLift:
             if exact != t_rem:
                 t_rem = exact
                 if t_rem == INF or (
-                    desc.duration <= t_rem - dt + TIME_TOL and self._descent_fits(desc, nxt[0])
+                    need <= t_rem - dt + TIME_TOL and self._descent_fits(desc, nxt[0])
                 ):
                     self._set(nxt)
                     self._on_rise = True
@@ -256,7 +260,7 @@ class AdvancedLift:
         if now.duration >= t_rem - TIME_TOL:
             tau, plan = 0.0, now  # overdue: descend time-optimally now
         elif self._descent_fits(desc, nxt[0]):
-            tau, plan = self._switch_time(up, base, now, desc, dt, t_rem)
+            tau, plan = self._switch_time(up, base, now, need, dt, t_rem)
         else:  # the limit, not the time, ends the rise: bisection on both conditions
             lo, hi = 0.0, dt
             plan = now
@@ -276,15 +280,15 @@ class AdvancedLift:
         self._follow(self.t + dt)
 
     def _switch_time(
-        self, up: Trajectory, base: float, now: Trajectory, desc: Trajectory, dt: float,
+        self, up: Trajectory, base: float, now: Trajectory, need: float, dt: float,
         t_rem: float,
     ) -> tuple[float, Trajectory]:  # fmt: skip
         """Root of f(τ) = τ + t_min(state(τ) → POS) − T_rem on [0, dt] by regula falsi (Illinois):
         f(0) < 0 < f(dt), f is smooth and increasing; ~5 ruckig calls instead of ~30 for
         bisection. Returns the last τ with f ≤ 0 (lands at most 1e-11 s early) and its plan.
-        The rise's state at τ is `up` at base + τ."""
+        The rise's state at τ is `up` at base + τ; `need` is the descent time from τ = dt."""
         lo, f_lo, plan = 0.0, now.duration - t_rem, now
-        hi, f_hi = dt, dt + desc.duration - t_rem
+        hi, f_hi = dt, dt + need - t_rem
         side = 0
         for _ in range(40):
             if f_lo > -1e-11 or hi - lo < 1e-13:

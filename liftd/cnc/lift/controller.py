@@ -21,8 +21,6 @@ Rules (vendor text §2.1, §2.5, §2.6; DESIGN.md §4), with liftd's choices whe
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 from liftd.cnc.lift.advanced import AdvancedLift, Refine
 from liftd.cnc.lift.guard import GuardFinding, LiftGuard
 from liftd.cnc.lift.motion import CoupledLift, LiftMotion, TimeBasedLift
@@ -35,24 +33,36 @@ from liftd.cnc.snapshot import LiftPhase
 INF = float("inf")
 
 
-@dataclass(slots=True)
 class LiftRecord:
-    """What the summary reports per lift (filled while the lift runs)."""
+    """What the summary reports per lift (filled while the lift runs). A plain class: a
+    dataclass's generated `__init__` is a Python function even in the compiled core (~6 µs
+    of every lift start, cold)."""
 
-    range: LiftRange
-    t_start: float
-    z_start: float
-    t_end: float = -1.0
-    peak: float = 0.0
-    area: float = 0.0  # ∫ (q − q_base) dt over the lift, for the mean clearance
-    arrival_error: float = 0.0
-    path_delay: float = 0.0
-    nominal_time: float = 0.0  # path time without the lift's limits (for path_delay_s)
-    departure: float | None = None  # the path leaves the range's start (after a wait there)
-    waits: float = 0.0  # time the path waited inside the range for other reasons than Z
-    late: bool = False  # the path passed LIFT_END with Z not at POS (arrival_error > 0)
-    z_a_max_ratio: float = 0.0  # largest sampled |Z acceleration| / a_max during the lift
-    premature: bool = False  # path-based: look-ahead overflow, lifted early
+    __slots__ = ("area", "arrival_error", "departure", "late", "nominal_time", "path_delay",
+                 "peak", "premature", "range", "t_end", "t_start", "waits", "z_a_max_ratio",
+                 "z_start")  # fmt: skip
+
+    def __init__(self, rng: LiftRange, t_start: float, z_start: float) -> None:
+        self.range = rng
+        self.t_start = t_start
+        self.z_start = z_start
+        self.t_end = -1.0
+        self.peak = 0.0
+        self.area = 0.0  # ∫ (q − q_base) dt over the lift, for the mean clearance
+        self.arrival_error = 0.0
+        self.path_delay = 0.0
+        self.nominal_time = 0.0  # path time without the lift's limits (for path_delay_s)
+        self.departure: float | None = None  # the path leaves the range's start (after a wait)
+        self.waits = 0.0  # time the path waited inside the range for other reasons than Z
+        self.late = False  # the path passed LIFT_END with Z not at POS (arrival_error > 0)
+        self.z_a_max_ratio = 0.0  # largest sampled |Z acceleration| / a_max during the lift
+        self.premature = False  # path-based: look-ahead overflow, lifted early
+
+    def __repr__(self) -> str:
+        return (
+            f"LiftRecord(line={self.range.start.line}, t_start={self.t_start}, "
+            f"t_end={self.t_end}, peak={self.peak}, arrival_error={self.arrival_error})"
+        )
 
 
 class LiftController:

@@ -43,12 +43,13 @@ class LiftGuard:
         """Bounds for one lift: between the start/target and POS_LIMIT (the limit does not
         apply when POS or the start lies beyond it); stop_margin allows for Z entering the
         range with velocity (its stopping distance)."""
+        # two-argument min/max only: with three the compiled core calls the builtin
         if direct:
             lo, hi = min(z_start, target), max(z_start, target)
         elif down:
-            lo, hi = min(pos_limit, target, z_start), max(z_start, target)
+            lo, hi = min(min(pos_limit, target), z_start), max(z_start, target)
         else:
-            lo, hi = min(z_start, target), max(pos_limit, target, z_start)
+            lo, hi = min(z_start, target), max(max(pos_limit, target), z_start)
         self.lo = max(self.lo_sw, lo - stop_margin - POS_TOL)
         self.hi = min(self.hi_sw, hi + stop_margin + POS_TOL)
 

@@ -12,12 +12,11 @@ The GEO task holds the active one; it never asks which kind it is.
 
 from __future__ import annotations
 
-from typing import Protocol
-
 from liftd.cnc.lift.advanced import DONE, DOWN, HOLD_LIMIT, IDLE, UP, AdvancedLift, Phase, Refine
 from liftd.cnc.lift.guard import GuardFinding, LiftGuard
 from liftd.cnc.lift.path_based import RangePlan
 from liftd.cnc.lift.ranges import LiftRange
+from liftd.cnc.path.interpolator import Interpolator
 from liftd.cnc.plc import MAX_OVERRIDE
 from liftd.cnc.snapshot import LiftPhase
 
@@ -25,17 +24,6 @@ INF = float("inf")
 MIN_LIFT_OVERRIDE = 0.01  # below this, the path waits for Z at the lift's horizon instead
 OVERRIDE_TRIALS = 6  # lower-bound evaluations to find the highest override Z still allows
 _PHASES = tuple(LiftPhase(int(p)) for p in Phase)  # the generator's phase as reported
-
-
-class PathTimes(Protocol):
-    """What a lift asks of the path (the interpolator)."""
-
-    t_state: float
-    stopped_at: int | None
-
-    def arrival(self, k: int) -> float: ...
-
-    def lower_bound(self, k: int, override: float) -> float: ...
 
 
 class OverrideVerdict:
@@ -53,34 +41,44 @@ class OverrideVerdict:
         self.path_waits = path_waits  # not even a crawl gives Z the time: the path waits at k
 
 
-class LiftMotion(Protocol):
-    """The lift axis inside one range (positions of the lift axis in m, times absolute)."""
+class LiftMotion:
+    """The lift axis inside one range (positions of the lift axis in m, times absolute).
+    A base class, not a Protocol: the compiled core calls a Protocol's methods as generic
+    Python calls with boxed floats, a base class's through its vtable (about ten calls in
+    every lift cycle)."""
 
     @property
-    def z(self) -> float: ...
+    def z(self) -> float:
+        raise NotImplementedError
 
     @property
-    def vz(self) -> float: ...
+    def vz(self) -> float:
+        raise NotImplementedError
 
     @property
-    def az(self) -> float: ...
+    def az(self) -> float:
+        raise NotImplementedError
 
     @property
-    def t(self) -> float: ...
+    def t(self) -> float:
+        raise NotImplementedError
 
     @property
-    def landed(self) -> float: ...
+    def landed(self) -> float:
+        raise NotImplementedError
 
     @property
-    def done(self) -> bool: ...
+    def done(self) -> bool:
+        raise NotImplementedError
 
     @property
-    def phase(self) -> LiftPhase: ...
+    def phase(self) -> LiftPhase:
+        raise NotImplementedError
 
     @property
     def uses_time(self) -> bool:
         """Whether `step` needs the remaining path time (else the path position)."""
-        ...
+        raise NotImplementedError
 
     def step(
         self, t_new: float, s: float, v: float, a: float, t_rem: float, override: float,
@@ -89,22 +87,27 @@ class LiftMotion(Protocol):
         """Move to t_new (`t_rem`: the path's remaining time to the horizon, time-based, or a
         lower bound of it that `refine()` makes exact when the decision needs it; s, v, a:
         the path's state, coupled; `override`: in effect)."""
-        ...
+        raise NotImplementedError
 
-    def needed_time(self) -> float: ...
+    def needed_time(self) -> float:
+        raise NotImplementedError
 
-    def resume_in_range(self, t: float) -> None: ...
+    def resume_in_range(self, t: float) -> None:
+        raise NotImplementedError
 
-    def error_in_range(self, t: float) -> None: ...
+    def error_in_range(self, t: float) -> None:
+        raise NotImplementedError
 
     def limit_override(
-        self, ov_req: float, ov_eff: float, was_holding: bool, k: int, path: PathTimes
-    ) -> OverrideVerdict: ...
+        self, ov_req: float, ov_eff: float, was_holding: bool, k: int, path: Interpolator
+    ) -> OverrideVerdict:
+        raise NotImplementedError
 
-    def take_findings(self) -> list[GuardFinding]: ...
+    def take_findings(self) -> list[GuardFinding]:
+        raise NotImplementedError
 
 
-class TimeBasedLift:
+class TimeBasedLift(LiftMotion):
     """Advanced Lifting's generator for one range (DESIGN.md §4, lift-algorithm.md §3)."""
 
     def __init__(self, gen: AdvancedLift, guard: LiftGuard, rng: LiftRange,
@@ -123,7 +126,9 @@ class TimeBasedLift:
         self.ov_at_descent: float | None = None
         self.findings: list[GuardFinding] = []
 
-    uses_time = True
+    @property
+    def uses_time(self) -> bool:
+        return True
 
     @property
     def z(self) -> float:
@@ -197,7 +202,7 @@ class TimeBasedLift:
         return out
 
     def limit_override(
-        self, ov_req: float, ov_eff: float, was_holding: bool, k: int, path: PathTimes
+        self, ov_req: float, ov_eff: float, was_holding: bool, k: int, path: Interpolator
     ) -> OverrideVerdict:
         """Advanced Lifting's override rules (vendor §2.5, DESIGN.md §4): while Z descends the
         override is clamped to its value at descent start; while Z rises (or goes straight to
@@ -244,7 +249,7 @@ class TimeBasedLift:
         return OverrideVerdict(granted, granted, limited=granted < ov_req)
 
 
-class CoupledLift:
+class CoupledLift(LiftMotion):
     """Path-based Lifting for one range: Z at z(s) of the path position."""
 
     def __init__(self, plan: RangePlan, guard: LiftGuard, rng: LiftRange,
@@ -254,11 +259,33 @@ class CoupledLift:
         self.rng = rng
         spec = rng.start
         guard.arm(z, spec.target, spec.pos_limit, spec.down, rng.direct, 0.0)
-        self.z, self.vz, self.az, self.t = z, vz, az, t
-        self.landed = t
+        self._z, self._vz, self._az, self._t = z, vz, az, t
+        self._landed = t
         self.findings: list[GuardFinding] = []
 
-    uses_time = False
+    @property
+    def uses_time(self) -> bool:
+        return False
+
+    @property
+    def z(self) -> float:
+        return self._z
+
+    @property
+    def vz(self) -> float:
+        return self._vz
+
+    @property
+    def az(self) -> float:
+        return self._az
+
+    @property
+    def t(self) -> float:
+        return self._t
+
+    @property
+    def landed(self) -> float:
+        return self._landed
 
     @property
     def phase(self) -> LiftPhase:
@@ -266,18 +293,18 @@ class CoupledLift:
 
     @property
     def done(self) -> bool:
-        return abs(self.z - self.rng.start.target) <= 1e-12 and self.vz == 0.0
+        return abs(self._z - self.rng.start.target) <= 1e-12 and self._vz == 0.0
 
     def step(
         self, t_new: float, s: float, v: float, a: float, t_rem: float, override: float,
         refine: Refine | None = None,
     ) -> None:  # fmt: skip
         z, dz, ddz = self.plan.state(s)
-        self.t, self.vz, self.az = t_new, dz * v, ddz * v * v + dz * a
-        self.z, findings = self.guard.check(z, 0)
+        self._t, self._vz, self._az = t_new, dz * v, ddz * v * v + dz * a
+        self._z, findings = self.guard.check(z, 0)
         self.findings.extend(findings)
         if self.done:
-            self.landed = t_new
+            self._landed = t_new
 
     def needed_time(self) -> float:
         return 0.0
@@ -293,6 +320,6 @@ class CoupledLift:
         return out
 
     def limit_override(
-        self, ov_req: float, ov_eff: float, was_holding: bool, k: int, path: PathTimes
+        self, ov_req: float, ov_eff: float, was_holding: bool, k: int, path: Interpolator
     ) -> OverrideVerdict:
         return OverrideVerdict(ov_req, MAX_OVERRIDE)  # Z follows the path, overloaded or not

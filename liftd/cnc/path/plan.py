@@ -5,8 +5,6 @@ tracker's steps are cut at; how the tracker chooses a profile is `tracker.py`.""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 from ruckig import Trajectory
 
 from liftd.cnc.ruckig1 import first_time_at
@@ -16,13 +14,21 @@ CRUISE = -1
 BRAKE = -2  # the last resort: to rest (counted as an error)
 
 
-@dataclass(frozen=True, slots=True)
 class Crossing:
-    boundary: int
-    t: float  # exact time the path reaches the boundary
-    at_rest: bool  # the path stops there (a stop, or a refused plan)
-    v: float  # path velocity there (m/s)
-    a: float = 0.0  # path acceleration there (m/s²)
+    """A boundary the path reaches. A plain class: a dataclass's generated `__init__` is a
+    Python frame even in the compiled core (~4 % of a re-plan cycle, 2026-12-01)."""
+
+    __slots__ = ("a", "at_rest", "boundary", "t", "v")
+
+    def __init__(self, boundary: int, t: float, at_rest: bool, v: float, a: float = 0.0) -> None:
+        self.boundary = boundary
+        self.t = t  # exact time the path reaches the boundary
+        self.at_rest = at_rest  # the path stops there (a stop, or a refused plan)
+        self.v = v  # path velocity there (m/s)
+        self.a = a  # path acceleration there (m/s²)
+
+    def __repr__(self) -> str:
+        return f"Crossing({self.boundary}, t={self.t}, at_rest={self.at_rest}, v={self.v})"
 
 
 class Plan:
