@@ -17,6 +17,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 
+from liftd.cnc.lift.advanced import FirstRise
 from liftd.cnc.lift.path_based import RangePlan, plan_range
 from liftd.cnc.lift.profile import LiftProfiles, ProfileError
 from liftd.cnc.lift.ranges import LiftRange, find_ranges
@@ -51,6 +52,10 @@ class GeoProgram:
     # (Z's velocity when the path passes it); the LIFT_START spec (by identity) → range index
     entry_dir: tuple[float, ...] = ()
     range_of: dict[int, int] = dataclasses.field(default_factory=dict)
+    # per time-based range: Advanced Lifting's rise from Z at rest at the programmed start,
+    # (start in the generator's coordinates, profile), prepared so that a lift start costs
+    # one ruckig solve less in its GEO cycle; None for coupled or suppressed ranges
+    rises: tuple[FirstRise | None, ...] = ()
 
     def range_at(self, action: Action) -> LiftRange:
         """The range a LIFT_START action opens: one dict lookup in the GEO cycle (a scan of
@@ -77,6 +82,34 @@ def _direction_into(path: PathProgram, k: int, axis: int) -> float:
         return 0.0
     seg = path.segments[k - 1]
     return seg.geom.tangent(seg.length)[axis]
+
+
+def _first_rises(
+    ranges: tuple[LiftRange, ...], plans: tuple[RangePlan | None, ...], ch: ChannelParams
+) -> tuple[FirstRise | None, ...]:
+    """Each time-based range's rise as `AdvancedLift` plans it when Z starts the range at
+    rest at its programmed start: the same solve with the same inputs, done here."""
+    profiles: dict[str, LiftProfiles] = {}
+    out: list[FirstRise | None] = []
+    for rng, plan in zip(ranges, plans, strict=True):
+        spec = rng.start
+        if plan is not None or rng.suppressed:
+            out.append(None)
+            continue
+        if spec.axis not in profiles:
+            z = ch.axis(spec.axis)
+            profiles[spec.axis] = LiftProfiles(z.v_max, z.a_max, z.j_max)
+        sign = -1.0 if spec.down else 1.0
+        q0 = sign * spec.z_start
+        try:
+            rise = profiles[spec.axis].to_rest(
+                q0, 0.0, 0.0, max(sign * spec.pos_limit, sign * spec.target)
+            )
+        except ProfileError:
+            out.append(None)
+            continue
+        out.append(FirstRise(q0, rise))
+    return tuple(out)
 
 
 def _cap_for_lifts(
@@ -213,6 +246,7 @@ def load_program(text: str, ch: ChannelParams, start: Vec) -> GeoProgram:
             _direction_into(path, r.k_start, ch.axis_names.index(r.start.axis)) for r in ranges
         ),
         range_of={id(r.start): r.index for r in ranges},
+        rises=_first_rises(ranges, plans, ch),
     )
 
 

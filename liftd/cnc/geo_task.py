@@ -117,6 +117,7 @@ class GeoTask(BoundaryActions):
             self.ch.cycle_time,
             self.prog.plans,
             both_flags=self.ch.lift_method is not LiftMethod.LIFTING,
+            rises=self.prog.rises,
         )
         for rng in self.prog.ranges:
             self._monitor_of(self.ch.axis_names.index(rng.start.axis))

@@ -54,6 +54,17 @@ DIRECT: Final = Phase.DIRECT
 HOLD_LIMIT: Final = Phase.HOLD_LIMIT
 
 
+class FirstRise:
+    """A range's rise prepared before the run (`GeoProgram.rises`): the profile from q0 at
+    rest toward max(POS_LIMIT, POS), in the generator's coordinates."""
+
+    __slots__ = ("q0", "traj")
+
+    def __init__(self, q0: float, traj: Trajectory) -> None:
+        self.q0 = q0
+        self.traj = traj
+
+
 class AdvancedLift:
     """The set-point generator of one lift range. Pure; times are absolute seconds."""
 
@@ -95,7 +106,10 @@ class AdvancedLift:
         limit: float,
         down: bool,
         direct: bool,
+        rise: FirstRise | None = None,
     ) -> None:
+        """Start a range from (z, vz, az) at t. `rise`: the range's prepared rise, followed
+        from here when Z starts exactly where and as it was prepared for (at rest)."""
         self.sign = -1.0 if down else 1.0
         s = self.sign
         self.t = t
@@ -111,6 +125,9 @@ class AdvancedLift:
             self.phase = DIRECT
         else:
             self.phase = UP
+            if rise is not None and rise.q0 == self.q and self.v == 0.0 and self.a == 0.0:
+                self.rise, self.rise_t0, self.rise_dur = rise.traj, t, rise.traj.duration
+                self._on_rise = True  # the state is the rise's at its start
 
     def rise_and_hold(self, t: float) -> None:
         """Program error inside the range: go to POS_LIMIT and stay (vendor §2.1.3 case 2)."""

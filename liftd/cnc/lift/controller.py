@@ -21,7 +21,7 @@ Rules (vendor text §2.1, §2.5, §2.6; DESIGN.md §4), with liftd's choices whe
 
 from __future__ import annotations
 
-from liftd.cnc.lift.advanced import AdvancedLift, Refine
+from liftd.cnc.lift.advanced import AdvancedLift, FirstRise, Refine
 from liftd.cnc.lift.guard import GuardFinding, LiftGuard
 from liftd.cnc.lift.motion import CoupledLift, LiftMotion, TimeBasedLift
 from liftd.cnc.lift.path_based import RangePlan
@@ -76,11 +76,13 @@ class LiftController:
         cycle: float,
         plans: tuple[RangePlan | None, ...] = (),
         both_flags: bool = True,
+        rises: tuple[FirstRise | None, ...] = (),
     ) -> None:
         self.axes = axes
         self.names = tuple(ax.name for ax in axes)
         self.ranges = ranges
         self.plans = plans or (None,) * len(ranges)
+        self.rises = rises or (None,) * len(ranges)  # prepared first rises (time-based)
         self.both_flags = both_flags  # suppressed with a Z move: lift_active too (Advanced)
         self.cycle = cycle
         self._gens: dict[str, AdvancedLift] = {}
@@ -137,7 +139,9 @@ class LiftController:
         self.motion = (
             CoupledLift(plan, guard, rng, t, z, vz, az)
             if plan is not None
-            else TimeBasedLift(self.generator(axis), guard, rng, t, z, vz, az)
+            else TimeBasedLift(
+                self.generator(axis), guard, rng, t, z, vz, az, self.rises[rng.index]
+            )
         )
         self.current = rng
         self.axis_index = self.names.index(axis)

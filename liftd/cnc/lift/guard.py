@@ -47,9 +47,9 @@ class LiftGuard:
         if direct:
             lo, hi = min(z_start, target), max(z_start, target)
         elif down:
-            lo, hi = min(min(pos_limit, target), z_start), max(z_start, target)
+            lo, hi = min(min(pos_limit, target), z_start), max(z_start, target)  # noqa: PLW3301
         else:
-            lo, hi = min(z_start, target), max(max(pos_limit, target), z_start)
+            lo, hi = min(z_start, target), max(max(pos_limit, target), z_start)  # noqa: PLW3301
         self.lo = max(self.lo_sw, lo - stop_margin - POS_TOL)
         self.hi = min(self.hi_sw, hi + stop_margin + POS_TOL)
 

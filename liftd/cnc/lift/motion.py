@@ -12,7 +12,17 @@ The GEO task holds the active one; it never asks which kind it is.
 
 from __future__ import annotations
 
-from liftd.cnc.lift.advanced import DONE, DOWN, HOLD_LIMIT, IDLE, UP, AdvancedLift, Phase, Refine
+from liftd.cnc.lift.advanced import (
+    DONE,
+    DOWN,
+    HOLD_LIMIT,
+    IDLE,
+    UP,
+    AdvancedLift,
+    FirstRise,
+    Phase,
+    Refine,
+)
 from liftd.cnc.lift.guard import GuardFinding, LiftGuard
 from liftd.cnc.lift.path_based import RangePlan
 from liftd.cnc.lift.ranges import LiftRange
@@ -111,14 +121,15 @@ class TimeBasedLift(LiftMotion):
     """Advanced Lifting's generator for one range (DESIGN.md §4, lift-algorithm.md §3)."""
 
     def __init__(self, gen: AdvancedLift, guard: LiftGuard, rng: LiftRange,
-                 t: float, z: float, vz: float, az: float) -> None:  # fmt: skip
+                 t: float, z: float, vz: float, az: float,
+                 rise: FirstRise | None = None) -> None:  # fmt: skip
         self.gen = gen
         self.guard = guard
         self.rng = rng
         spec = rng.start
         beyond = rng.beyond_limit or ((z < spec.pos_limit) if spec.down else (z > spec.pos_limit))
         direct = rng.suppressed or beyond
-        gen.start(t, z, vz, az, spec.target, spec.pos_limit, spec.down, direct)
+        gen.start(t, z, vz, az, spec.target, spec.pos_limit, spec.down, direct, rise)
         axis = guard.axis
         a, j = axis.a_max, axis.j_max
         margin = vz * vz / (2.0 * a) + (abs(vz) * a / j if j != INF else 0.0)

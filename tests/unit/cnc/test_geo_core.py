@@ -311,3 +311,30 @@ def test_an_event_cycle_plans_only_its_own_state() -> None:
     assert ip.v < v_before and ip.a < 0.0  # it acts in its own cycle: the path brakes
     task.step(GeoInputs(override=0.5), 601 * dt)
     assert len(ip.queue) == ip.fill_per_cycle  # growing again
+
+
+def test_a_lift_start_follows_the_rise_prepared_with_the_program() -> None:
+    """Each time-based range's rise from Z at rest at its start is solved when the program
+    is prepared (`GeoProgram.rises`), and the lift start's GEO cycle follows that profile
+    instead of solving it again; a lift whose Z does not start at rest (the path enters the
+    range moving Z too) solves its own."""
+    ch = make_channel(lift_min_dist=0.005)  # the last range (2 mm) is suppressed
+    text = ("G01 X10 Y10 Z1 F6000\nZ[LIFT_START POS=1 POS_LIMIT=30]\nG01 X60 F12000\n"
+            "Z[LIFT_END]\nZ[LIFT_START POS=1 POS_LIMIT=20]\nG01 Y40\nZ[LIFT_END]\n"
+            "Z[LIFT_START POS=1 POS_LIMIT=25]\nG01 X20\nZ[LIFT_END]\n"
+            "Z[LIFT_START POS=1 POS_LIMIT=20]\nG01 X22\nZ[LIFT_END]\nM30\n")  # fmt: skip
+    task = GeoTask(ch, text)
+    rises = task.prog.rises
+    assert len(rises) == 4 and None not in rises[:3]
+    assert rises[3] is None  # suppressed: Z goes straight to POS
+    followed = []
+    for k in range(1, 20_000):
+        before = task.lift.current
+        snap = task.step(GeoInputs(1.0, False, None, False), k * ch.cycle_time)
+        rng = task.lift.current
+        if rng is not None and rng is not before and rises[rng.index] is not None:
+            gen = task.lift.motion.gen  # type: ignore[union-attr]
+            followed.append(gen.rise is rises[rng.index].traj)  # type: ignore[union-attr]
+        if snap.state is ChannelState.READY and k > 1:
+            break
+    assert followed == [False, True, True]  # the first enters moving Z (X10 Y10 Z1)

@@ -138,3 +138,37 @@ def test_ruckig_failure_falls_back_to_a_safe_move(monkeypatch: pytest.MonkeyPatc
     assert gen.fallbacks >= 1
     assert z.max() <= 0.05 + 1e-7 and abs(z[-1]) <= 1e-9
     assert max(fd(z)) <= 1 + 1e-9
+
+
+@pytest.mark.parametrize(("z0", "target", "limit", "down"), [
+    (0.001, 0.001, 0.05, False),  # rise and land where it started
+    (0.0, 0.02, 0.05, False),  # POS above the start
+    (0.04, 0.01, 0.0, True),  # a downward lift (mirrored coordinates)
+])  # fmt: skip
+def test_a_prepared_first_rise_gives_the_cycle_the_same_set_points(
+    z0: float, target: float, limit: float, down: bool
+) -> None:
+    """GeoProgram prepares each range's rise from Z at rest at its start (one ruckig solve
+    less in the lift start's GEO cycle); the generator started with it follows it from there,
+    and every set-point is the one it computes without it, bit for bit, also through an
+    override step; a rise prepared for another start is not used."""
+    from liftd.cnc.lift.advanced import FirstRise  # noqa: PLC0415
+
+    prof = LiftProfiles(V, A, J)
+    sign = -1.0 if down else 1.0
+    q0 = sign * z0
+    prepared = FirstRise(q0, prof.to_rest(q0, 0.0, 0.0, max(sign * limit, sign * target)))
+    runs = []
+    for rise in (None, prepared, FirstRise(q0 + 1e-9, prepared.traj)):
+        gen = AdvancedLift(LiftProfiles(V, A, J), DT)
+        gen.start(0.0, z0, 0.0, 0.0, target, limit, down, direct=False, rise=rise)
+        assert (gen.rise is prepared.traj) == (rise is prepared)
+        states, t_rem, t = [], 0.3, 0.0
+        for k in range(600):
+            t += DT
+            gen.step(t, t_rem if k < 100 else t_rem / 1.5)
+            t_rem = max(0.0, t_rem - DT * (1.0 if k < 100 else 1.5))
+            states.append((gen.z, gen.vz, gen.az, gen.phase))
+        runs.append(states)
+    assert runs[1] == runs[0] and runs[2] == runs[0]
+    assert max(sign * s[0] for s in runs[0]) > sign * z0 + 0.005  # it did lift
