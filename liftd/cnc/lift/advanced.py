@@ -26,6 +26,7 @@ from typing import Final
 from ruckig import Trajectory
 
 from liftd.cnc.lift.profile import LiftProfiles, ProfileError, position_range, state_at
+from liftd.cnc.ruckig1 import Evaluator, Phases
 
 INF = float("inf")
 # the exact remaining path time, when the generator was given a lower bound of it and its
@@ -58,11 +59,12 @@ class FirstRise:
     """A range's rise prepared before the run (`GeoProgram.rises`): the profile from q0 at
     rest toward max(POS_LIMIT, POS), in the generator's coordinates."""
 
-    __slots__ = ("q0", "traj")
+    __slots__ = ("phases", "q0", "traj")
 
     def __init__(self, q0: float, traj: Trajectory) -> None:
         self.q0 = q0
         self.traj = traj
+        self.phases = Phases(traj)  # read here, in preparation: the cycles evaluate natively
 
 
 class AdvancedLift:
@@ -85,6 +87,8 @@ class AdvancedLift:
         self.peak = -INF  # highest q reached (for the summary)
         self.landed = 0.0  # exact time Z reached the target
         self.rise: Trajectory | None = None  # last rise profile (fallback)
+        self.rise_ev = Evaluator(Trajectory(1))  # the rise's states, read natively
+        self.plan_ev = Evaluator(Trajectory(1))  # the plan's (re-made when the plan changes)
         self.rise_t0 = 0.0
         self.rise_dur = 0.0
         # the state is the rise's at (t − rise_t0): the next cycle follows it without a new
@@ -127,6 +131,7 @@ class AdvancedLift:
             self.phase = UP
             if rise is not None and rise.q0 == self.q and self.v == 0.0 and self.a == 0.0:
                 self.rise, self.rise_t0, self.rise_dur = rise.traj, t, rise.traj.duration
+                self.rise_ev = Evaluator(rise.traj, rise.phases)
                 self._on_rise = True  # the state is the rise's at its start
 
     def rise_and_hold(self, t: float) -> None:
@@ -220,17 +225,21 @@ class AdvancedLift:
         self.t_need = self.plan.duration
 
     def _follow(self, t_new: float) -> None:
-        if self.plan is None:
+        plan = self.plan
+        if plan is None:
             return
+        ev = self.plan_ev
+        if ev.traj is not plan:
+            ev = self.plan_ev = Evaluator(plan)
         local = t_new - self.plan_t0
-        if local >= self.plan.duration - TIME_TOL:  # within 1 ns of the end: rounding of t
+        if local >= ev.dur - TIME_TOL:  # within 1 ns of the end: rounding of t
             self.q, self.v, self.a = self.target, 0.0, 0.0  # snap (ruckig #160 regime)
-            self.landed = self.plan_t0 + self.plan.duration
+            self.landed = self.plan_t0 + ev.dur
             self.plan = None
             if self.phase is DOWN:
                 self.phase = DONE
             return
-        self._set(state_at(self.plan, local))
+        self._set(ev.at(local))
 
     def _descent_fits(self, traj: Trajectory, start_q: float) -> bool:
         lo, hi = position_range(traj)
@@ -244,12 +253,13 @@ class AdvancedLift:
         else:
             up = self.prof.to_rest(self.q, self.v, self.a, max(self.limit, self.target))
             self.rise, self.rise_t0, self.rise_dur = up, self.t, up.duration
+            self.rise_ev = Evaluator(up)
         base = self.t - self.rise_t0  # the rise's local time of the current state
         goal = max(self.limit, self.target)
         if base + dt >= self.rise_dur - TIME_TOL:
             nxt = (goal, 0.0, 0.0)  # at rest at the goal (ruckig's end may round a bit past it)
         else:
-            nxt = state_at(up, base + dt)
+            nxt = self.rise_ev.at(base + dt)
             if nxt[0] > goal:
                 nxt = (goal, nxt[1], nxt[2])
         desc = self.prof.to_rest(nxt[0], nxt[1], nxt[2], self.target, into=self._desc)

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from ruckig import Trajectory
 
-from liftd.cnc.ruckig1 import first_time_at
+from liftd.cnc.ruckig1 import Evaluator, first_time_at
 
 EPS_S = 1e-12  # m: a boundary counts as reached within this distance
 CRUISE = -1
@@ -35,7 +35,8 @@ class Plan:
     """A ruckig profile started at t0, extended at constant velocity after its end; its end
     snaps to the goal (target position, goal velocity) it was planned for."""
 
-    __slots__ = ("dur", "goal", "p_end", "serves", "soft_from", "t0", "traj", "v_end", "window")
+    __slots__ = ("dur", "ev", "goal", "p_end", "serves", "soft_from", "t0", "traj", "v_end",
+                 "window")  # fmt: skip
 
     def __init__(
         self, traj: Trajectory, t0: float, goal: int, window: int, p_goal: float | None,
@@ -51,6 +52,7 @@ class Plan:
         self.soft_from = goal
         self.window = window  # window end when planned
         self.dur: float = float(traj.duration)
+        self.ev = Evaluator(traj)  # the cycles' states, natively from the second on
         p, v, _ = traj.at_time(self.dur)
         p_end, v_end = float(p[0]), float(v[0])
         self.p_end = p_goal if p_goal is not None and abs(p_end - p_goal) <= 1e-9 else p_end
@@ -60,9 +62,7 @@ class Plan:
         local = t - self.t0
         if local >= self.dur:
             return self.p_end + self.v_end * (local - self.dur), self.v_end, 0.0
-        local = max(0.0, local)
-        p, v, a = self.traj.at_time(local)
-        return p[0], v[0], a[0]
+        return self.ev.at(max(0.0, local))
 
     def time_at(self, s: float, t_default: float) -> float:
         """Absolute time the plan first reaches position s (t_default if it never does)."""

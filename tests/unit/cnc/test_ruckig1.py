@@ -1,0 +1,63 @@
+"""The one ruckig wrapper: the native evaluation of a profile (`Phases`, `Evaluator`) gives
+what ruckig's own `at_time` gives, bit for bit."""
+
+from __future__ import annotations
+
+import random
+
+from ruckig import Trajectory
+
+from liftd.cnc.ruckig1 import Evaluator, Phases, ProfileError, Ruckig1, state_at
+
+
+def _profiles(n: int, seed: int = 1) -> list[Trajectory]:
+    """Random profiles of both interfaces: from states within and beyond the limits (a brake
+    pre-trajectory), to rest and to a velocity, time-optimal and stretched."""
+    calc, rng = Ruckig1(), random.Random(seed)
+    out: list[Trajectory] = []
+    while len(out) < n:
+        v_max, a_max, j_max = rng.uniform(0.1, 2.0), rng.uniform(1.0, 30.0), rng.uniform(50, 3000)
+        p0, v0, a0 = (
+            rng.uniform(-0.1, 0.1),
+            rng.uniform(-1.5, 1.5) * v_max,
+            rng.uniform(-1.5, 1.5) * a_max,
+        )
+        try:
+            if len(out) % 3 == 0:
+                traj = calc.velocity(p0, v0, a0, rng.uniform(0.0, v_max), a_max, j_max)
+            else:
+                stretch = rng.choice([None, None, rng.uniform(0.0, 1.0)])
+                traj = calc.position(
+                    p0, v0, a0, rng.uniform(-0.1, 0.1), rng.choice([0.0, rng.uniform(0, v_max)]),
+                    v_max, a_max, j_max, forward_only=False, min_duration=stretch,
+                )  # fmt: skip
+        except ProfileError:
+            continue
+        out.append(traj)
+    return out
+
+
+def test_the_native_evaluation_is_ruckigs_own_bit_for_bit() -> None:
+    rng = random.Random(2)
+    braked = 0
+    for traj in _profiles(2000):
+        ph = Phases(traj)
+        prof = traj.profiles[0][0]
+        braked += prof.brake.duration > 0.0
+        starts = [prof.brake.duration + sum(prof.t[:i]) for i in range(8)]  # phase boundaries
+        dur = traj.duration
+        for t in [0.0, dur, dur + 0.01, *starts, *(rng.uniform(0.0, dur) for _ in range(20))]:
+            p, v, a = traj.at_time(t)
+            assert ph.at(t) == (p[0], v[0], a[0]), (t, dur)
+    assert braked > 100  # profiles that start beyond the limits were among them
+
+
+def test_an_evaluator_answers_as_state_at_from_its_first_call_on() -> None:
+    """Clamped to [0, duration] like `state_at`; the binding answers the first call, the
+    profile's pieces (read at the second) every later one."""
+    for traj in _profiles(200, seed=3):
+        ev = Evaluator(traj)
+        dur = traj.duration
+        times = [0.3 * dur, -1.0, 0.0, dur, 2 * dur, 0.7 * dur]
+        assert [ev.at(t) for t in times] == [state_at(traj, t) for t in times]
+        assert ev.phases is not None and ev.dur == dur
