@@ -9,8 +9,8 @@ CPU per cycle, bit-identical results. Without a C compiler they run as Python.
 """
 
 # The cycle's path: everything `GeoTask.step` and `Machine.step` run, and the automatic PLC of
-# `simulate`. Not compiled: preparation (nc/, geo_program, the lists), and `lift/profile.py`,
-# the thin wrapper tests use to inject ruckig failures (a compiled class cannot be patched).
+# `simulate`. Not compiled: preparation (nc/, geo_program, the lists). Tests that inject ruckig
+# failures patch `lift/profile.py` in the core run as Python (tests/support/pure_core.py).
 COMPILED: tuple[str, ...] = (
     "liftd.cnc.actions",
     "liftd.cnc.geo_task",
@@ -23,6 +23,7 @@ COMPILED: tuple[str, ...] = (
     "liftd.cnc.lift.monitor",
     "liftd.cnc.lift.motion",
     "liftd.cnc.lift.path_based",
+    "liftd.cnc.lift.profile",
     "liftd.cnc.path.bounds",
     "liftd.cnc.path.constraints",
     "liftd.cnc.path.geometry",

@@ -5,13 +5,15 @@ v 0.8 m/s, a 10 m/s², j 500 m/s³, POS_LIMIT 50 mm)."""
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
 import pytest
 
 from liftd.cnc.lift.advanced import AdvancedLift, Phase
-from liftd.cnc.lift.profile import LiftProfiles, ProfileError
+from liftd.cnc.lift.profile import LiftProfiles
+from tests.support.pure_core import PureCore
 
 DT = 1e-3
 V, A, J = 0.8, 10.0, 500.0
@@ -123,21 +125,32 @@ def test_direct_move_when_no_time() -> None:
     )
 
 
-def test_ruckig_failure_falls_back_to_a_safe_move(monkeypatch: pytest.MonkeyPatch) -> None:
-    calls = {"n": 0}
-    real = LiftProfiles.to_rest
+def test_ruckig_failure_falls_back_to_a_safe_move(pure_core: PureCore) -> None:
+    """Ruckig refuses three profiles in a row while Z flies: the generator falls back to a
+    safe move, stays within POS_LIMIT and the axis limits, and lands at rest. The fault is
+    patched into `LiftProfiles.to_rest`, which only the core run as Python allows."""
+    code = """
+import json
+from liftd.cnc.lift.profile import LiftProfiles, ProfileError
+from tests.unit.cnc.lift.test_advanced_generator import fd, fly
 
-    def flaky(self: LiftProfiles, *args: float, **kw: float | None) -> object:
-        calls["n"] += 1
-        if 40 <= calls["n"] < 43:
-            raise ProfileError("injected")
-        return real(self, *args, **kw)
-
-    monkeypatch.setattr(LiftProfiles, "to_rest", flaky)
-    t, z, gen = fly(0.4, target=0.0, limit=0.05)
-    assert gen.fallbacks >= 1
-    assert z.max() <= 0.05 + 1e-7 and abs(z[-1]) <= 1e-9
-    assert max(fd(z)) <= 1 + 1e-9
+calls = {"n": 0}
+real = LiftProfiles.to_rest
+def flaky(self, *args, **kw):
+    calls["n"] += 1
+    if 40 <= calls["n"] < 43:
+        raise ProfileError("injected")
+    return real(self, *args, **kw)
+LiftProfiles.to_rest = flaky
+t, z, gen = fly(0.4, target=0.0, limit=0.05)
+print(json.dumps({"calls": calls["n"], "fallbacks": gen.fallbacks, "z_max": float(z.max()),
+                  "z_end": float(z[-1]), "fd_max": max(fd(z))}))
+"""
+    res = json.loads(pure_core.run(code))
+    assert res["calls"] >= 43, "the fault must be injected"
+    assert res["fallbacks"] >= 1
+    assert res["z_max"] <= 0.05 + 1e-7 and abs(res["z_end"]) <= 1e-9
+    assert res["fd_max"] <= 1 + 1e-9
 
 
 @pytest.mark.parametrize(("z0", "target", "limit", "down"), [
