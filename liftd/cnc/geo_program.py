@@ -24,7 +24,7 @@ from liftd.cnc.lift.ranges import LiftRange, find_ranges
 from liftd.cnc.nc import DecoderContext, NcError, decode
 from liftd.cnc.nc.blocks import Severity
 from liftd.cnc.params import PLANNING_MARGIN, ChannelParams, LiftMethod
-from liftd.cnc.path.geometry import Vec
+from liftd.cnc.path.geometry import Vec, within
 from liftd.cnc.path.program import Action, ActionKind, PathProgram, prepare
 from liftd.cnc.path.table import PathTable, build_table
 from liftd.cnc.path.velocity import brake_distance
@@ -56,6 +56,9 @@ class GeoProgram:
     # (start in the generator's coordinates, profile), prepared so that a lift start costs
     # one ruckig solve less in its GEO cycle; None for coupled or suppressed ranges
     rises: tuple[FirstRise | None, ...] = ()
+    # the axes the program lifts (its LIFT_STARTs' axes, in order of first use): a run's lift
+    # generators, guards and monitors are built for these, not once per range
+    lift_axes: tuple[str, ...] = ()
 
     def range_at(self, action: Action) -> LiftRange:
         """The range a LIFT_START action opens: one dict lookup in the GEO cycle (a scan of
@@ -247,7 +250,13 @@ def load_program(text: str, ch: ChannelParams, start: Vec) -> GeoProgram:
         ),
         range_of={id(r.start): r.index for r in ranges},
         rises=_first_rises(ranges, plans, ch),
+        lift_axes=tuple(dict.fromkeys(r.start.axis for r in ranges)),
     )
+
+
+def same_start(a: Vec, b: Vec) -> bool:
+    """Whether a program prepared for start `a` runs from `b` (PreparedPrograms.SAME_START_M)."""
+    return within(a, b, PreparedPrograms.SAME_START_M)
 
 
 class PreparedPrograms:
@@ -266,10 +275,18 @@ class PreparedPrograms:
         self._by_start: dict[Vec, GeoProgram] = {}
         self.loads = 0  # programs decoded and planned
 
-    def from_start(self, start: Vec) -> GeoProgram:
+    def prepared(self, start: Vec) -> GeoProgram | None:
+        """The program prepared for a start within SAME_START_M of `start`, if there is one
+        (nothing is decoded: a GEO cycle may ask)."""
         for key, prog in self._by_start.items():
-            if all(abs(a - b) <= self.SAME_START_M for a, b in zip(key, start, strict=True)):
+            if same_start(key, start):
                 return prog
+        return None
+
+    def from_start(self, start: Vec) -> GeoProgram:
+        prog = self.prepared(start)
+        if prog is not None:
+            return prog
         prog = load_program(self.text, self.ch, start)
         self.loads += 1
         if len(self._by_start) >= self.capacity:

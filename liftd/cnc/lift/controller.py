@@ -77,6 +77,7 @@ class LiftController:
         plans: tuple[RangePlan | None, ...] = (),
         both_flags: bool = True,
         rises: tuple[FirstRise | None, ...] = (),
+        lift_axes: tuple[str, ...] | None = None,
     ) -> None:
         self.axes = axes
         self.names = tuple(ax.name for ax in axes)
@@ -97,9 +98,13 @@ class LiftController:
         self.ending = False  # LIFT_END passed while Z still moved: close when Z is there
         self.counts = (0,) * len(axes)  # lifts started per axis since the program started
         self.findings: list[GuardFinding] = []  # consumed by the GEO task each cycle
-        for rng in ranges:  # built here, not at the range's start in a GEO cycle
-            self.generator(rng.start.axis)
-            self.guard(rng.start.axis)
+        # built here, not at a range's start in a GEO cycle; per axis that lifts (the program
+        # prepares them: a loop over its ranges at a repeat START cost ~50 µs on 500 parts)
+        if lift_axes is None:
+            lift_axes = tuple(dict.fromkeys(rng.start.axis for rng in ranges))
+        for axis in lift_axes:
+            self.generator(axis)
+            self.guard(axis)
 
     def _axis(self, name: str) -> AxisParams:
         return self.axes[self.names.index(name)]

@@ -14,6 +14,17 @@ Vec = tuple[float, ...]
 TWO_PI = 2.0 * math.pi
 
 
+def within(a: Vec, b: Vec, tol: float) -> bool:
+    """Whether two positions of the same axes differ by at most `tol` in every axis (indexed:
+    native in the compiled core, where a generator over a zip is a Python-level iteration)."""
+    if len(a) != len(b):
+        return False
+    for i in range(len(a)):  # noqa: SIM110 (all() over a generator is not native)
+        if abs(a[i] - b[i]) > tol:
+            return False
+    return True
+
+
 @dataclass(frozen=True, slots=True)
 class LineSeg:
     start: Vec

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import itertools
 
+from bench.gen import nesting_program
 from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.params import LiftMethod
 from liftd.cnc.plc import Schedule, SimPlc
@@ -30,11 +31,22 @@ def run_once(task: GeoTask, k0: int, dt: float) -> tuple[int, list[GeoSnapshot]]
             return k, out
 
 
+def assert_same_run(got: list[GeoSnapshot], want: list[GeoSnapshot]) -> None:
+    assert len(got) == len(want)
+    for g, w in zip(got, want, strict=True):  # the same run, cycle for cycle
+        assert g._replace(cycle=0, events=()) == w._replace(cycle=0, events=()), g.t
+
+
 def test_a_repeat_from_the_prepared_end_position_loads_nothing_and_equals_a_fresh_start() -> None:
-    for method in (LiftMethod.ADVANCED, LiftMethod.LIFTING):
+    """Runs 2 and 3 start on a state built ahead (before the loop, and in the cycles after
+    the previous START, while what that START replaced is released a few objects a cycle):
+    each is the run a fresh task started there makes, bit for bit."""
+    nesting = nesting_program(12)  # 11 lift records and a long queue to release in a run
+    for method, text, lifts in ((LiftMethod.ADVANCED, DEMO, 5), (LiftMethod.LIFTING, DEMO, 5),
+                                (LiftMethod.ADVANCED, nesting, 11)):  # fmt: skip
         ch = make_channel(method, lift_min_dist=0.005)
         dt = ch.cycle_time
-        task = GeoTask(ch, DEMO, autostart=False)
+        task = GeoTask(ch, text, autostart=False)
         task.prepare_next_run()  # what the loop does before it starts cycling
         assert task.programs.loads == 2
         k, first = run_once(task, 0, dt)
@@ -42,16 +54,16 @@ def test_a_repeat_from_the_prepared_end_position_loads_nothing_and_equals_a_fres
         assert end.state is ChannelState.READY
         assert max(abs(a - b) for a, b in zip(end.positions, task.prog.path.end_position,
                                               strict=True)) <= 1e-9  # fmt: skip
-        _, second = run_once(task, k, dt)
-        assert task.programs.loads == 2, method  # the repeat decoded nothing in the cycle
-        assert second[-1].state is ChannelState.READY and task.runs == 2
-
-        fresh = GeoTask(ch, DEMO, autostart=False, start_position=end.positions)
-        _, expected = run_once(fresh, k, dt)
-        assert len(second) == len(expected)
-        for got, want in zip(second, expected, strict=True):  # the same run, cycle for cycle
-            assert got._replace(cycle=0, events=()) == want._replace(cycle=0, events=()), got.t
-        assert sum(1 for s in second for e in s.events if e.name == "lift.start") == 5
+        for run in (2, 3):
+            assert task.next_run_ready, (method, run)  # START only swaps it in
+            k0 = k
+            k, again = run_once(task, k0, dt)
+            assert task.programs.loads == 2, method  # the repeat decoded nothing in the cycle
+            assert again[-1].state is ChannelState.READY and task.runs == run
+            fresh = GeoTask(ch, text, autostart=False, start_position=end.positions)
+            _, expected = run_once(fresh, k0, dt)
+            assert_same_run(again, expected)
+            assert sum(1 for s in again for e in s.events if e.name == "lift.start") == lifts
 
 
 def test_a_start_from_elsewhere_prepares_the_program_for_that_position() -> None:
