@@ -46,6 +46,11 @@ from liftd.runtime.shared import (
 )
 
 OVERRUN_EVENT_EVERY_NS = 1_000_000_000  # at most one geo.overrun event per second
+# geo.compute_over events: each names the cycle, its line and what the cycle did, so that a
+# slow cycle of ours can be told from the machine's own stalls (bench_rt.py); a token bucket of
+# COMPUTE_OVER_BURST events refilled at one per COMPUTE_OVER_EVENT_EVERY_NS
+COMPUTE_OVER_EVENT_EVERY_NS = 100_000_000
+COMPUTE_OVER_BURST = 10
 READY: Final = ChannelState.READY  # a C static: `ChannelState.READY` is two lookups a use
 
 
@@ -86,9 +91,13 @@ class GeoLoop:
         self.pending_cfg = cfg
         self.reload_gen = 0
 
-    def _check_reload(self, snaps: list[GeoSnapshot]) -> None:
+    def _check_reload(self, snaps: list[GeoSnapshot]) -> bool:
+        """Take a configuration the daemon sent, and apply it to each channel at its program
+        boundary; True when this cycle did either (it may have decoded a program)."""
         words = self.shared.words
+        took = False
         if words[RELOAD] != self.reload_gen:
+            took = True
             words[LOADING] += 1  # a large program takes a while to arrive
             self.reload_gen, cfg = read_message(self.control_fd)  # one per reload, in order
             self.pending_cfg = cfg
@@ -96,7 +105,7 @@ class GeoLoop:
             words[RELOAD_TAKEN] = self.reload_gen
             words[LOADING] += 1
         if self.pending_cfg is self.cfg:  # nothing waits for a program boundary (every cycle)
-            return
+            return took
         for i, pending in enumerate(self.pending):
             snap = snaps[i]
             if pending is None or snap.state not in (ChannelState.READY, ChannelState.ERROR):
@@ -104,6 +113,7 @@ class GeoLoop:
             # the channel's program boundary: its new lists and program take effect from
             # where its axes are; the other channels go on
             self.pending[i] = None
+            took = True
             self.current[i] = pending
             words[LOADING] += 1  # decoding and planning: tell the supervisor it works
             task = GeoTask(pending.channel, pending.program_text, autostart=False,
@@ -120,6 +130,7 @@ class GeoLoop:
                 self.plcs[i].request(Command.START)
         if not any(self.pending):
             self.cfg = self.pending_cfg  # every channel has it
+        return took
 
     def run(self) -> None:
         shared, cfg = self.shared, self.cfg
@@ -139,6 +150,7 @@ class GeoLoop:
         channels = range(n)
         last: list[GeoSnapshot | None] = [None] * n
         last_overrun_event = -OVERRUN_EVENT_EVERY_NS
+        over_tokens, over_refilled = COMPUTE_OVER_BURST, 0
         sleep_until = rt.spin_until if self.spin else rt.sleep_until
         tags, plcs, tasks, step = self.tags, self.plcs, self.machine.tasks, self.machine.step
         send = self.events.send
@@ -151,9 +163,11 @@ class GeoLoop:
             late = wake - deadline
             k += 1
             t = k * dt
+            applied = False
             while (raw := shared.inputs.get()) is not None:  # rare: only when the PLC writes
                 w = unpack_input(raw)
                 if w.channel < n and plcs[w.channel].apply(w):  # logged with its cycle
+                    applied = True
                     send(Event("geo.plc_input", t, 0, w.value, w.signal.name.lower()),
                          tags[w.channel])  # fmt: skip
             inputs = [plcs[i].inputs(last[i], t) for i in channels]
@@ -177,7 +191,7 @@ class GeoLoop:
                 ended = snap.state is READY and (before is None or before.state is not READY)
                 if ended and self.current[i].repeat and tasks[i].runs:
                     plcs[i].request(start)
-            self._check_reload(snaps)
+            reloaded = self._check_reload(snaps)
             last = list(snaps)
             end = now_ns()
             compute_ns = end - wake
@@ -192,6 +206,14 @@ class GeoLoop:
             if compute_ns > quarter_ns:
                 over += 1
                 words[COMPUTE_OVER] = over
+                gained = (end - over_refilled) // COMPUTE_OVER_EVENT_EVERY_NS
+                if gained:
+                    over_tokens = min(COMPUTE_OVER_BURST, over_tokens + gained)
+                    over_refilled += gained * COMPUTE_OVER_EVENT_EVERY_NS
+                if over_tokens:
+                    over_tokens -= 1
+                    send(Event("geo.compute_over", t, snaps[0].line, compute_ns / 1e3,
+                               cycle_kinds(snaps, applied, reloaded)))  # fmt: skip
             if end > deadline + period_ns:
                 exceeded += 1
                 words[EXCEEDED] = exceeded
@@ -206,6 +228,19 @@ class GeoLoop:
                 send(Event("geo.regrid", t, snaps[0].line, float(skipped)))
             if self.events.dropped:
                 words[EVENTS_DROPPED] = self.events.dropped
+
+
+def cycle_kinds(snaps: list[GeoSnapshot], applied: bool, reloaded: bool) -> str:
+    """What a cycle did, for its geo.compute_over event: the names of its channels' events
+    (lift.start, geo.program_start, …), `plc_input` when a PLC write took effect in it,
+    `reload` when it took a configuration (and may have decoded a program); "" for a cycle
+    that did nothing but move (its own cost is a few µs: bench_step.py)."""
+    names = sorted({ev.name for s in snaps for ev in s.events})
+    if applied:
+        names.append("plc_input")
+    if reloaded:
+        names.append("reload")
+    return ",".join(names)
 
 
 def main(control_fd: int, events_fd: int, shm_fd: int) -> bool:

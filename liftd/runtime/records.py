@@ -46,6 +46,7 @@ EVENT_NAMES = (
     "lift.z_acc_warning",
     "lift.z_acc_error",
     "geo.overrun",
+    "geo.compute_over",
     "geo.regrid",
     "geo.reloaded",
     "geo.plan_error",

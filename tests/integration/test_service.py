@@ -129,6 +129,13 @@ def test_without_a_program_the_daemon_idles_and_liftd_reload_brings_one(tmp_path
             assert time.monotonic() < deadline
             time.sleep(0.02)
         assert d.read_symbol("GEO.cycle", "<Q") > cycles
+        # the cycle that decoded the program took far more than a quarter of the period, and
+        # its geo.compute_over line says so and why (VM stalls may add lines that say "")
+        assert d.read_symbol("GEO.timing.compute_over_25pct", "<I") >= 1
+        slow = [rec for rec in list(d.logs) if rec.get("event") == "geo.compute_over"]
+        took = [rec for rec in slow if "reload" in (rec.get("text") or "").split(",")]
+        assert len(took) == 1 and took[0]["value"] > 250.0, slow
+        assert abs(took[0]["t"] * 1000 - round(took[0]["t"] * 1000)) < 1e-6  # a GEO cycle
     finally:
         assert d.stop() == 0
 
