@@ -93,6 +93,41 @@ def baseline_result(proc: subprocess.Popen[str] | None) -> dict[str, object] | N
             "over_250us_pct": round(100 * over / max(total, 1), 4)}  # fmt: skip
 
 
+def probe_start(seconds: float, rt: bool, cpu: int = -1) -> subprocess.Popen[str]:
+    """bench/noise_probe.py for `seconds`: a constant workload on the same 1 ms grid with the
+    same RT settings (on the loop's cpu when it is pinned), whose cycles above 25 % are this
+    machine's compute stalls."""
+    cmd = [sys.executable, str(ROOT / "bench" / "noise_probe.py"), "--seconds", str(seconds),
+           "--priority", "80" if rt else "0", "--cpu", str(cpu)]  # fmt: skip
+    return subprocess.Popen(cmd, stdout=subprocess.PIPE, text=True)
+
+
+def probe_result(proc: subprocess.Popen[str]) -> dict[str, object] | None:
+    out, _ = proc.communicate(timeout=120)
+    lines = out.strip().splitlines()
+    return json.loads(lines[-1]) if lines else None
+
+
+def over_kinds(logs: list[dict[str, object]]) -> dict[str, object]:
+    """The loop's geo.compute_over lines grouped by what their cycle did ("" = it only moved:
+    bench_step.py puts such a cycle at a few µs), with the compute of each group (µs)."""
+    groups: dict[str, list[float]] = {}
+    for rec in logs:
+        if rec.get("event") == "geo.compute_over":
+            value = rec.get("value")
+            groups.setdefault(str(rec.get("text") or "-"), []).append(
+                float(value) if isinstance(value, (int, float)) else 0.0
+            )
+    return {
+        kind: {
+            "cycles": len(v),
+            "median_us": round(sorted(v)[len(v) // 2]),
+            "max_us": round(max(v)),
+        }
+        for kind, v in sorted(groups.items(), key=lambda kv: -len(kv[1]))
+    }
+
+
 def one_run(minutes: float, rt: bool, pollers: int = 4, notifiers: int = 1,
             subscriptions: int = 10, window_s: float = 60.0,
             override_every_s: float = 1.0,
@@ -117,7 +152,9 @@ def one_run(minutes: float, rt: bool, pollers: int = 4, notifiers: int = 1,
             procs, out = load.start(d.net_id, d.address, seconds, pollers, 1000.0, notifiers, 10,
                                     subscriptions, override_every_s)  # fmt: skip
             cpu = spin.get("cpu", -1) if spin else -1
-            baseline = baseline_start(seconds, rt, cpu if isinstance(cpu, int) else -1)
+            cpu = cpu if isinstance(cpu, int) else -1
+            baseline = baseline_start(seconds, rt, cpu)
+            probe = probe_start(seconds, rt, cpu)
             rss: list[tuple[float | None, float | None]] = []
             exceeded: list[tuple[float, int]] = []
             end = time.monotonic() + seconds
@@ -128,6 +165,7 @@ def one_run(minutes: float, rt: bool, pollers: int = 4, notifiers: int = 1,
                 time.sleep(min(10.0, max(0.0, end - time.monotonic())))
             results = load.collect(procs, out, 120)
             machine = baseline_result(baseline)
+            null_loop = probe_result(probe)
             time.sleep(0.3)
         finally:
             d.stop(timeout=30)
@@ -144,6 +182,8 @@ def one_run(minutes: float, rt: bool, pollers: int = 4, notifiers: int = 1,
             "lateness_us": stopped.get("lateness_us"), "compute_us": stopped.get("compute_us"),
             "compute_over_25pct": stopped.get("compute_over_25pct"),
             "machine_baseline_lateness_us": machine,
+            "machine_baseline_compute": null_loop,
+            "compute_over_by_kind": over_kinds(d.logs),
             "override_writes": sum(r["writes"] for r in writers),
             "override_write_errors": sum(r["errors"] for r in writers),
             "exceeded": stopped.get("exceeded"),
