@@ -61,3 +61,38 @@ def test_an_evaluator_answers_as_state_at_from_its_first_call_on() -> None:
         times = [0.3 * dur, -1.0, 0.0, dur, 2 * dur, 0.7 * dur]
         assert [ev.at(t) for t in times] == [state_at(traj, t) for t in times]
         assert ev.phases is not None and ev.dur == dur
+
+
+def test_a_forward_only_target_below_zero_is_refused_as_ruckig_refuses_it() -> None:
+    """The wrapper refuses such a target itself (ruckig's refusal goes through a C++
+    exception that formats the whole input, the costliest thing a cycle did): the same
+    inputs, the same verdict, and ruckig's reason in the message of the ones it refuses."""
+    from ruckig import ControlInterface, InputParameter, Ruckig, RuckigError  # noqa: PLC0415
+
+    def ruckig_refuses(v1: float) -> bool:
+        inp = InputParameter(1)
+        inp.control_interface = ControlInterface.Position
+        inp.current_position, inp.current_velocity, inp.current_acceleration = [0.0], [0.3], [0.0]
+        inp.target_position, inp.target_velocity, inp.target_acceleration = [0.05], [v1], [0.0]
+        inp.max_velocity, inp.max_acceleration, inp.max_jerk = [1.0], [10.0], [500.0]
+        inp.min_velocity = [0.0]
+        try:
+            Ruckig(1).calculate(inp, Trajectory(1))
+        except RuckigError:
+            return True
+        return False
+
+    calc = Ruckig1()
+    for v1 in (-1e-17, -1e-300, -1e-9, -0.2, -0.0, 0.0, 1e-17, 0.1):
+        try:
+            calc.position(0.0, 0.3, 0.0, 0.05, v1, 1.0, 10.0, 500.0)
+            refused = False
+        except ProfileError:
+            refused = True
+        assert refused == ruckig_refuses(v1) == (v1 < 0.0), v1
+    try:  # a refusal ruckig makes itself says why, not "" (its message starts with a newline)
+        calc.position(0.0, 1.0, 0.0, 1e-4, 0.0, 1.0, 10.0, 500.0)
+    except ProfileError as exc:
+        assert str(exc).startswith("[ruckig] error in step 1"), str(exc)
+    else:
+        raise AssertionError("ruckig accepted a stop from 1 m/s within 0.1 mm")
