@@ -14,7 +14,12 @@ Issue 14 adds a PLC client writing a new override every --override-every seconds
 150/200 %, each write restarts the committed path) and, in the same run, a cyclictest-style
 baseline of this machine (`cyclictest` from rt-tests when installed: same period, same
 priority; its wake-up lateness is the VM's own noise, not ours); `compute_over_25pct` is the
-count of cycles whose compute took more than 25 % of the period.
+count of cycles whose compute took more than 25 % of the period. Beside it, in the same run:
+`machine_baseline_compute`, a null GEO loop (bench/noise_probe.py: a constant ~10 µs workload
+on the same grid with the same RT settings, on the loop's cpu when it is pinned), whose cycles
+above 25 % are this machine's own compute stalls; and `compute_over_by_kind`, the loop's
+`geo.compute_over` lines grouped by what their cycle did ("-": it only moved, a few µs of
+work: the stall was the machine's).
 
 Goals: with RT p99 ≤ 100 µs, p99.9 ≤ 500 µs, exceed ≤ 0.05 %; READY < 1 s; RSS flat;
 0 cycles of compute above 25 % of the period (issue 14).
