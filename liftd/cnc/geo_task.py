@@ -117,9 +117,9 @@ class GeoTask(BoundaryActions):
         # committed look-ahead per axis that may lift (computed here, outside the cycle)
         self.leads = {name: lead_cycles(channel, name) for name in channel.axis_names}
         # a repeated program's next run, built ahead (prepare_next_run, then a piece per cycle
-        # after each START), and what a START replaced, released an object per cycle: a
-        # repeat START only swaps them (it built and freed them in its cycle: ~0.1 ms for
-        # the demo, more cold in the GEO process)
+        # after each START), and what a START replaced, released RELEASE_PER_CYCLE objects a
+        # cycle: a repeat START only swaps them (it built and freed them in its cycle: 158-205
+        # µs for the demo, 475-757 µs for a 500-part job, more cold in the GEO process)
         self._repeats = False
         self._next: _Run | None = None
         self._building: _Run | None = None
@@ -140,7 +140,7 @@ class GeoTask(BoundaryActions):
         end = self.prog.path.end_position
         prog = self.programs.from_start(end)
         self._next = _Run(end, prog, self._new_interp(prog), self._new_lift(prog))
-        self._next_for = self.runs
+        self._next_for = max(self.runs, 1)  # before the first START: the run after run 1
 
     @property
     def next_run_ready(self) -> bool:
@@ -204,6 +204,9 @@ class GeoTask(BoundaryActions):
         self._retired.append(records)
         self._retired.append(arrivals)
         self._retired.append(queue)
+        bins = interp.discarded.bins  # futures an event discarded, not yet all released
+        while bins:
+            self._retired.append(bins.popleft())
 
     def _deferred(self) -> None:
         """At most one piece of deferred work, in a cycle without a START: release one object
