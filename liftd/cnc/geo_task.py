@@ -16,20 +16,18 @@ same inputs give bit-identical snapshots. Order within a cycle:
 from __future__ import annotations
 
 import functools
-from collections import deque
-from typing import Any, Final
+from typing import Final
 
 from liftd.cnc.actions import BoundaryActions
-from liftd.cnc.geo_program import GeoProgram, PreparedPrograms
-from liftd.cnc.lift.controller import LiftController
+from liftd.cnc.geo_program import PreparedPrograms
 from liftd.cnc.lift.monitor import AccelMonitor
 from liftd.cnc.lift.profile import LiftProfiles, ProfileError
 from liftd.cnc.nc.blocks import ErrorId
-from liftd.cnc.params import ChannelParams, LiftMethod
-from liftd.cnc.path.geometry import within
+from liftd.cnc.params import ChannelParams
 from liftd.cnc.path.interpolator import Interpolator
 from liftd.cnc.path.program import ActionKind, PathProgram
 from liftd.cnc.plc import MAX_OVERRIDE
+from liftd.cnc.runs import Runs
 from liftd.cnc.snapshot import (
     ChannelState,
     Command,
@@ -41,9 +39,6 @@ from liftd.cnc.snapshot import (
 
 INF = float("inf")
 LIFT_LATE_ID = int(ErrorId.LIFT_LATE)  # the path passed LIFT_END with Z not at POS
-# objects a START replaced, released this many a cycle (a 500-part run's lift records freed
-# at once were ~70 µs hot, several times that cold)
-RELEASE_PER_CYCLE = 8
 
 # Enum members as C statics of the compiled module: `ChannelState.ACTIVE` is a dict and a type
 # lookup each time (~80 ns), about ten a cycle.
@@ -55,22 +50,6 @@ START: Final = Command.START
 STOP: Final = Command.STOP
 RESET: Final = Command.RESET
 NO_PHASE: Final = LiftPhase.NONE
-
-
-class _Run:
-    """A program run's state before it starts: the program prepared for its start position,
-    its interpolator and its lift controller (None while the run is still being built)."""
-
-    __slots__ = ("interp", "lift", "prog", "start")
-
-    def __init__(
-        self, start: tuple[float, ...], prog: GeoProgram, interp: Interpolator,
-        lift: LiftController | None,
-    ) -> None:  # fmt: skip
-        self.start = start
-        self.prog = prog
-        self.interp = interp
-        self.lift = lift
 
 
 class GeoTask(BoundaryActions):
@@ -116,16 +95,8 @@ class GeoTask(BoundaryActions):
         self.programs = PreparedPrograms(program_text, channel)
         # committed look-ahead per axis that may lift (computed here, outside the cycle)
         self.leads = {name: lead_cycles(channel, name) for name in channel.axis_names}
-        # a repeated program's next run, built ahead (prepare_next_run, then a piece per cycle
-        # after each START), and what a START replaced, released RELEASE_PER_CYCLE objects a
-        # cycle: a repeat START only swaps them (it built and freed them in its cycle: 158-205
-        # µs for the demo, 475-757 µs for a 500-part job, more cold in the GEO process)
-        self._repeats = False
-        self._next: _Run | None = None
-        self._building: _Run | None = None
-        self._next_for = -1  # the run (`runs`) whose next run was built or looked for
-        # bins of objects (lists, deques, dicts), emptied RELEASE_PER_CYCLE items a cycle
-        self._retired: list[list[Any] | deque[Any] | dict[Any, Any]] = []
+        # the run after this one, built ahead for a repeat START (runs.py)
+        self.next_runs = Runs(channel, self.programs, self.leads)
         self._started = False  # a START in this cycle: no deferred work in it
         self._loaded = False
         self._load(self.home)
@@ -135,52 +106,20 @@ class GeoTask(BoundaryActions):
         """Prepare now (outside the GEO cycle, e.g. before the loop starts) the program for a
         run from where this one ends, and that run's state, so that a repeat START costs no
         decoding and no building in its cycle; from then on, the run after each START is
-        built in the cycles after it, a piece per cycle (`_deferred`)."""
-        self._repeats = True
-        end = self.prog.path.end_position
-        prog = self.programs.from_start(end)
-        self._next = _Run(end, prog, self._new_interp(prog), self._new_lift(prog))
-        self._next_for = max(self.runs, 1)  # before the first START: the run after run 1
+        built in the cycles after it, a piece per cycle (`Runs.deferred`)."""
+        # before the first START: the run after run 1
+        self.next_runs.prepare(self.prog.path.end_position, max(self.runs, 1))
 
     @property
     def next_run_ready(self) -> bool:
         """Whether the state of a repeat run is built (a START from where this run ends
         only swaps it in)."""
-        nxt = self._next
-        return nxt is not None and nxt.lift is not None
-
-    def _new_interp(self, prog: GeoProgram) -> Interpolator:
-        lead = self.leads[self.ch.lift_axis]
-        for name in prog.lift_axes:
-            lead = max(lead, self.leads[name])
-        return Interpolator(
-            prog.path, prog.table, self.ch.look_ahead_blocks, self.ch.cycle_time, lead
-        )
-
-    def _new_lift(self, prog: GeoProgram) -> LiftController:
-        return LiftController(
-            self.ch.axes,
-            prog.ranges,
-            self.ch.cycle_time,
-            prog.plans,
-            both_flags=self.ch.lift_method is not LiftMethod.LIFTING,
-            rises=prog.rises,
-            lift_axes=prog.lift_axes,
-        )
+        return self.next_runs.ready
 
     def _load(self, start: tuple[float, ...]) -> None:
-        run, self._next = self._next, None
-        if self._building is not None:
-            self._retired.append([self._building])
-            self._building = None
-        same = run is not None and within(run.start, start, PreparedPrograms.SAME_START_M)
-        if run is None or run.lift is None or not same:
-            if run is not None:
-                self._retired.append([run])
-            prog = self.programs.from_start(start)  # decodes unless prepared
-            run = _Run(start, prog, self._new_interp(prog), self._new_lift(prog))
+        run = self.next_runs.take(start)
         if self._loaded:  # released over the next cycles, not in this one
-            self._retire(self.interp, self.lift)
+            self.next_runs.retire(self.interp, self.lift)
         self._loaded = True
         self.prog = run.prog
         self.path = run.prog.path  # read every cycle: a native attribute, not GeoProgram's
@@ -193,54 +132,6 @@ class GeoTask(BoundaryActions):
         self.waiting = []
         self.m_acked.clear()
         self.m_pending = -1
-
-    def _retire(self, interp: Interpolator, lift: LiftController) -> None:
-        """Hand a finished run's state to the release bins: what grows with the program (the
-        lift records, the committed queue and its arrival times) item by item, then the rest."""
-        records, lift.records = lift.records, []
-        queue, interp.queue = interp.queue, deque()
-        arrivals, interp.arrivals = interp.arrivals, {}
-        self._retired.append([interp, lift])
-        self._retired.append(records)
-        self._retired.append(arrivals)
-        self._retired.append(queue)
-        bins = interp.discarded.bins  # futures an event discarded, not yet all released
-        while bins:
-            self._retired.append(bins.popleft())
-
-    def _deferred(self) -> None:
-        """At most one piece of deferred work, in a cycle without a START: release one object
-        a START replaced, or build a piece of the next run of a repeated program (its
-        interpolator, then its lift controller) from the program prepared for where this
-        run ends; a program not prepared for that start is decoded by the START, as before."""
-        bins = self._retired
-        if bins:
-            n = RELEASE_PER_CYCLE
-            while n > 0 and bins:
-                items = bins[-1]
-                if not items:
-                    bins.pop()
-                elif isinstance(items, dict):
-                    items.popitem()
-                    n -= 1
-                else:
-                    items.pop()
-                    n -= 1
-            return
-        if not self._repeats or self._next_for == self.runs:
-            return
-        b = self._building
-        if b is None:
-            end = self.prog.path.end_position
-            prog = self.programs.prepared(end)
-            if prog is None:
-                self._next_for = self.runs  # nothing to build ahead: the START decodes
-                return
-            self._building = _Run(end, prog, self._new_interp(prog), None)
-        else:
-            b.lift = self._new_lift(b.prog)
-            self._next, self._building = b, None
-            self._next_for = self.runs
 
     def _start(self, t: float) -> None:
         if self.state is READY:
@@ -411,7 +302,7 @@ class GeoTask(BoundaryActions):
         if self._started:
             self._started = False
         else:
-            self._deferred()
+            self.next_runs.deferred(self.path.end_position, self.runs)
         return snap
 
     def _monitor_of(self, axis: int) -> AccelMonitor:

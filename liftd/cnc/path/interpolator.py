@@ -29,12 +29,9 @@ from liftd.cnc.path.program import PathProgram
 from liftd.cnc.path.table import PathTable
 from liftd.cnc.path.tracker import Tracker
 from liftd.cnc.path.velocity import projected_velocity
+from liftd.cnc.release import ReleaseBins
 
 INF = float("inf")
-# Entries an event discards are released this many per cycle, not all in the cycle of the event:
-# freeing a full queue (hundreds of entries) cost ~50 µs in one cycle. More than the producer
-# makes per cycle, so what is discarded is gone a few cycles later.
-RELEASE_PER_CYCLE = 8
 
 __all__ = ["Crossing", "Interpolator"]
 
@@ -60,30 +57,6 @@ class _Entry:
         self.parked = parked
 
 
-class _Discarded:
-    """The committed futures events discarded, released `RELEASE_PER_CYCLE` items a cycle."""
-
-    def __init__(self) -> None:
-        self.bins: deque[deque[_Entry] | dict[int, float]] = deque()
-
-    def put(self, items: deque[_Entry] | dict[int, float]) -> None:
-        if items:
-            self.bins.append(items)
-
-    def release(self, n: int) -> None:
-        bins = self.bins
-        while n > 0 and bins:
-            b = bins[0]
-            if not b:
-                bins.popleft()
-            elif isinstance(b, dict):
-                b.popitem()
-                n -= 1
-            else:
-                b.pop()
-                n -= 1
-
-
 class Interpolator:
     """Path state over one path program (see the module docstring)."""
 
@@ -106,7 +79,7 @@ class Interpolator:
         self.prod = Tracker(table, look_ahead, self.lift_stops, self.acked_conditional)
         self.queue: deque[_Entry] = deque()
         self.arrivals: dict[int, float] = {}
-        self.discarded = _Discarded()
+        self.discarded = ReleaseBins()  # what events discard, freed over the next cycles
         self.k_next = 1  # cycle index of the next entry the producer makes
         self._fresh = False  # restarted since the last cycle: it fills no more than its own
         # the state of the current cycle
@@ -222,7 +195,7 @@ class Interpolator:
         """Move to the cycle at time t (a multiple of dt); the boundaries reached since the last
         call, with their exact times."""
         k = round(t / self.dt)
-        self.discarded.release(RELEASE_PER_CYCLE)
+        self.discarded.release()
         if self.stopped_at is not None:
             return []
         if self.parked and not self.queue:

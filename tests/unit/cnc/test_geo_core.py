@@ -272,7 +272,7 @@ def test_what_events_discard_is_released_within_a_few_cycles() -> None:
     """An event discards the committed future without freeing it in its own cycle (that cost
     ~50 µs): a few entries per cycle go, also while events keep coming, so nothing is left a
     bounded number of cycles later."""
-    from liftd.cnc.path.interpolator import RELEASE_PER_CYCLE  # noqa: PLC0415
+    from liftd.cnc.release import RELEASE_PER_CYCLE  # noqa: PLC0415
 
     ch = make_channel()
     task = GeoTask(ch, "G01 X10 Y10 F6000\nG01 X900 F20000\nM30\n")

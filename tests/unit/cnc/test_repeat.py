@@ -49,9 +49,11 @@ def test_a_repeat_from_the_prepared_end_position_loads_nothing_and_equals_a_fres
         task = GeoTask(ch, text, autostart=False)
         task.prepare_next_run()  # what the loop does before it starts cycling
         assert task.programs.loads == 2
-        built = task._next
+        built = task.next_runs.ahead
         k, first = run_once(task, 0, dt)
-        assert task._next is built  # run 2's state, built before the loop, was kept for it
+        assert (
+            task.next_runs.ahead is built
+        )  # run 2's state, built before the loop, was kept for it
         end = first[-1]
         assert end.state is ChannelState.READY
         assert max(abs(a - b) for a, b in zip(end.positions, task.prog.path.end_position,
