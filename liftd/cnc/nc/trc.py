@@ -27,45 +27,12 @@ https://infosys.beckhoff.com/content/1033/tf5200_programming_manual/207729163.ht
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 from liftd.cnc.nc.blocks import Block, ErrorId, Motion, MotionKind, NcFault
+from liftd.cnc.nc.offsets import EPS, Element, Point, arc_sweep, dist, dot, sub
 
-Point = tuple[float, float]
-EPS = 1e-9  # m: points closer than this are the same point
 MAX_NON_RELEVANT = 1000  # blocks without plane motion held at one corner (ID 90011)
-TWO_PI = 2.0 * math.pi
-
-
-def _sub(a: Point, b: Point) -> Point:
-    return (a[0] - b[0], a[1] - b[1])
-
-
-def _dot(a: Point, b: Point) -> float:
-    return a[0] * b[0] + a[1] * b[1]
-
-
-def _cross(a: Point, b: Point) -> float:
-    return a[0] * b[1] - a[1] * b[0]
-
-
-def _dist(a: Point, b: Point) -> float:
-    return math.hypot(a[0] - b[0], a[1] - b[1])
-
-
-def _unit(v: Point) -> Point:
-    n = math.hypot(v[0], v[1])
-    return (v[0] / n, v[1] / n)
-
-
-def _left(t: Point) -> Point:
-    return (-t[1], t[0])
-
-
-def _ccw_angle(a: float, b: float) -> float:
-    """Angle from a to b counter-clockwise, in [0, 2π)."""
-    return (b - a) % TWO_PI
 
 
 class TrcFault(NcFault):
@@ -76,114 +43,6 @@ class TrcFault(NcFault):
         self.block = block
 
 
-class _Element:
-    """One programmed element of the contour in the plane, with its offset geometry
-    (tangents and offset points at both ends computed once)."""
-
-    __slots__ = (
-        "approach", "arc", "block", "ccw", "center", "direct", "p0", "p1", "q0", "q1", "r",
-        "roff", "side", "start", "sweep", "t0", "t1",
-    )  # fmt: skip
-
-    def __init__(
-        self, block: Block, side: int, r: float, start: Point, p0: Point, p1: Point,
-        center: Point | None = None, sweep: float = 0.0, approach: bool = False,
-    ) -> None:  # fmt: skip
-        self.block = block
-        self.side = side  # +1 left (G41), -1 right (G42)
-        self.r = r  # tool radius, m
-        self.start = start  # compensated start (trimmed by the previous corner, or approach)
-        self.p0 = p0  # programmed start
-        self.p1 = p1  # programmed end
-        self.arc = center is not None
-        self.center = center if center is not None else (0.0, 0.0)
-        self.sweep = sweep  # programmed sweep, signed
-        self.ccw = sweep > 0.0
-        self.approach = approach  # start not offset (selection block)
-        self.direct = False  # G138 approach: ends at the next element's compensated start
-        self.roff = 0.0  # offset radius of an arc
-        self.set_side(side)
-
-    def set_side(self, side: int) -> None:
-        self.side = side
-        if not self.arc:
-            p0, p1 = self.p0, self.p1
-            dx, dy = p1[0] - p0[0], p1[1] - p0[1]
-            length = math.hypot(dx, dy)
-            tx, ty = dx / length, dy / length
-            self.t0 = self.t1 = (tx, ty)
-            k = side * self.r
-            nx, ny = -ty * k, tx * k  # the left normal times the signed radius
-            self.q0 = (p0[0] + nx, p0[1] + ny)
-            self.q1 = (p1[0] + nx, p1[1] + ny)
-            return
-        c = self.center
-        radius = _dist(self.p0, c)
-        self.roff = radius - side * (1.0 if self.ccw else -1.0) * self.r
-        r0 = _unit(_sub(self.p0, c))
-        r1 = _unit(_sub(self.p1, c))
-        self.t0 = _left(r0) if self.ccw else (r0[1], -r0[0])
-        self.t1 = _left(r1) if self.ccw else (r1[1], -r1[0])
-        k = self.roff
-        self.q0 = (c[0] + k * r0[0], c[1] + k * r0[1])
-        self.q1 = (c[0] + k * r1[0], c[1] + k * r1[1])
-
-    def tangent(self, at_end: bool) -> Point:
-        return self.t1 if at_end else self.t0
-
-    def offset_point(self, at_end: bool) -> Point:
-        return self.q1 if at_end else self.q0
-
-    def intersections(self, other: _Element) -> list[Point]:
-        """Points where the offset geometries (infinite line / full circle) meet."""
-        if not self.arc and not other.arc:
-            return _line_line(self.q0, self.t0, other.q0, other.t0)
-        if not self.arc:
-            return _line_circle(self.q0, self.t0, other.center, other.roff)
-        if not other.arc:
-            return _line_circle(other.q0, other.t0, self.center, self.roff)
-        return _circle_circle(self.center, self.roff, other.center, other.roff)
-
-
-def _line_line(q: Point, t: Point, q2: Point, t2: Point) -> list[Point]:
-    den = _cross(t, t2)
-    if abs(den) < 1e-15:
-        return []
-    u = _cross(_sub(q2, q), t2) / den
-    return [(q[0] + u * t[0], q[1] + u * t[1])]
-
-
-def _line_circle(q: Point, t: Point, c: Point, r: float) -> list[Point]:
-    d = _sub(q, c)
-    b = _dot(t, d)
-    disc = b * b - (_dot(d, d) - r * r)
-    if disc < -1e-18:
-        return []
-    root = math.sqrt(max(disc, 0.0))
-    return [(q[0] + u * t[0], q[1] + u * t[1]) for u in (-b - root, -b + root)]
-
-
-def _circle_circle(c1: Point, r1: float, c2: Point, r2: float) -> list[Point]:
-    d = _dist(c1, c2)
-    if d < EPS or d > r1 + r2 + EPS or d < abs(r1 - r2) - EPS:
-        return []
-    a = (r1 * r1 - r2 * r2 + d * d) / (2.0 * d)
-    h = math.sqrt(max(r1 * r1 - a * a, 0.0))
-    ex = ((c2[0] - c1[0]) / d, (c2[1] - c1[1]) / d)
-    m = (c1[0] + a * ex[0], c1[1] + a * ex[1])
-    return [(m[0] - h * ex[1], m[1] + h * ex[0]), (m[0] + h * ex[1], m[1] - h * ex[0])]
-
-
-def _arc_sweep(center: Point, a: Point, b: Point, ccw: bool, full_if_closed: bool) -> float:
-    """Signed sweep from a to b around center in the given direction."""
-    ang_a = math.atan2(a[1] - center[1], a[0] - center[0])
-    ang_b = math.atan2(b[1] - center[1], b[0] - center[0])
-    delta = _ccw_angle(ang_a, ang_b) if ccw else _ccw_angle(ang_b, ang_a)
-    if delta < 1e-12 and full_if_closed:
-        delta = TWO_PI
-    return delta if ccw else -delta
-
-
 @dataclass(slots=True)
 class Trc:
     """TRC state of a channel between blocks."""
@@ -191,7 +50,7 @@ class Trc:
     side: int = 0  # programmed: 0 G40, +1 G41, -1 G42
     radius: float = 0.0  # of the selected D word, m
     direct: bool = False  # G138 (True) / G139 (False, initial state)
-    held: _Element | None = None
+    held: Element | None = None
     after: list[Block] = field(default_factory=list)
     pending: str = ""  # "select" | "deselect" | "change" until the next plane motion
     radius_changed: bool = False
@@ -290,7 +149,7 @@ class Trc:
                 out = self._finish(last, a_end, transition)
             self.held = None
             tail = (m.end[0], m.end[1])
-            if _dot(_sub(tail, start), retract.tangent(False)) < -EPS:
+            if dot(sub(tail, start), retract.tangent(False)) < -EPS:
                 raise TrcFault(
                     ErrorId.TRC_CONTOUR_VIOLATION,
                     "contour violation: the retract block is shorter than the tool radius",
@@ -326,7 +185,7 @@ class Trc:
         return self._finish(held, held.offset_point(True), [])
 
     # -- geometry -----------------------------------------------------------------------------
-    def _element(self, block: Block, start: Point, approach: bool) -> _Element:
+    def _element(self, block: Block, start: Point, approach: bool) -> Element:
         m = block.motion
         assert m is not None
         side = self.side if self.side != 0 else 1
@@ -336,10 +195,10 @@ class Trc:
         p0 = (m.start[0], m.start[1])
         p1 = (m.end[0], m.end[1])
         if m.center is None:
-            return _Element(block, side, r, start, p0, p1, approach=approach)
-        el = _Element(block, side, r, start, p0, p1, m.center, m.sweep, approach)
+            return Element(block, side, r, start, p0, p1, approach=approach)
+        el = Element(block, side, r, start, p0, p1, m.center, m.sweep, approach)
         if el.roff <= EPS:
-            radius = _dist(p0, m.center)
+            radius = dist(p0, m.center)
             raise TrcFault(
                 ErrorId.TRC_RADIUS_TOO_LARGE,
                 f"tool radius {r * 1e3:.4f} mm is not smaller than the radius "
@@ -350,7 +209,7 @@ class Trc:
             el.start = el.q0
         return el
 
-    def _corner(self, a: _Element, b: _Element) -> tuple[Point, list[Motion], Point]:
+    def _corner(self, a: Element, b: Element) -> tuple[Point, list[Motion], Point]:
         """End of a, transition motions, start of b at their common programmed point."""
         qb = b.q0
         if a.approach and a.direct:
@@ -373,18 +232,18 @@ class Trc:
                     b.block,
                 )
             q = points[0]
-            if len(points) > 1 and _dist(points[1], corner) < _dist(q, corner):
+            if len(points) > 1 and dist(points[1], corner) < dist(q, corner):
                 q = points[1]
             self._check_end(a, q)
             self._check_start(b, q)
             return q, [], q
         if a.r == b.r and a.side == b.side and a.r > 0.0:
             ccw = a.side < 0  # G41 goes round an outer corner clockwise, G42 counter-clockwise
-            sweep = _arc_sweep(corner, qa, qb, ccw, full_if_closed=False)
+            sweep = arc_sweep(corner, qa, qb, ccw, full_if_closed=False)
             return qa, [_arc_motion(b.block, qa, qb, corner, sweep)], qb
         return qa, [_line_only(b.block, qa, qb)], qb
 
-    def _check_end(self, a: _Element, q: Point) -> None:
+    def _check_end(self, a: Element, q: Point) -> None:
         if not a.arc:
             t = a.t1
             if (q[0] - a.start[0]) * t[0] + (q[1] - a.start[1]) * t[1] < -EPS:
@@ -395,15 +254,15 @@ class Trc:
                     a.block,
                 )
             return
-        new = abs(_arc_sweep(a.center, a.start, q, a.ccw, full_if_closed=True))
-        if new > abs(a.sweep) + 1e-9 and _dist(a.start, q) > EPS:
+        new = abs(arc_sweep(a.center, a.start, q, a.ccw, full_if_closed=True))
+        if new > abs(a.sweep) + 1e-9 and dist(a.start, q) > EPS:
             raise TrcFault(
                 ErrorId.TRC_CONTOUR_VIOLATION,
                 "contour violation: the compensated arc of this block would run backwards",
                 a.block,
             )
 
-    def _check_start(self, b: _Element, q: Point) -> None:
+    def _check_start(self, b: Element, q: Point) -> None:
         if not b.arc:
             t, end = b.t0, b.q1
             if (end[0] - q[0]) * t[0] + (end[1] - q[1]) * t[1] < -EPS:
@@ -414,7 +273,7 @@ class Trc:
                     b.block,
                 )
             return
-        new = abs(_arc_sweep(b.center, q, b.offset_point(True), b.ccw, full_if_closed=True))
+        new = abs(arc_sweep(b.center, q, b.offset_point(True), b.ccw, full_if_closed=True))
         if new > abs(b.sweep) + 1e-9:
             raise TrcFault(
                 ErrorId.TRC_CONTOUR_VIOLATION,
@@ -422,7 +281,7 @@ class Trc:
                 b.block,
             )
 
-    def _finish(self, a: _Element, end: Point, transition: list[Motion]) -> list[Block]:
+    def _finish(self, a: Element, end: Point, transition: list[Motion]) -> list[Block]:
         """The held element as a compensated block, its transition, then the blocks that
         waited at its corner (their plane coordinates moved to where the tool is)."""
         m = a.block.motion
@@ -430,7 +289,7 @@ class Trc:
         out: list[Block] = []
         block = a.block
         if a.arc:
-            sweep = _arc_sweep(a.center, a.start, end, a.ccw, full_if_closed=True)
+            sweep = arc_sweep(a.center, a.start, end, a.ccw, full_if_closed=True)
             if abs(sweep) > abs(a.sweep) + 1e-9:  # a full circle stays one
                 sweep = a.sweep
             motion = Motion(m.kind, _with_xy(m.start, a.start), _with_xy(m.end, end), m.feed,
