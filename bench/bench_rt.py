@@ -113,24 +113,40 @@ def probe_result(proc: subprocess.Popen[str]) -> dict[str, object] | None:
     return json.loads(lines[-1]) if lines else None
 
 
+def over_events(logs: list[dict[str, object]]) -> list[list[object]]:
+    """Each slow cycle that did more than move: [t, compute µs, "what; cpu …; step …"]."""
+    return [
+        [rec.get("t"), round(float(str(rec.get("value") or 0))), rec.get("text")]
+        for rec in logs
+        if rec.get("event") == "geo.compute_over"
+        and not str(rec.get("text") or ";").startswith(";")
+    ]
+
+
 def over_kinds(logs: list[dict[str, object]]) -> dict[str, object]:
     """The loop's geo.compute_over lines grouped by what their cycle did ("" = it only moved:
     bench_step.py puts such a cycle at a few µs), with the compute of each group (µs)."""
-    groups: dict[str, list[float]] = {}
+    groups: dict[str, list[tuple[float, float]]] = {}
     for rec in logs:
         if rec.get("event") == "geo.compute_over":
             value = rec.get("value")
-            groups.setdefault(str(rec.get("text") or "-"), []).append(
-                float(value) if isinstance(value, (int, float)) else 0.0
+            what, _, rest = str(rec.get("text") or "").partition("; cpu ")
+            cpu = float(rest.split(" ")[0]) if rest[:1].isdigit() else 0.0
+            groups.setdefault(what or "-", []).append(
+                (float(value) if isinstance(value, (int, float)) else 0.0, cpu)
             )
-    return {
-        kind: {
+    out: dict[str, object] = {}
+    for kind, v in sorted(groups.items(), key=lambda kv: -len(kv[1])):
+        wall, cpu = sorted(w for w, _ in v), sorted(c for _, c in v)
+        out[kind] = {
             "cycles": len(v),
-            "median_us": round(sorted(v)[len(v) // 2]),
-            "max_us": round(max(v)),
+            "median_us": round(wall[len(v) // 2]),
+            "max_us": round(wall[-1]),
+            "cpu_median_us": round(cpu[len(v) // 2]),
+            "cpu_max_us": round(cpu[-1]),
+            "cpu_over_25pct": sum(1 for c in cpu if c > 250),
         }
-        for kind, v in sorted(groups.items(), key=lambda kv: -len(kv[1]))
-    }
+    return out
 
 
 def one_run(minutes: float, rt: bool, pollers: int = 4, notifiers: int = 1,
@@ -186,9 +202,13 @@ def one_run(minutes: float, rt: bool, pollers: int = 4, notifiers: int = 1,
             "bench": "rt_loop", "rt": rt, "minutes": minutes, "cycles": cycles,
             "lateness_us": stopped.get("lateness_us"), "compute_us": stopped.get("compute_us"),
             "compute_over_25pct": stopped.get("compute_over_25pct"),
+            "compute_cpu_over_25pct": stopped.get("compute_cpu_over_25pct"),
+            "compute_cpu_max_us": stopped.get("compute_cpu_max_us"),
             "machine_baseline_lateness_us": machine,
             "machine_baseline_compute": null_loop,
             "compute_over_by_kind": over_kinds(d.logs),
+            # each slow cycle that did more than move: [t, compute µs, what; cpu; step]
+            "compute_over_events": over_events(d.logs),
             "override_writes": sum(r["writes"] for r in writers),
             "override_write_errors": sum(r["errors"] for r in writers),
             "exceeded": stopped.get("exceeded"),

@@ -117,11 +117,15 @@ class LoopStats(NamedTuple):
     lateness_last_us: float = 0.0
     lateness_max_us: float = 0.0
     compute_over: int = 0  # cycles whose compute took more than 25 % of the period (runtime)
+    # the same on the loop thread's CPU clock: time the hypervisor took the vCPU away
+    # (steal) does not count there, its own work and the interrupts it served do
+    compute_cpu_max_us: float = 0.0
+    compute_cpu_over: int = 0
 
 
 # the GEO loop's per-cycle constructor (runtime/geo_loop.py), as `new_snapshot`
 new_loop_stats = cast(
-    Callable[[tuple[int, int, float, float, float, float, int]], LoopStats],
+    Callable[[tuple[int, int, float, float, float, float, int, float, int]], LoopStats],
     functools.partial(tuple.__new__, LoopStats),
 )
 

@@ -30,6 +30,7 @@ START_TIMEOUT_S = 20.0
 STOP_WAIT_S = 1.5  # a stop waits this long for a cycle boundary, then kills
 LOAD_TIMEOUT_S = 60.0  # a cycle that decodes and plans a program (START, reload) may take this
 POLL_S = 0.05
+EVENT_POLL_S = 0.005  # the loop's events reach the log within this (the stream holds 64 KiB)
 QUANTILES = (0.5, 0.99, 0.999)
 
 
@@ -60,6 +61,8 @@ class LoopSummary(NamedTuple):
     compute_us: dict[float, float]
     compute_max_us: float
     rss_mb: float | None
+    compute_cpu_over: int = 0
+    compute_cpu_max_us: float = 0.0
 
     def as_log(self) -> dict[str, object]:
         return {
@@ -71,6 +74,8 @@ class LoopSummary(NamedTuple):
             "compute_us": self.compute_us,
             "compute_max_us": round(self.compute_max_us, 1),
             "compute_over_25pct": self.compute_over,
+            "compute_cpu_max_us": round(self.compute_cpu_max_us, 1),
+            "compute_cpu_over_25pct": self.compute_cpu_over,
             "events_dropped": self.events_dropped,
             "geo_rss_mb": self.rss_mb,
         }
@@ -105,8 +110,8 @@ class GeoProcess:
         self.alive = False  # cycling and serving: between start() and a failure or stop()
         self.generation = 0  # of the newest configuration handed over
         self._control_fd = -1
-        self._events_fd = -1
         self._reader = EventReader()
+        self._poller: asyncio.Task[None] | None = None
         self._watched = (-1, -1)
         self._rss_mb: float | None = None
 
@@ -120,9 +125,8 @@ class GeoProcess:
         caller still calls stop() to clean up)."""
         loop = asyncio.get_running_loop()
         control_r, self._control_fd = os.pipe()
-        self._events_fd, events_w = os.pipe()
         shm_fd = self.shared.block.fd
-        fds = (control_r, events_w, shm_fd)
+        fds = (control_r, shm_fd)
         try:
             self.proc = subprocess.Popen(
                 [sys.executable, "-m", "liftd.runtime", *map(str, fds)],
@@ -130,10 +134,8 @@ class GeoProcess:
             )  # fmt: skip
         finally:
             os.close(control_r)
-            os.close(events_w)
         self.shared.block.unlink()  # the child holds the descriptor: no name left to leak
-        os.set_blocking(self._events_fd, False)
-        loop.add_reader(self._events_fd, self._on_events)
+        self._poller = asyncio.create_task(self._poll_events())
         first = pack_message((self.shared.spec, cfg))
         try:  # above the pipe buffer (64 KiB) this waits until the child reads: off the loop
             await loop.run_in_executor(None, _write_all, self._control_fd, first)
@@ -148,18 +150,17 @@ class GeoProcess:
             await asyncio.sleep(0.005)
         self.alive = True
 
-    def _on_events(self) -> None:
-        try:
-            data = os.read(self._events_fd, 65536)
-        except BlockingIOError:
-            return
-        except OSError:
-            data = b""
-        if not data:  # the GEO process closed its end
-            asyncio.get_running_loop().remove_reader(self._events_fd)
-            return
-        for ev in self._reader.feed(data):
-            self.on_event(ev)
+    async def _poll_events(self) -> None:
+        while True:
+            self._drain_events()
+            await asyncio.sleep(EVENT_POLL_S)
+
+    def _drain_events(self) -> None:
+        """Pass on the events the loop has put into the shared block since the last call."""
+        data = self.shared.events.take()
+        if data:
+            for ev in self._reader.feed(data):
+                self.on_event(ev)
 
     # -- what the daemon serves -------------------------------------------------------------------
     def advancing(self) -> bool:
@@ -232,27 +233,14 @@ class GeoProcess:
                     clean = False
                     proc.kill()
                     await loop.run_in_executor(None, proc.wait)
-        if self._events_fd >= 0:
-            asyncio.get_running_loop().remove_reader(self._events_fd)
-            self._on_events_drain()
-            os.close(self._events_fd)
-            self._events_fd = -1
+        if self._poller is not None:
+            self._poller.cancel()
+            self._poller = None
+            self._drain_events()  # what the loop put before it ended
         if self._control_fd >= 0:
             os.close(self._control_fd)
             self._control_fd = -1
         return clean
-
-    def _on_events_drain(self) -> None:
-        """The events the process wrote before it ended."""
-        while True:
-            try:
-                data = os.read(self._events_fd, 65536)
-            except OSError:
-                return
-            if not data:
-                return
-            for ev in self._reader.feed(data):
-                self.on_event(ev)
 
     def summary(self) -> LoopSummary:
         sh = self.shared
@@ -269,4 +257,6 @@ class GeoProcess:
             compute_us={q: percentile_us(comp, q) for q in QUANTILES},
             compute_max_us=stats.compute_max_us,
             rss_mb=self._rss_mb,
+            compute_cpu_over=totals.compute_cpu_over,
+            compute_cpu_max_us=stats.compute_cpu_max_us,
         )

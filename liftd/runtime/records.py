@@ -55,6 +55,9 @@ EVENT_NAMES = (
 EVENT_IDS = {name: i for i, name in enumerate(EVENT_NAMES)}
 
 
+STATS = "qqddddqdq"  # LoopStats
+
+
 def _fields(s: GeoSnapshot, n_axes: int) -> tuple[Any, ...]:
     """The snapshot's packed fields: the tuple without its events, positions and lift counts
     flattened. Slices of the tuple, not 25 attribute reads and a starred display: packing
@@ -67,7 +70,7 @@ class SnapshotCodec:
 
     def __init__(self, n_axes: int) -> None:
         self.n = n_axes
-        self.fmt = struct.Struct(f"<qdiii{n_axes}ddddd???iddiiiddi{n_axes}I" + "qqddddq")
+        self.fmt = struct.Struct(f"<qdiii{n_axes}ddddd???iddiiiddi{n_axes}I" + STATS)
         self.size = self.fmt.size
 
     def pack(self, s: GeoSnapshot, st: LoopStats) -> bytes:
@@ -98,8 +101,8 @@ class MachineCodec:
     def __init__(self, axes: Sequence[int]) -> None:
         self.axes = tuple(axes)
         self.channels = [SnapshotCodec(n) for n in self.axes]
-        bodies = "".join(c.fmt.format[1:-7] for c in self.channels)  # without "<" and stats
-        self.fmt = struct.Struct(f"<{bodies}qqddddq")
+        bodies = "".join(c.fmt.format[1 : -len(STATS)] for c in self.channels)  # no "<", stats
+        self.fmt = struct.Struct(f"<{bodies}{STATS}")
         self.size = self.fmt.size
         self._fields = [21 + 2 * n for n in self.axes]
 
@@ -141,7 +144,7 @@ def pack_event(ev: Event, channel: int = 0) -> bytes:
 
 
 class EventReader:
-    """Reassembles event records from pipe reads (a read may end inside a record)."""
+    """Reassembles event records from reads of the event stream (a read may end inside a record)."""
 
     def __init__(self) -> None:
         self._buf = bytearray()

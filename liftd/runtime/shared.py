@@ -1,7 +1,8 @@
 """The one shared-memory block between the daemon and the GEO loop process, and its layout:
 words (u64: two control words daemon → loop, counters loop → daemon), the snapshot seqlock
 (every channel's snapshot of one cycle in one record, `MachineCodec`),
-the PLC input ring, the optional trace ring and the compute and lateness histograms.
+the PLC input ring, the loop's event stream, the optional trace ring and the compute and
+lateness histograms.
 
 Words are read and written by index through `words` (the loop: one store per counter per
 cycle, no lookup) and read by name through the properties (the daemon).
@@ -15,7 +16,7 @@ from typing import NamedTuple
 
 from liftd.runtime.cycle import BUCKETS
 from liftd.runtime.records import INPUT, MachineCodec
-from liftd.runtime.shm import Block, Ring, Seqlock
+from liftd.runtime.shm import Block, ByteRing, Ring, Seqlock
 
 # word indices; daemon → loop:
 STOP = 0  # 1: stop at the next cycle boundary
@@ -31,9 +32,11 @@ REGRIDDED = 7
 EVENTS_DROPPED = 8
 COMPUTE_SUM_NS = 9
 LATENESS_SUM_NS = 10
-WORDS = 11
+COMPUTE_CPU_OVER = 11  # cycles whose compute took more than COMPUTE_SHARE on the thread's CPU clock
+WORDS = 12
 COMPUTE_SHARE = 0.25  # a cycle computing longer than this share of its period is counted
 INPUT_CAPACITY = 256
+EVENTS_CAPACITY = 1 << 16  # bytes of events the daemon has not read yet (a pipe's buffer)
 CACHE_LINE = 64
 
 
@@ -53,6 +56,7 @@ class LoopTotals(NamedTuple):
     events_dropped: int
     compute_sum_ns: int
     lateness_sum_ns: int
+    compute_cpu_over: int = 0  # the same count on the thread's CPU clock (without steal)
 
 
 @dataclass(frozen=True, slots=True)
@@ -77,7 +81,8 @@ class Shared:
         self.trace_capacity = trace_capacity
         snap_at = _line(8 * WORDS)
         in_at = _line(snap_at + Seqlock.space(self.codec.size))
-        trace_at = _line(in_at + Ring.space(INPUT.size, INPUT_CAPACITY))
+        events_at = _line(in_at + Ring.space(INPUT.size, INPUT_CAPACITY))
+        trace_at = _line(events_at + ByteRing.space(EVENTS_CAPACITY))
         hist_at = _line(
             trace_at + (Ring.space(self.codec.size, trace_capacity) if trace_capacity else 0)
         )
@@ -87,6 +92,7 @@ class Shared:
         self.words = buf[: 8 * WORDS].cast("Q")
         self.snapshot = Seqlock(self.block, snap_at, self.codec.size)
         self.inputs = Ring(self.block, in_at, INPUT.size, INPUT_CAPACITY)
+        self.events = ByteRing(self.block, events_at, EVENTS_CAPACITY)
         self.trace = (
             Ring(self.block, trace_at, self.codec.size, trace_capacity) if trace_capacity else None
         )
@@ -130,13 +136,14 @@ class Shared:
     def totals(self) -> LoopTotals:
         w = self.words
         return LoopTotals(w[CYCLES], w[EXCEEDED], w[COMPUTE_OVER], w[REGRIDDED],
-                          w[EVENTS_DROPPED], w[COMPUTE_SUM_NS], w[LATENESS_SUM_NS])  # fmt: skip
+                          w[EVENTS_DROPPED], w[COMPUTE_SUM_NS], w[LATENESS_SUM_NS],
+                          w[COMPUTE_CPU_OVER])  # fmt: skip
 
     def close(self) -> None:
         """Release the views, unmap the block (and unlink it if this side created it)."""
         for view in (self.compute_hist, self.lateness_hist, self._hist, self.words):
             view.release()
-        self.snapshot.buf = self.inputs.buf = memoryview(b"")
+        self.snapshot.buf = self.inputs.buf = self.events.buf = memoryview(b"")
         if self.trace is not None:
             self.trace.buf = memoryview(b"")
         self.block.close()

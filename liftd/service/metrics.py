@@ -72,8 +72,11 @@ class LiftdCollector(Collector):
              "(TwinCAT exceed counter)", t.exceeded),
             ("geo_compute_over_25pct", "GEO cycles whose compute took more than 25 % of the "
              "cycle time", t.compute_over),
+            ("geo_compute_cpu_over_25pct", "GEO cycles whose compute took more than 25 % of the "
+             "cycle time on the loop thread's CPU clock (VM steal excluded)", t.compute_cpu_over),
             ("geo_regridded", "wall-clock GEO ticks skipped after a stall", t.regridded),
-            ("geo_events_dropped", "GEO events dropped (event pipe full)", t.events_dropped),
+            ("geo_events_dropped", "GEO events dropped (the daemon had not read the last 64 KiB)",
+             t.events_dropped),
             ("ads_requests", "ADS requests answered", a.requests),
             ("ads_errors", "ADS connections closed for protocol errors and requests answered "
              "0x700", a.errors),

@@ -133,8 +133,14 @@ def test_without_a_program_the_daemon_idles_and_liftd_reload_brings_one(tmp_path
         # its geo.compute_over line says so and why (VM stalls may add lines that say "")
         assert d.read_symbol("GEO.timing.compute_over_25pct", "<I") >= 1
         slow = [rec for rec in list(d.logs) if rec.get("event") == "geo.compute_over"]
-        took = [rec for rec in slow if "reload" in (rec.get("text") or "").split(",")]
+        took = [rec for rec in slow
+                if "reload" in (rec.get("text") or "").split(";")[0].split(",")]  # fmt: skip
         assert len(took) == 1 and took[0]["value"] > 250.0, slow
+        # decoding is the loop's own work: the thread's CPU clock saw it too
+        cpu_us = int(took[0]["text"].split("; cpu ")[1].split(" µs")[0])
+        assert cpu_us > 250, took[0]
+        assert d.read_symbol("GEO.timing.compute_cpu_over_25pct", "<I") >= 1
+        assert d.read_symbol("GEO.timing.compute_cpu_max_us", "<d") >= cpu_us
         assert abs(took[0]["t"] * 1000 - round(took[0]["t"] * 1000)) < 1e-6  # a GEO cycle
     finally:
         assert d.stop() == 0
@@ -259,12 +265,18 @@ def test_geo_timing_reports_compute_max_and_the_cycles_over_a_quarter(tmp_path: 
         over = d.read_symbol("GEO.timing.compute_over_25pct", "<I")
         cycles = d.read_symbol("GEO.cycle", "<Q")
         assert 0 <= over <= cycles
-        assert d.read_symbol("GEO.timing.compute_max_us", "<d") > 0.0
+        compute_max = d.read_symbol("GEO.timing.compute_max_us", "<d")
+        assert compute_max > 0.0
+        # the thread's CPU clock: each cycle's compute on it is there (and counted apart)
+        assert d.read_symbol("GEO.timing.compute_cpu_max_us", "<d") > 0.0
+        assert 0 <= d.read_symbol("GEO.timing.compute_cpu_over_25pct", "<I") <= cycles
     finally:
         assert d.stop() == 0
     stopped = d.event("daemon.stopped", 1)
     assert stopped is not None
     assert stopped["compute_max_us"] > 0 and 0 <= stopped["compute_over_25pct"] <= stopped["cycles"]
+    assert stopped["compute_cpu_max_us"] > 0
+    assert 0 <= stopped["compute_cpu_over_25pct"] <= stopped["cycles"]
 
 
 def test_prometheus_exposition_has_help_fixed_buckets_sums_and_process_metrics(

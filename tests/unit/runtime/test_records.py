@@ -23,7 +23,7 @@ def test_snapshot_and_stats_round_trip_bit_exactly() -> None:
         lift_phase=LiftPhase.DOWN, lift_vz=-0.98, m_pending=8, error_id=21558, error_line=14,
         events=(Event("lift.start", 1.0, 3),), lift_axis=0, lift_counts=(2, 0, 4_000_000_000),
     )  # fmt: skip
-    stats = LoopStats(123_456, 7, 45.5, 130.25, 12.0, 480.0)
+    stats = LoopStats(123_456, 7, 45.5, 130.25, 12.0, 480.0, 3, 210.5, 2)
     raw = codec.pack(snap, stats)
     assert len(raw) == codec.size
     back, back_stats = codec.unpack(raw)

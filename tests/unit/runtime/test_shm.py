@@ -12,7 +12,7 @@ from typing import Any
 
 import pytest
 
-from liftd.runtime.shm import MAX_RETRIES, Block, Ring, Seqlock
+from liftd.runtime.shm import MAX_RETRIES, Block, ByteRing, Ring, Seqlock
 
 SIZE = 64
 
@@ -85,6 +85,28 @@ def test_ring_is_fifo_bounded_and_wraps(block: Block) -> None:
         assert ring.get() == struct.pack("<3I", i - 3, i - 3, i - 3)
     assert [ring.get() for _ in range(3)][-1] == struct.pack("<3I", 49, 49, 49)
     assert ring.get() is None and ring.dropped == 1
+
+
+def test_byte_ring_keeps_records_whole_across_the_end_and_rejects_what_does_not_fit(
+    block: Block,
+) -> None:
+    """The loop's event stream: records of any length, each whole or not at all, in order,
+    however they straddle the end of the buffer; the daemon reassembles them (EventReader)."""
+    ring = ByteRing(block, 0, capacity=100)
+    assert ring.take() == b""
+    sent = bytearray()
+    for i in range(60):  # ~14 times round the buffer, at a different offset each time
+        rec = bytes([i]) * (7 + i % 13)
+        assert ring.put(rec)
+        sent += rec
+        if i % 3 == 2:
+            got = ring.take()
+            assert sent.startswith(got) and got
+            del sent[: len(got)]
+    assert ring.take() == bytes(sent)
+    assert ring.put(bytes(60)) and not ring.put(bytes(41))  # 40 free: rejected, counted
+    assert ring.dropped == 1 and ring.put(bytes(40)) and not ring.put(b"x")
+    assert ring.take() == bytes(100) and ring.dropped == 2
 
 
 def _index_watcher(name: str, seconds: float, out: Any) -> None:

@@ -35,12 +35,14 @@ def test_buckets_are_cumulative_on_the_fixed_edges() -> None:
 
 def test_the_exposition_of_a_sample() -> None:
     totals = LoopTotals(cycles=1000, exceeded=3, compute_over=7, regridded=0, events_dropped=0,
-                        compute_sum_ns=60_000_000, lateness_sum_ns=20_000_000)  # fmt: skip
+                        compute_sum_ns=60_000_000, lateness_sum_ns=20_000_000,
+                        compute_cpu_over=2)  # fmt: skip
     sample = Sample(totals, hist(*[60_000] * 1000), hist(*[20_000] * 1000), True,
                     AdsStats(2, 500, 1, 40))  # fmt: skip
     body = generate_latest(registry(lambda: sample, lambda: None)).decode()
     assert "liftd_geo_cycles_total 1000.0" in body
     assert "liftd_geo_compute_over_25pct_total 7.0" in body
+    assert "liftd_geo_compute_cpu_over_25pct_total 2.0" in body
     assert "liftd_geo_compute_seconds_sum 0.06" in body
     assert "liftd_geo_compute_seconds_count 1000.0" in body
     assert 'liftd_geo_compute_seconds_bucket{le="5e-05"} 0.0' in body
