@@ -22,12 +22,19 @@ from typing import Final
 
 from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.machine import ChannelProgram, Machine
-from liftd.cnc.snapshot import ChannelState, Command, Event, GeoSnapshot, new_loop_stats
+from liftd.cnc.snapshot import (
+    ChannelState,
+    Command,
+    Event,
+    GeoSnapshot,
+    new_event,
+    new_loop_stats,
+)
 from liftd.runtime import rt
 from liftd.runtime.cycle import CycleClock, bucket
 from liftd.runtime.loop_config import ChannelConfig, LoopConfig
 from liftd.runtime.plc_inputs import PlcInputs
-from liftd.runtime.records import pack_event, read_message, unpack_input
+from liftd.runtime.records import INPUT_NAMES, pack_event, read_message, unpack_input
 from liftd.runtime.shared import (
     COMPUTE_CPU_OVER,
     COMPUTE_OVER,
@@ -170,7 +177,7 @@ class GeoLoop:
                 w = unpack_input(raw)
                 if w.channel < n and plcs[w.channel].apply(w):  # logged with its cycle
                     applied = True
-                    send(Event("geo.plc_input", t, 0, w.value, w.signal.name.lower()),
+                    send(new_event(("geo.plc_input", t, 0, w.value, INPUT_NAMES[w.signal], 0)),
                          tags[w.channel])  # fmt: skip
             inputs = [plcs[i].inputs(last[i], t) for i in channels]
             # a START may decode and plan the program

@@ -226,9 +226,11 @@ class ByteRing:
         pos = head % cap
         first = min(n, cap - pos)
         at = self.data_at
-        view = memoryview(record)
-        self.buf[at + pos : at + pos + first] = view[:first]
-        if first < n:
+        if first == n:
+            self.buf[at + pos : at + pos + n] = record
+        else:  # across the end
+            view = memoryview(record)
+            self.buf[at + pos : at + pos + first] = view[:first]
             self.buf[at : at + n - first] = view[first:]
         words[self.head_i] = head + n  # publish after the bytes
         return True
