@@ -72,30 +72,35 @@ class LineQueue:
             self._ready.wait()
             self._ready.clear()
             batch = [lines.popleft() for _ in range(len(lines))]
-            if batch:
-                self._write_lines(batch)
-            if self._dropped != self._reported and not lines:
+            wrote = self._write_lines(batch) if batch else False
+            # report drops only once a write got through: on a broken stream the report is
+            # dropped too, and reporting that was a loop (68 % of a CPU in a daemon whose
+            # stderr reader had gone, 13 000 failed writes a second)
+            if wrote and self._dropped != self._reported and not lines:
                 held, self._reported = self._dropped - self._reported, self._dropped
                 structlog.get_logger("liftd").warning("log.dropped", lines=held,
                                                       total=self._dropped)  # fmt: skip
             if self._stop and not lines:
                 return
 
-    def _write_lines(self, batch: list[str]) -> None:
-        """Blocking write. Through the fd, not `stream.write`: a writer blocked inside the
-        stream's buffer would keep its lock, and the interpreter aborts at exit ("could not
-        acquire lock for <stderr> at interpreter shutdown")."""
+    def _write_lines(self, batch: list[str]) -> bool:
+        """Blocking write; False when the stream is closed or broken. Through the fd, not
+        `stream.write`: a writer blocked inside the stream's buffer would keep its lock, and
+        the interpreter aborts at exit ("could not acquire lock for <stderr> at interpreter
+        shutdown")."""
         text = "".join(line + "\n" for line in batch)
         try:
             if self._fd is None:
                 self.stream.write(text)
                 self.stream.flush()
-                return
+                return True
             data = text.encode("utf-8", "replace")
             while data:
                 data = data[os.write(self._fd, data) :]
         except (OSError, ValueError):  # stream closed or broken: count the lines as dropped
             self._dropped += len(batch)
+            return False
+        return True
 
     def flush(self, timeout_s: float) -> None:
         """Write what is queued, waiting at most `timeout_s` (a blocked stream stays blocked:

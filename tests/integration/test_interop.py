@@ -58,10 +58,10 @@ class Session:
         cfg = write_config(tmp, program={"repeat": True},
                            ads={"udp_discovery": True, "udp_port": self.udp_port})  # fmt: skip
         self.pcap = tmp / "session.pcapng"
+        tshark = tool("tshark")  # before the daemon: a failure here left it running
         self.daemon = Daemon(cfg)
         self.port = self.daemon.ready()
         self.net_id = self.daemon.net_id
-        tshark = tool("tshark")
         self.capture = subprocess.Popen(
             [tshark, "-i", "lo", "-f", f"tcp port {self.port} or udp port {self.udp_port}",
              "-w", str(self.pcap), "-q"],
@@ -72,6 +72,7 @@ class Session:
             if "Capturing on" in line:
                 break
         else:
+            self.daemon.stop()
             pytest.fail("tshark did not start capturing")
 
     def node(self, mode: str, *extra: str) -> dict[str, Any]:

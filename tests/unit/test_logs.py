@@ -64,3 +64,24 @@ def test_a_blocked_writer_drops_and_counts_without_blocking() -> None:
     lines.flush(5.0)
     written = out.getvalue().splitlines()
     assert written[0] == "line 0" and len(written) + lines.dropped == 1000
+
+
+BROKEN = """
+import os, sys, structlog
+from liftd.service import logs
+r, w = os.pipe()
+os.close(r)  # the reader has gone (a supervisor restarted, `liftd run | head` ended)
+logs.configure("info", "json", stream=os.fdopen(w, "w"))
+structlog.get_logger("t").info("t.info")
+logs.flush(5.0)
+print(logs.dropped(), logs._lines._closed)
+"""
+
+
+def test_a_broken_stream_drops_its_lines_once_and_the_writer_rests() -> None:
+    """Until 2026-12-02 the writer reported each drop in a log line that was dropped in turn:
+    a loop of failed writes at 68 % of a CPU for as long as the daemon ran."""
+    r = subprocess.run([sys.executable, "-c", BROKEN], capture_output=True, text=True,
+                       cwd=REPO, timeout=60, check=False)  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.split() == ["1", "True"]  # one line dropped; flush found the writer done
