@@ -21,10 +21,17 @@ runs (the run is deterministic, so the minimum filters out the VM's noise), spli
 the cycle did (a lift moving, the producer filling more than one entry after an event, a
 producer re-plan).
 
+`--cold [NAME ...]` times the cycles that do more than move (a PLC override write every 0.5 s
+through 60/80/100/150/200 %, lift starts and ends, M functions, …) and every 50th plain cycle
+with the caches cold: 64 MiB written just before the step, as the GEO process finds them after
+its 1 ms sleep beside the daemon and its clients (its plain cycles take 10–20× the hot step).
+Per kind of cycle p50 / p90 / max over the minimum of 2 runs, in µs: what an event cycle costs
+in the daemon, without its RT noise (bench_rt.py measures the same cycles there).
+
 `--repeat [NAME ...]` times the repeat STARTs of the demo and the 500-part job (or the programs
 named) run as `[program] repeat` runs them: each START's cycle and the largest cycle after it.
 
-Run: .venv/bin/python bench/bench_step.py [--breakdown | --repeat] [NAME ...]   (~5 min)
+Run: .venv/bin/python bench/bench_step.py [--breakdown | --cold | --repeat] [NAME ...]   (~5 min)
 """
 
 from __future__ import annotations
@@ -201,6 +208,65 @@ def breakdown(name: str, text: str, schedule: Schedule, runs: int = 3) -> dict[s
     return out
 
 
+def _override_writes(duration: float) -> Schedule:
+    steps = (0.6, 0.8, 1.0, 1.5, 2.0)
+    return Schedule(override=tuple((0.5 * (k + 1) - 0.0004, steps[k % len(steps)])
+                                   for k in range(int(duration / 0.5))))  # fmt: skip
+
+
+def cold_cycles(name: str, text: str, runs: int = 2, every: int = 50) -> dict[str, object]:
+    """Step time by kind of cycle with the caches flushed just before the step (`--cold`)."""
+    import numpy as np  # noqa: PLC0415
+
+    from liftd.cnc.geo_task import GeoTask  # noqa: PLC0415
+    from liftd.cnc.plc import SimPlc  # noqa: PLC0415
+
+    ch = load_settings(str(ROOT / "config" / "liftd.toml")).channel
+    first = simulate(ch, text, Schedule(), 0.02, max_time=3600.0)
+    schedule = _override_writes(first.summary.duration_s)
+    flush = np.zeros((64 << 20) // 8)
+    clock = time.perf_counter_ns
+    kinds: dict[int, str] = {}
+    best: dict[int, float] = {}
+    for r in range(runs + 1):  # run 0 (hot) finds the cycles to time
+        task, plc, last = GeoTask(ch, text), SimPlc(0.02), None
+        gc.collect()
+        gc.freeze()
+        gc.disable()
+        for k in range(1, 10_000_000):
+            t = k * ch.cycle_time
+            inputs = plc.inputs(last, t, schedule)
+            timed = r > 0 and k in kinds
+            if timed:
+                flush += 1.0
+            c0 = clock()
+            snap = task.step(inputs, t)
+            took = (clock() - c0) / 1e3
+            if r == 0:
+                names = sorted({e.name for e in snap.events})
+                if last is not None and inputs.override != last.override_requested:
+                    names.append("override write")
+                if names or k % every == 0:
+                    kinds[k] = ",".join(names) or "plain"
+            elif timed:
+                best[k] = min(best.get(k, took), took)
+            last = snap
+            if snap.state.name in ("READY", "ERROR") and task.runs:
+                break
+        gc.enable()
+        gc.unfreeze()
+    out: dict[str, object] = {"bench": "step_cold", "program": name, "runs": runs}
+    groups: dict[str, list[float]] = {}
+    for k, kind in kinds.items():
+        groups.setdefault(kind, []).append(best[k])
+    for kind, v in sorted(groups.items(), key=lambda kv: -max(kv[1])):
+        a = np.array(v)
+        out[kind] = {"cycles": int(a.size), "p50": round(float(np.median(a)), 1),
+                     "p90": round(float(np.percentile(a, 90)), 1),
+                     "max": round(float(a.max()), 1)}  # fmt: skip
+    return out
+
+
 def repeat_starts(name: str, text: str, runs: int = 4, after: int = 300) -> dict[str, object]:
     """A program repeated as `[program] repeat` runs it in the GEO loop (prepare_next_run
     before the first START, each START in the cycle after the program ended): the step time
@@ -252,6 +318,11 @@ def main() -> None:
         for name, (text, _) in programs().items():
             if name in (wanted or ["demo", "nesting-500"]):
                 print(json.dumps(repeat_starts(name, text)), flush=True)
+        return
+    if "--cold" in sys.argv:
+        for name, (text, _) in programs().items():
+            if name in (wanted or ["demo"]):
+                print(json.dumps(cold_cycles(name, text)), flush=True)
         return
     if "--breakdown" in sys.argv:
         for name, (text, schedule_for) in programs().items():
