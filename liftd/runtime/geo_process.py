@@ -151,8 +151,13 @@ class GeoProcess:
         self.alive = True
 
     async def _poll_events(self) -> None:
+        loop = asyncio.get_running_loop()
         while True:
-            self._drain_events()
+            try:
+                self._drain_events()
+            except Exception as exc:  # a consumer's bug must not end the events' delivery
+                loop.call_exception_handler({"message": "GEO event consumer failed",
+                                             "exception": exc})  # fmt: skip
             await asyncio.sleep(EVENT_POLL_S)
 
     def _drain_events(self) -> None:
