@@ -117,8 +117,8 @@ class LoopStats(NamedTuple):
     lateness_last_us: float = 0.0
     lateness_max_us: float = 0.0
     compute_over: int = 0  # cycles whose compute took more than 25 % of the period (runtime)
-    # the same on the loop thread's CPU clock: time the hypervisor took the vCPU away
-    # (steal) does not count there, its own work and the interrupts it served do
+    # the same on the loop thread's CPU clock: a preemption inside the guest does not count
+    # there; its own work, the interrupts it served and (on this VM) the hypervisor's stalls do
     compute_cpu_max_us: float = 0.0
     compute_cpu_over: int = 0
 

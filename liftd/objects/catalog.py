@@ -220,7 +220,7 @@ def _objects(ch: ChannelParams, index: int = 0) -> list[CncObject]:
                       "cycles whose compute took > 25 % of the cycle"),
             CncObject("compute_cpu_max_us", "GEO.timing.compute_cpu_max_us", REAL64, "µs",
                       lambda v: v.stats.compute_cpu_max_us,
-                      "largest compute on the loop thread's CPU clock (without VM steal)"),
+                      "largest compute on the loop thread's CPU clock"),
             CncObject("compute_cpu_over_25pct", "GEO.timing.compute_cpu_over_25pct", UNS32, "-",
                       lambda v: v.stats.compute_cpu_over,
                       "cycles whose compute took > 25 % of the cycle on the thread's CPU clock"),

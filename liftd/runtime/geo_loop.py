@@ -41,7 +41,6 @@ from liftd.runtime.shared import (
     COMPUTE_SHARE,
     COMPUTE_SUM_NS,
     CYCLES,
-    EVENTS_DROPPED,
     EXCEEDED,
     LATENESS_SUM_NS,
     LOADING,
@@ -66,11 +65,9 @@ READY: Final = ChannelState.READY  # a C static: `ChannelState.READY` is two loo
 class _Events:
     def __init__(self, ring: ByteRing) -> None:
         self.ring = ring
-        self.dropped = 0
 
     def send(self, ev: Event, channel: int = 0) -> None:
-        if not self.ring.put(pack_event(ev, channel)):
-            self.dropped += 1
+        self.ring.put(pack_event(ev, channel))  # a full stream counts what it rejects (shared)
 
 
 class GeoLoop:
@@ -245,14 +242,13 @@ class GeoLoop:
                 regridded += skipped
                 words[REGRIDDED] = regridded
                 send(Event("geo.regrid", t, snaps[0].line, float(skipped)))
-            if self.events.dropped:
-                words[EVENTS_DROPPED] = self.events.dropped
 
 
 def cycle_kinds(snaps: list[GeoSnapshot], applied: bool, reloaded: bool) -> str:
     """What a cycle did, for its geo.compute_over event (whose text is this, then the cycle's
-    compute on the thread's CPU clock and the wall time of its steps alone: "lift.start;
-    cpu 31 µs; step 27 µs" is a cycle the machine stalled): the names of its channels' events
+    compute on the thread's CPU clock and the wall time of its steps alone: a CPU time far
+    below the wall time is a preemption, a step time far below it is time spent outside the
+    steps): the names of its channels' events
     (lift.start, geo.program_start, …), `plc_input` when a PLC write took effect in it,
     `reload` when it took a configuration (and may have decoded a program); "" for a cycle
     that did nothing but move (its own cost is a few µs: bench_step.py)."""

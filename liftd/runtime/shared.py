@@ -29,11 +29,10 @@ CYCLES = 4
 EXCEEDED = 5  # cycles that finished after the start of the next one
 COMPUTE_OVER = 6  # cycles whose compute took more than COMPUTE_SHARE of the period
 REGRIDDED = 7
-EVENTS_DROPPED = 8
-COMPUTE_SUM_NS = 9
-LATENESS_SUM_NS = 10
-COMPUTE_CPU_OVER = 11  # cycles whose compute took more than COMPUTE_SHARE on the thread's CPU clock
-WORDS = 12
+COMPUTE_SUM_NS = 8
+LATENESS_SUM_NS = 9
+COMPUTE_CPU_OVER = 10  # cycles whose compute took more than COMPUTE_SHARE on the thread's CPU clock
+WORDS = 11  # (the events dropped are the event stream's own count)
 COMPUTE_SHARE = 0.25  # a cycle computing longer than this share of its period is counted
 INPUT_CAPACITY = 256
 EVENTS_CAPACITY = 1 << 16  # bytes of events the daemon has not read yet (a pipe's buffer)
@@ -56,7 +55,7 @@ class LoopTotals(NamedTuple):
     events_dropped: int
     compute_sum_ns: int
     lateness_sum_ns: int
-    compute_cpu_over: int = 0  # the same count on the thread's CPU clock (without steal)
+    compute_cpu_over: int = 0  # the same count on the loop thread's CPU clock
 
 
 @dataclass(frozen=True, slots=True)
@@ -136,7 +135,7 @@ class Shared:
     def totals(self) -> LoopTotals:
         w = self.words
         return LoopTotals(w[CYCLES], w[EXCEEDED], w[COMPUTE_OVER], w[REGRIDDED],
-                          w[EVENTS_DROPPED], w[COMPUTE_SUM_NS], w[LATENESS_SUM_NS],
+                          self.events.dropped, w[COMPUTE_SUM_NS], w[LATENESS_SUM_NS],
                           w[COMPUTE_CPU_OVER])  # fmt: skip
 
     def close(self) -> None:

@@ -73,7 +73,7 @@ class LiftdCollector(Collector):
             ("geo_compute_over_25pct", "GEO cycles whose compute took more than 25 % of the "
              "cycle time", t.compute_over),
             ("geo_compute_cpu_over_25pct", "GEO cycles whose compute took more than 25 % of the "
-             "cycle time on the loop thread's CPU clock (VM steal excluded)", t.compute_cpu_over),
+             "cycle time on the loop thread's CPU clock", t.compute_cpu_over),
             ("geo_regridded", "wall-clock GEO ticks skipped after a stall", t.regridded),
             ("geo_events_dropped", "GEO events dropped (the daemon had not read the last 64 KiB)",
              t.events_dropped),
