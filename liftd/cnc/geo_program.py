@@ -25,7 +25,7 @@ from liftd.cnc.nc import DecoderContext, NcError, decode
 from liftd.cnc.nc.blocks import Severity
 from liftd.cnc.params import PLANNING_MARGIN, ChannelParams, LiftMethod
 from liftd.cnc.path.geometry import Vec, within
-from liftd.cnc.path.program import Action, ActionKind, PathProgram, prepare
+from liftd.cnc.path.program import ActionKind, PathProgram, prepare
 from liftd.cnc.path.table import PathTable, build_table
 from liftd.cnc.path.velocity import brake_distance
 from liftd.cnc.plc import MAX_OVERRIDE
@@ -50,6 +50,7 @@ class GeoProgram:
     nominal_differs: tuple[bool, ...] = ()
     # per range: direction cosine of its lift axis at the end of the segment before LIFT_START
     # (Z's velocity when the path passes it); the LIFT_START spec (by identity) → range index
+    # (the GEO cycle's lookup of the range a LIFT_START action opens: `BoundaryActions._do`)
     entry_dir: tuple[float, ...] = ()
     range_of: dict[int, int] = dataclasses.field(default_factory=dict)
     # per time-based range: Advanced Lifting's rise from Z at rest at the programmed start,
@@ -59,14 +60,6 @@ class GeoProgram:
     # the axes the program lifts (its LIFT_STARTs' axes, in order of first use): a run's lift
     # generators, guards and monitors are built for these, not once per range
     lift_axes: tuple[str, ...] = ()
-
-    def range_at(self, action: Action) -> LiftRange:
-        """The range a LIFT_START action opens: one dict lookup in the GEO cycle (a scan of
-        the ranges cost up to 25 µs on a 500-part job)."""
-        i = self.range_of.get(id(action.lift_start), -1)
-        if i < 0:
-            raise KeyError(action.line)
-        return self.ranges[i]
 
     def conditional_for(self, number: int) -> tuple[int, ...]:
         """Boundaries where an MVS_SNS M<number> waits for its acknowledge."""

@@ -6,11 +6,12 @@ A run's state is the program prepared for its start position, its `Interpolator`
 µs of its cycle on the demo and 475–757 µs on a 500-part job (2026-12-01). `Runs` keeps the
 next run of a repeated program built ahead instead: `prepare` builds it with the program,
 outside the GEO cycle; after each START `deferred` builds the one after it in the following
-cycles, a piece per cycle (the interpolator, then the lift controller, from the program
-`PreparedPrograms.prepared` has for where this run ends; it never decodes), so `take` only
-swaps it in. What a START replaces goes to `ReleaseBins`, the parts that grow with the program
-(lift records, the committed queue, its arrival times) item by item. None of it changes what a
-cycle computes: the state built ahead is the one a START would build (test_repeat.py).
+cycles, a piece per cycle (the interpolator, the lift controller, the tracker of the lifts'
+nominal runs, from the program `PreparedPrograms.prepared` has for where this run ends; it
+never decodes), so `take` only swaps it in. What a START replaces goes to `ReleaseBins`, the
+parts that grow with the program (lift records, the committed queue, its arrival times) item
+by item. None of it changes what a cycle computes: the state built ahead is the one a START
+would build (test_repeat.py).
 """
 
 from __future__ import annotations
@@ -110,19 +111,25 @@ class Runs:
             if prog is None:
                 self._built_for = run  # nothing to build ahead: the START decodes
                 return
-            self._building = RunState(end, prog, self._interpolator(prog), None)
-        else:
+            self._building = RunState(end, prog, self._interpolator(prog, nominal=False), None)
+        elif b.lift is None:
             b.lift = self._lift(b.prog)
+        else:
+            if b.prog.ranges:
+                b.interp.prepare_nominal(b.prog.nominal)
             self.ahead, self._building = b, None
             self._built_for = run
 
-    def _interpolator(self, prog: GeoProgram) -> Interpolator:
+    def _interpolator(self, prog: GeoProgram, nominal: bool = True) -> Interpolator:
         lead = self.leads[self.ch.lift_axis]
         for name in prog.lift_axes:
             lead = max(lead, self.leads[name])
-        return Interpolator(
+        interp = Interpolator(
             prog.path, prog.table, self.ch.look_ahead_blocks, self.ch.cycle_time, lead
         )
+        if nominal and prog.ranges:
+            interp.prepare_nominal(prog.nominal)
+        return interp
 
     def _lift(self, prog: GeoProgram) -> LiftController:
         return LiftController(

@@ -59,12 +59,34 @@ class FirstRise:
     """A range's rise prepared before the run (`GeoProgram.rises`): the profile from q0 at
     rest toward max(POS_LIMIT, POS), in the generator's coordinates."""
 
-    __slots__ = ("phases", "q0", "traj")
+    __slots__ = ("dur", "ev", "phases", "q0", "traj")
 
     def __init__(self, q0: float, traj: Trajectory) -> None:
         self.q0 = q0
         self.traj = traj
         self.phases = Phases(traj)  # read here, in preparation: the cycles evaluate natively
+        self.dur = self.phases.dur  # traj.duration, without a binding call in the start cycle
+        self.ev = Evaluator(traj, self.phases)  # stateless given its phases: shared by runs
+
+
+class FirstStep:
+    """What a range's first rising cycle computes from its prepared rise, computed in a cycle
+    before it (`AdvancedLift.prime`, once the path's crossing of LIFT_START is committed): the
+    state the rise reaches after `dt` and whether the time-optimal descent from there fits.
+    Its one ruckig solve was the costliest part of a lift start's cycle (38 µs of ~180 with
+    cold caches, bench_step.py --cold)."""
+
+    __slots__ = ("dt", "fits", "limit", "need", "nxt", "rise", "target")
+
+    def __init__(self, rise: Trajectory, target: float, limit: float, dt: float,
+                 nxt: tuple[float, float, float], need: float, fits: bool) -> None:  # fmt: skip
+        self.rise = rise
+        self.target = target
+        self.limit = limit
+        self.dt = dt
+        self.nxt = nxt
+        self.need = need
+        self.fits = fits
 
 
 class AdvancedLift:
@@ -98,6 +120,8 @@ class AdvancedLift:
         # the descent from the next rising state is asked only for its duration and extent:
         # each rising cycle solves it into this one trajectory (no allocation per cycle)
         self._desc = Trajectory(1)
+        self.first: FirstStep | None = None  # the next range's first rising cycle, primed
+        self._first_desc = Trajectory(1)
 
     # -- lifecycle -------------------------------------------------------------------------------
     def start(
@@ -130,9 +154,22 @@ class AdvancedLift:
         else:
             self.phase = UP
             if rise is not None and rise.q0 == self.q and self.v == 0.0 and self.a == 0.0:
-                self.rise, self.rise_t0, self.rise_dur = rise.traj, t, rise.traj.duration
-                self.rise_ev = Evaluator(rise.traj, rise.phases)
+                self.rise, self.rise_t0, self.rise_dur = rise.traj, t, rise.dur
+                self.rise_ev = rise.ev
                 self._on_rise = True  # the state is the rise's at its start
+
+    def prime(self, rise: FirstRise, target: float, limit: float, down: bool, dt: float) -> None:
+        """Compute ahead the first rising cycle of a range that will start on `rise` (at rest at
+        its start) `dt` before the end of its cycle, toward POS `target` under `limit` (z
+        coordinates): that cycle then takes it from `first` instead of solving it. Pure with
+        respect to the running lift: only `first` changes."""
+        s = -1.0 if down else 1.0
+        q_target, q_limit = s * target, s * limit
+        goal = max(q_limit, q_target)
+        nxt = _rise_next(rise.ev, 0.0, dt, rise.dur, goal)
+        desc = self.prof.to_rest(nxt[0], nxt[1], nxt[2], q_target, into=self._first_desc)
+        fits = _fits(desc, nxt[0], q_limit, q_target)
+        self.first = FirstStep(rise.traj, q_target, q_limit, dt, nxt, desc.duration, fits)
 
     def rise_and_hold(self, t: float) -> None:
         """Program error inside the range: go to POS_LIMIT and stay (vendor §2.1.3 case 2)."""
@@ -242,8 +279,7 @@ class AdvancedLift:
         self._set(ev.at(local))
 
     def _descent_fits(self, traj: Trajectory, start_q: float) -> bool:
-        lo, hi = position_range(traj)
-        return hi <= self.limit + POS_TOL and lo >= min(start_q, self.target) - POS_TOL
+        return _fits(traj, start_q, self.limit, self.target)
 
     def _up(
         self, dt: float, t_rem: float, on_rise: bool = False, refine: Refine | None = None
@@ -255,20 +291,27 @@ class AdvancedLift:
             self.rise, self.rise_t0, self.rise_dur = up, self.t, up.duration
             self.rise_ev = Evaluator(up)
         base = self.t - self.rise_t0  # the rise's local time of the current state
-        goal = max(self.limit, self.target)
-        if base + dt >= self.rise_dur - TIME_TOL:
-            nxt = (goal, 0.0, 0.0)  # at rest at the goal (ruckig's end may round a bit past it)
+        first = self.first
+        if (
+            first is not None
+            and base == 0.0
+            and first.rise is up
+            and first.dt == dt
+            and first.target == self.target
+            and first.limit == self.limit
+        ):
+            nxt, need, fits = first.nxt, first.need, first.fits  # primed: the same solve
         else:
-            nxt = self.rise_ev.at(base + dt)
-            if nxt[0] > goal:
-                nxt = (goal, nxt[1], nxt[2])
-        desc = self.prof.to_rest(nxt[0], nxt[1], nxt[2], self.target, into=self._desc)
-        need = self.t_need = desc.duration  # also while holding: the restart is limited by it
+            nxt = _rise_next(self.rise_ev, base, dt, self.rise_dur, max(self.limit, self.target))
+            desc = self.prof.to_rest(nxt[0], nxt[1], nxt[2], self.target, into=self._desc)
+            need, fits = desc.duration, t_rem != INF and self._descent_fits(desc, nxt[0])
+        self.first = None
+        self.t_need = need  # also while holding: the restart is limited by it
         if t_rem == INF:
             self._set(nxt)
             self._on_rise = True
             return
-        if need <= t_rem - dt + TIME_TOL and self._descent_fits(desc, nxt[0]):
+        if need <= t_rem - dt + TIME_TOL and fits:
             self._set(nxt)
             self._on_rise = True
             return
@@ -276,9 +319,7 @@ class AdvancedLift:
             exact = refine()
             if exact != t_rem:
                 t_rem = exact
-                if t_rem == INF or (
-                    need <= t_rem - dt + TIME_TOL and self._descent_fits(desc, nxt[0])
-                ):
+                if t_rem == INF or (need <= t_rem - dt + TIME_TOL and fits):
                     self._set(nxt)
                     self._on_rise = True
                     return
@@ -286,7 +327,7 @@ class AdvancedLift:
         now = self.prof.to_rest(self.q, self.v, self.a, self.target)
         if now.duration >= t_rem - TIME_TOL:
             tau, plan = 0.0, now  # overdue: descend time-optimally now
-        elif self._descent_fits(desc, nxt[0]):
+        elif fits:
             tau, plan = self._switch_time(up, base, now, need, dt, t_rem)
         else:  # the limit, not the time, ends the rise: bisection on both conditions
             lo, hi = 0.0, dt
@@ -380,3 +421,21 @@ class AdvancedLift:
         self.late = max(0.0, best.duration - t_rem)
         self.plan = best
         self.plan_t0 = self.t
+
+
+def _rise_next(
+    ev: Evaluator, base: float, dt: float, dur: float, goal: float
+) -> tuple[float, float, float]:
+    """The state a rise (evaluated by `ev`, `dur` long, toward `goal`) reaches at base + dt."""
+    if base + dt >= dur - TIME_TOL:
+        return (goal, 0.0, 0.0)  # at rest at the goal (ruckig's end may round a bit past it)
+    nxt = ev.at(base + dt)
+    if nxt[0] > goal:
+        return (goal, nxt[1], nxt[2])
+    return nxt
+
+
+def _fits(traj: Trajectory, start_q: float, limit: float, target: float) -> bool:
+    """Whether a descent from start_q stays within [min(start, target), limit]."""
+    lo, hi = position_range(traj)
+    return hi <= limit + POS_TOL and lo >= min(start_q, target) - POS_TOL

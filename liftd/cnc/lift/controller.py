@@ -135,6 +135,15 @@ class LiftController:
         except ProfileError:
             return INF
 
+    def prime(self, rng: LiftRange, dt: float) -> None:
+        """Compute ahead the first rising cycle of `rng` (time-based, on its prepared rise),
+        which will start `dt` before the end of its cycle (`AdvancedLift.prime`)."""
+        rise = self.rises[rng.index]
+        if rise is None or self.plans[rng.index] is not None or rng.direct:
+            return
+        spec = rng.start
+        self.generator(spec.axis).prime(rise, spec.target, spec.pos_limit, spec.down, dt)
+
     # -- events -----------------------------------------------------------------------------------
     def start(self, rng: LiftRange, t: float, z: float, vz: float, az: float) -> None:
         spec = rng.start

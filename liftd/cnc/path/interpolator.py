@@ -236,7 +236,27 @@ class Interpolator:
         while budget > 0 and len(self.queue) < self.lead and self._produce():
             budget -= 1
 
+    def crossing_within(self, k: int, cycles: int) -> tuple[int, Crossing] | None:
+        """The committed crossing of boundary k when one of the next `cycles` cycles reports it,
+        with that cycle's index (bounded: looks at `cycles` entries of the queue)."""
+        q = self.queue
+        for j in range(min(cycles, len(q))):
+            e = q[j]
+            for c in e.crossings:
+                if c.boundary == k:
+                    return e.k, c
+        return None
+
     # -- the nominal run of a lift range (path_delay_s) ------------------------------------------
+    def prepare_nominal(self, table: PathTable) -> None:
+        """Build the nominal run's tracker now, outside the GEO cycle: built where a lift's
+        start (or the path's parting from its nominal run) first needed it, it cost up to
+        80 µs of that cycle with cold caches (bench_step.py --cold)."""
+        self._shadow_table = table
+        sh = self._shadow
+        if sh is None or sh.tb is not table:
+            self._shadow = Tracker(table, self.prod.look_ahead, set(), self.acked_conditional)
+
     def nominal_start(
         self, table: PathTable, target: int, t: float, s: float, v: float, a: float, seg: int,
         differs: bool = True,
