@@ -61,10 +61,6 @@ class GeoProgram:
     # generators, guards and monitors are built for these, not once per range
     lift_axes: tuple[str, ...] = ()
 
-    def conditional_for(self, number: int) -> tuple[int, ...]:
-        """Boundaries where an MVS_SNS M<number> waits for its acknowledge."""
-        return self.conditional.get(number, ())
-
     def boundary_position(self, k: int) -> Vec:
         segs = self.path.segments
         if k < len(segs):

@@ -375,7 +375,8 @@ class GeoTask(BoundaryActions):
         self.m_acked.add(number)
         self.ack_time = t
         self._emit("geo.m_ack", t, self.line, float(number))
-        for k in self.prog.conditional_for(number):
+        # the dict, not GeoProgram.conditional_for: a Python frame in an M acknowledge's cycle
+        for k in self.prog.conditional.get(number, ()):
             self.interp.acknowledge_conditional(k)
 
     def _run_path(self, t: float) -> None:
