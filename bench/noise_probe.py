@@ -5,7 +5,9 @@ next to a baseline of this machine measured in the same run").
 cyclictest (rt-tests) measures how late a real-time task *wakes up*; this measures how long a
 constant piece of work takes once it is awake, the way the GEO loop measures its compute
 (perf_counter from wake-up to the end of the cycle's work; and, as it also does, on the
-thread's CPU clock, which leaves out the time the hypervisor took the vCPU away). The work is pure Python over a
+thread's CPU clock, which on this Firecracker VM counts the hypervisor's stalls too: steal is
+not accounted to it, so only the wall clock of this probe tells the machine's share). The
+work is pure Python over a
 64 KiB copy (every cache line of two buffers, at C speed) and an arithmetic loop, calibrated
 back to back at start to `--hot-us` (its median when the caches are warm); it never
 changes, so every cycle above 25 % of the period is the machine's doing: a VM stall,
