@@ -82,6 +82,7 @@ class Interpolator:
         self.discarded = ReleaseBins()  # what events discard, freed over the next cycles
         self.k_next = 1  # cycle index of the next entry the producer makes
         self._fresh = False  # restarted since the last cycle: it fills no more than its own
+        self._quiet = True  # no restart since the last `advance`: it may free discarded items
         # the state of the current cycle
         self.t_state = 0.0
         self.s = table.s[0] if table.s else 0.0
@@ -135,6 +136,7 @@ class Interpolator:
         p.set_state(self.t_state, self.s, self.v, self.a, self.segment, self.stopped_at)
         self.k_next = int(self.t_state / self.dt + 1e-6) + 1
         self._fresh = True
+        self._quiet = False
 
     def start(self, t: float) -> None:
         """The program starts: at rest at boundary 0 from time t (its actions run first)."""
@@ -197,8 +199,9 @@ class Interpolator:
         """Move to the cycle at time t (a multiple of dt); the boundaries reached since the last
         call, with their exact times."""
         k = round(t / self.dt)
-        if not self._fresh:  # an event's cycle frees nothing: its re-plan is its work
+        if self._quiet:  # an event's cycle frees nothing: its re-plan is its work
             self.discarded.release()
+        self._quiet = True  # (`_fresh` stays set while the path rests: not a cycle's flag)
         if self.stopped_at is not None:
             return []
         if self.parked and not self.queue:
