@@ -59,13 +59,14 @@ class FirstRise:
     """A range's rise prepared before the run (`GeoProgram.rises`): the profile from q0 at
     rest toward max(POS_LIMIT, POS), in the generator's coordinates."""
 
-    __slots__ = ("dur", "ev", "phases", "q0", "traj")
+    __slots__ = ("ev", "phases", "q0", "traj")
 
     def __init__(self, q0: float, traj: Trajectory) -> None:
         self.q0 = q0
         self.traj = traj
-        self.phases = Phases(traj)  # read here, in preparation: the cycles evaluate natively
-        self.dur = self.phases.dur  # traj.duration, without a binding call in the start cycle
+        # read here, in preparation: the cycles evaluate natively (its dur is traj.duration
+        # without a binding call)
+        self.phases = Phases(traj)
         self.ev = Evaluator(traj, self.phases)  # stateless given its phases: shared by runs
 
 
@@ -154,7 +155,7 @@ class AdvancedLift:
         else:
             self.phase = UP
             if rise is not None and rise.q0 == self.q and self.v == 0.0 and self.a == 0.0:
-                self.rise, self.rise_t0, self.rise_dur = rise.traj, t, rise.dur
+                self.rise, self.rise_t0, self.rise_dur = rise.traj, t, rise.phases.dur
                 self.rise_ev = rise.ev
                 self._on_rise = True  # the state is the rise's at its start
 
@@ -166,7 +167,7 @@ class AdvancedLift:
         s = -1.0 if down else 1.0
         q_target, q_limit = s * target, s * limit
         goal = max(q_limit, q_target)
-        nxt = _rise_next(rise.ev, 0.0, dt, rise.dur, goal)
+        nxt = _rise_next(rise.ev, 0.0, dt, rise.phases.dur, goal)
         desc = self.prof.to_rest(nxt[0], nxt[1], nxt[2], q_target, into=self._first_desc)
         fits = _fits(desc, nxt[0], q_limit, q_target)
         self.first = FirstStep(rise.traj, q_target, q_limit, dt, nxt, desc.duration, fits)
