@@ -23,7 +23,7 @@ producer re-plan).
 
 `--cold [NAME ...]` times the cycles that do more than move (a PLC override write every 0.5 s
 through 60/80/100/150/200 %, lift starts and ends, M functions, …; the two cycles before each
-lift start, which prime it: `GeoTask._prime_lift`) and every 50th plain cycle
+lift start, which prime it: `LiftAhead._prime_lift`) and every 50th plain cycle
 with the caches cold: 64 MiB written just before the step, as the GEO process finds them after
 its 1 ms sleep beside the daemon and its clients (its plain cycles take 10–20× the hot step).
 Per kind of cycle p50 / p90 / max over the minimum of 2 runs, in µs: what an event cycle costs

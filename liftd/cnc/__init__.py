@@ -14,6 +14,7 @@ CPU per cycle, bit-identical results. Without a C compiler they run as Python.
 COMPILED: tuple[str, ...] = (
     "liftd.cnc.actions",
     "liftd.cnc.geo_task",
+    "liftd.cnc.lift_ahead",
     "liftd.cnc.machine",
     "liftd.cnc.plc",
     "liftd.cnc.release",

@@ -40,7 +40,7 @@ class BoundaryActions:
     events: list[Event]
     lift_ranges: tuple[LiftRange, ...]  # the program's (`GeoProgram.ranges`)
     range_of: dict[int, int]  # id of a LIFT_START's spec -> its range (`GeoProgram.range_of`)
-    prime_next: int  # the range whose start `GeoTask._prime_lift` prepares
+    prime_next: int  # the range whose start `LiftAhead._prime_lift` prepares
 
     def _end_of_program(self, t: float, line: int) -> None:
         """The program ends (M30 reached, or an error stops it): `GeoTask`'s."""
