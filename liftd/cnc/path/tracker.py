@@ -245,7 +245,11 @@ class Tracker(Constraints):
             ramp = ramp_distance(v, a, j_max)
             fits = d + SLACK_TOL
             if v_p <= top and ramp <= fits:
-                return min(top, reach_velocity(v_p, max(d - ramp, 0.0), a_max, j_max))
+                # a path never moves backwards: a projected velocity a rounding puts below 0
+                # (-1e-17 m/s) is rest (ruckig1 refuses a negative target, which cost a
+                # refusal and a fallback to rest in the cycle: 26 of them in the 500-part job
+                # with override steps, most in the nominal run's re-plans)
+                return max(min(top, reach_velocity(v_p, max(d - ramp, 0.0), a_max, j_max)), 0.0)
             if v_p > top and brake_distance(v, a, top, a_max, j_max) <= fits:
                 return top
             if brake_distance(v, a, 0.0, a_max, j_max) <= fits:
