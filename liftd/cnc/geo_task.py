@@ -238,7 +238,7 @@ class GeoTask(LiftAhead):
         if verdict.path_waits:
             self.interp.add_lift_stop(k)
             self._emit("lift.path_waits", t0, self.line, float(k))
-        elif verdict.limited:
+        elif verdict.limited and verdict.override != self.ov_eff:  # a new grant, not each cycle
             self._emit("lift.override_limited", t0, self.line, verdict.override)
         return verdict.override
 

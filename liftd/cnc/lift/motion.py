@@ -33,6 +33,12 @@ from liftd.cnc.snapshot import LiftPhase
 INF = float("inf")
 MIN_LIFT_OVERRIDE = 0.01  # below this, the path waits for Z at the lift's horizon instead
 OVERRIDE_TRIALS = 6  # lower-bound evaluations to find the highest override Z still allows
+# While a cut request stands, a higher grant is taken only this far (5 % of the programmed feed)
+# above the override in effect: each grant is a re-plan of the path, and the verdict creeps up
+# as the path advances (the demo, 200 % written while Z rises: 16 re-plans in 16 cycles for
+# 145.5 → 148.9 %, then a `lift.override_limited` event in each of the next 100 cycles; with
+# 1 % steps 7 re-plans for 145.8 → 152.7 %, with 5 % steps 2 for 145.8 → 150.8 %)
+OVERRIDE_STEP = 0.05
 _PHASES = tuple(LiftPhase(int(p)) for p in Phase)  # the generator's phase as reported
 
 
@@ -135,6 +141,7 @@ class TimeBasedLift(LiftMotion):
         margin = vz * vz / (2.0 * a) + (abs(vz) * a / j if j != INF else 0.0)
         guard.arm(z, spec.target, spec.pos_limit, spec.down, direct, margin)
         self.ov_at_descent: float | None = None
+        self.cut_request = -1.0  # the request the last verdict cut (-1: none stands)
         self.findings: list[GuardFinding] = []
 
     @property
@@ -220,7 +227,9 @@ class TimeBasedLift(LiftMotion):
         POS) an increase, or a restart after feed hold, is accepted only as far as Z still lands
         on time; a decrease is always accepted. "Lands on time" is decided against a lower bound
         of the path's arrival at the horizon k at the candidate override (bounded work):
-        granting an override that passes it can never make Z late."""
+        granting an override that passes it can never make Z late. While a request that was
+        cut stands, the verdict is re-examined every cycle but granted higher only in steps of
+        OVERRIDE_STEP, one bound evaluation a cycle while the next step does not fit."""
         phase = self.gen.phase
         if phase is DONE or phase is HOLD_LIMIT or phase is IDLE:
             return OverrideVerdict(ov_req, MAX_OVERRIDE)
@@ -238,25 +247,36 @@ class TimeBasedLift(LiftMotion):
         if not changing or path.stopped_at is not None or need <= 0.0:
             return OverrideVerdict(ov_req, ov_max)
         floor = 0.0 if was_holding else ov_eff
+        if not was_holding and ov_req == self.cut_request:
+            # the cut request stands: T(ov) falls with ov, so if the next step does not fit,
+            # nothing higher does, and the override in effect stays (as when nothing changes)
+            step = min(ov_eff + OVERRIDE_STEP, ov_req)
+            if path.lower_bound(k, step) - t0 < need:
+                return OverrideVerdict(ov_eff, ov_eff, limited=True)
+            floor = step  # known to fit: the search below only looks above it
         span = path.lower_bound(k, ov_req) - t0
         if span >= need:
+            self.cut_request = -1.0
             return OverrideVerdict(ov_req, ov_max)
-        # T(ov) falls about as 1/ov: aim at T = need, then step down until the bound holds
-        granted = -1.0
+        # T(ov) falls about as 1/ov: aim at T = need, then bisect between the highest override
+        # known to fit (or the floor) and the lowest known not to; the floor when none fits
+        lo, hi = floor, ov_req
         candidate = ov_req * span / need if span > 0.0 else floor
         for _ in range(OVERRIDE_TRIALS):
-            if candidate <= floor:
-                break
+            if not lo < candidate < hi:
+                candidate = 0.5 * (lo + hi)
             if path.lower_bound(k, candidate) - t0 >= need:
-                granted = candidate
-                break
-            candidate *= 0.9
-        if granted < 0.0:
-            granted = floor
+                lo = candidate
+            else:
+                hi = candidate
+            candidate = 0.5 * (lo + hi)
+        granted = lo
         if granted < MIN_LIFT_OVERRIDE:
             # crawling would not do (e.g. a feed hold ended just before LIFT_END): the path
             # stops there and waits for Z, as it does for a lift without path motion
+            self.cut_request = -1.0
             return OverrideVerdict(ov_req, MAX_OVERRIDE, path_waits=True)
+        self.cut_request = ov_req if granted < ov_req else -1.0
         return OverrideVerdict(granted, granted, limited=granted < ov_req)
 
 

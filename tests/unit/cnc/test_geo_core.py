@@ -115,6 +115,31 @@ def test_an_override_increase_while_rising_is_limited_so_that_z_still_lands() ->
     assert max(s.override_max for s in after if s.lift_phase is LiftPhase.UP) < 2.0
 
 
+@pytest.mark.parametrize("after_up", [0.12, 0.2])
+def test_a_cut_override_request_costs_a_few_re_plans_not_one_a_cycle(after_up: float) -> None:
+    """200 % written while Z rises and cut: the verdict is re-examined every cycle and creeps up
+    as the path advances, but each grant is a re-plan of the path (the committed future
+    discarded: an event's cost in the GEO cycle). It used to be re-granted in almost every
+    cycle (39 re-plans and 128 `lift.override_limited` events for one write at +0.12 s); now a
+    higher grant comes in steps of 5 %, each one event, the override in effect never falls while
+    the request stands, and Z still lands."""
+    ch = make_channel()
+    text = ("G01 X10 Y10 Z1 F6000\nZ[LIFT_START POS=1 POS_LIMIT=100]\nG01 X220 F30000\n"
+            "Z[LIFT_END]\nG01 Y20 F3000\nM30\n")  # fmt: skip
+    base_task, base = run_task(ch, text)
+    t0 = _phase_times(base_task, base)[LiftPhase.UP] + after_up
+    task, snaps = run_task(ch, text, sched(f"{t0:.3f}:200"))
+    landing_checks(task, snaps)
+    # the write itself, at most two higher grants, and the full 200 % after the lift
+    assert task.interp.restarts - base_task.interp.restarts <= 4
+    grants = [v for _, _, v in events(snaps, "lift.override_limited")]
+    assert 1 <= len(grants) <= 3 and grants == sorted(set(grants)) and grants[-1] < 2.0
+    end = task.lift.records[0].t_end
+    ov = [s.override for s in snaps if t0 < s.t < end]
+    assert all(b >= a for a, b in zip(ov, ov[1:], strict=False))  # monotone under the request
+    assert set(ov[1:]) <= {*grants, ov[0]}  # what it runs at is what the events said
+
+
 @pytest.mark.parametrize("t_step", [0.12, 0.2, 0.5])  # accelerating (below / above), cruising
 def test_an_override_decrease_acts_at_once_and_never_dips(t_step: float) -> None:
     """150 % → 100 % on a straight block: the acceleration turns down in the very next cycle
