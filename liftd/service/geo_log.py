@@ -1,6 +1,6 @@
 """The GEO process's events as log lines: one structlog line per event, with its level (errors,
 warnings for overruns, regrids, refused RT settings and Z overloads) and the quiet ones
-rate-limited or dropped (an override limit can change every cycle)."""
+rate-limited or dropped (a lift's override grants, M output and acknowledge)."""
 
 from __future__ import annotations
 
