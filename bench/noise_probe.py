@@ -16,8 +16,9 @@ another tenant's cache traffic, an interrupt. Sleeps as the GEO loop sleeps
 at --priority, memory locked and `/dev/cpu_dma_latency` held at 0 when permitted (as
 `[rt]` does; skipped silently otherwise, and the JSON says which were taken).
 
-Prints one JSON line: the calibrated hot cost, compute p50/p99/p99.9/max in µs, the cycles
-above 25 % of the period and their share (and those on the CPU clock), as bench_rt.py records beside the loop's own.
+Prints one JSON line: the calibrated hot cost, compute p50/p99/p99.9/max and mean in µs, the
+compute summed over the run (s), the cycles above 25 % of the period and their share (and those
+on the CPU clock), as bench_rt.py records beside the loop's own.
 
 Run: .venv/bin/python bench/noise_probe.py --seconds 60 [--priority 80] [--hot-us 10] [--cpu N]
 """
@@ -120,6 +121,7 @@ def run(
         deadline += period_ns
         while deadline < end:  # behind: the next deadline still ahead, as the loop regrids
             deadline += period_ns
+    total_ns = sum(times)
     times.sort()
     quarter = period_ns // 4
     over = sum(1 for t in times if t > quarter)
@@ -131,6 +133,8 @@ def run(
         "tool": "noise_probe", "cycles": n, "hot_us": round(hot, 1), "iterations": iterations,
         "compute_us": {"0.5": q(0.5), "0.99": q(0.99), "0.999": q(0.999),
                        "max": round(times[-1] / 1e3, 1)},
+        "compute_mean_us": round(total_ns / 1e3 / max(n, 1), 2),
+        "compute_s": round(total_ns / 1e9, 3),
         "over_25pct": over, "over_25pct_pct": round(100 * over / max(n, 1), 4),
         "cpu_over_25pct": cpu_over,
         "rt": taken,

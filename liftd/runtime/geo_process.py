@@ -63,6 +63,7 @@ class LoopSummary(NamedTuple):
     rss_mb: float | None
     compute_cpu_over: int = 0
     compute_cpu_max_us: float = 0.0
+    compute_mean_us: float = 0.0  # the loop's compute summed over the run, per cycle
 
     def as_log(self) -> dict[str, object]:
         return {
@@ -73,6 +74,7 @@ class LoopSummary(NamedTuple):
             "lateness_us": self.lateness_us,
             "compute_us": self.compute_us,
             "compute_max_us": round(self.compute_max_us, 1),
+            "compute_mean_us": round(self.compute_mean_us, 2),
             "compute_over_25pct": self.compute_over,
             "compute_cpu_max_us": round(self.compute_cpu_max_us, 1),
             "compute_cpu_over_25pct": self.compute_cpu_over,
@@ -264,4 +266,5 @@ class GeoProcess:
             rss_mb=self._rss_mb,
             compute_cpu_over=totals.compute_cpu_over,
             compute_cpu_max_us=stats.compute_cpu_max_us,
+            compute_mean_us=totals.compute_sum_ns / 1e3 / totals.cycles if totals.cycles else 0.0,
         )
