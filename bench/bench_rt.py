@@ -140,7 +140,7 @@ def exposure(over: int, mean_us: float, cycles: int,
 
 
 def over_events(logs: list[dict[str, object]]) -> list[list[object]]:
-    """Each slow cycle that did more than move: [t, compute µs, "what; cpu …; step …"]."""
+    """Each slow cycle that did more than move: [t, compute µs, "what; cpu …; step …; before …"]."""
     return [
         [rec.get("t"), round(float(str(rec.get("value") or 0))), rec.get("text")]
         for rec in logs
@@ -151,26 +151,36 @@ def over_events(logs: list[dict[str, object]]) -> list[list[object]]:
 
 def over_kinds(logs: list[dict[str, object]]) -> dict[str, object]:
     """The loop's geo.compute_over lines grouped by what their cycle did ("" = it only moved:
-    bench_step.py puts such a cycle at a few µs), with the compute of each group (µs)."""
-    groups: dict[str, list[tuple[float, float]]] = {}
+    bench_step.py puts such a cycle at a few µs), with the compute of each group (µs): wall, on
+    the CPU clock, and the wall time of the steps and of the loop's work before them."""
+
+    def field(text: str, name: str) -> float:
+        rest = text.partition(f"; {name} ")[2]
+        return float(rest.split(" ")[0]) if rest[:1].isdigit() else 0.0
+
+    groups: dict[str, list[tuple[float, float, float, float]]] = {}
     for rec in logs:
         if rec.get("event") == "geo.compute_over":
             value = rec.get("value")
-            what, _, rest = str(rec.get("text") or "").partition("; cpu ")
-            cpu = float(rest.split(" ")[0]) if rest[:1].isdigit() else 0.0
-            groups.setdefault(what or "-", []).append(
-                (float(value) if isinstance(value, (int, float)) else 0.0, cpu)
-            )
+            text = str(rec.get("text") or "")
+            groups.setdefault(text.partition("; cpu ")[0] or "-", []).append((
+                float(value) if isinstance(value, (int, float)) else 0.0,
+                field(text, "cpu"), field(text, "step"), field(text, "before"),
+            ))  # fmt: skip
     out: dict[str, object] = {}
     for kind, v in sorted(groups.items(), key=lambda kv: -len(kv[1])):
-        wall, cpu = sorted(w for w, _ in v), sorted(c for _, c in v)
+        wall, cpu = sorted(r[0] for r in v), sorted(r[1] for r in v)
+        step, before = sorted(r[2] for r in v), sorted(r[3] for r in v)
+        mid = len(v) // 2
         out[kind] = {
             "cycles": len(v),
-            "median_us": round(wall[len(v) // 2]),
+            "median_us": round(wall[mid]),
             "max_us": round(wall[-1]),
-            "cpu_median_us": round(cpu[len(v) // 2]),
+            "cpu_median_us": round(cpu[mid]),
             "cpu_max_us": round(cpu[-1]),
             "cpu_over_25pct": sum(1 for c in cpu if c > 250),
+            "step_median_us": round(step[mid]),
+            "before_median_us": round(before[mid]),
         }
     return out
 

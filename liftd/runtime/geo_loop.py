@@ -155,6 +155,7 @@ class GeoLoop:
         channels = range(n)
         last: list[GeoSnapshot | None] = [None] * n
         last_overrun_event = -OVERRUN_EVENT_EVERY_NS
+        staged = False  # a channel has PLC writes that take effect in the next cycle
         over_tokens, over_refilled = COMPUTE_OVER_BURST, 0
         sleep_until = rt.spin_until if self.spin else rt.sleep_until
         tags, plcs, tasks, step = self.tags, self.plcs, self.machine.tasks, self.machine.step
@@ -169,13 +170,20 @@ class GeoLoop:
             late = wake - deadline
             k += 1
             t = k * dt
-            applied = False
+            applied = staged  # what the last cycle read takes effect in this one
+            if staged:
+                staged = False
+                for i in channels:
+                    if plcs[i].staged:
+                        plcs[i].take()
+            read = False
             while (raw := shared.inputs.get()) is not None:  # rare: only when the PLC writes
                 w = unpack_input(raw)
                 if w.channel < n and plcs[w.channel].apply(w):  # logged with its cycle
-                    applied = True
-                    send(new_event(("geo.plc_input", t, 0, w.value, INPUT_NAMES[w.signal], 0)),
-                         tags[w.channel])  # fmt: skip
+                    staged = read = True
+                    t_next = (k + 1) * dt
+                    send(new_event(("geo.plc_input", t_next, 0, w.value, INPUT_NAMES[w.signal],
+                                    0)), tags[w.channel])  # fmt: skip
             inputs = [plcs[i].inputs(last[i], t) for i in channels]
             # a START may decode and plan the program
             starting = any(inp.command is start for inp in inputs)
@@ -227,8 +235,10 @@ class GeoLoop:
                     over_refilled += gained * COMPUTE_OVER_EVENT_EVERY_NS
                 if over_tokens:
                     over_tokens -= 1
-                    did = cycle_kinds(snaps, applied, reloaded)
-                    what = f"{did}; cpu {compute_cpu // 1000} µs; step {step_ns // 1000} µs"
+                    did = cycle_kinds(snaps, applied, read, reloaded)
+                    pre_us = (step_start - wake) // 1000  # the PLC inputs' drain, the inputs
+                    what = (f"{did}; cpu {compute_cpu // 1000} µs; step {step_ns // 1000} µs; "
+                            f"before {pre_us} µs")  # fmt: skip
                     send(Event("geo.compute_over", t, snaps[0].line, compute_ns / 1e3, what))
             if end > deadline + period_ns:
                 exceeded += 1
@@ -244,17 +254,21 @@ class GeoLoop:
                 send(Event("geo.regrid", t, snaps[0].line, float(skipped)))
 
 
-def cycle_kinds(snaps: list[GeoSnapshot], applied: bool, reloaded: bool) -> str:
+def cycle_kinds(snaps: list[GeoSnapshot], applied: bool, read: bool, reloaded: bool) -> str:
     """What a cycle did, for its geo.compute_over event (whose text is this, then the cycle's
     compute on the thread's CPU clock and the wall time of its steps alone: a CPU time far
     below the wall time is a preemption, a step time far below it is time spent outside the
-    steps): the names of its channels' events
+    steps, `before` of it before them: the PLC inputs; the rest after them: publishing the
+    snapshot, the trace, the events, a reload): the names of its channels' events
     (lift.start, geo.program_start, …), `plc_input` when a PLC write took effect in it,
+    `plc_read` when it read one (which takes effect in the next cycle),
     `reload` when it took a configuration (and may have decoded a program); "" for a cycle
     that did nothing but move (its own cost is a few µs: bench_step.py)."""
     names = sorted({ev.name for s in snaps for ev in s.events})
     if applied:
         names.append("plc_input")
+    if read:
+        names.append("plc_read")
     if reloaded:
         names.append("reload")
     return ",".join(names)

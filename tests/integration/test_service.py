@@ -139,6 +139,10 @@ def test_without_a_program_the_daemon_idles_and_liftd_reload_brings_one(tmp_path
         # decoding is the loop's own work: the thread's CPU clock saw it too
         cpu_us = int(took[0]["text"].split("; cpu ")[1].split(" µs")[0])
         assert cpu_us > 250, took[0]
+        # after the steps (a reload is taken after the snapshot is published), not before them
+        step_us = int(took[0]["text"].split("; step ")[1].split(" µs")[0])
+        before_us = int(took[0]["text"].split("; before ")[1].split(" µs")[0])
+        assert took[0]["value"] - step_us - before_us > 250 > before_us, took[0]
         assert d.read_symbol("GEO.timing.compute_cpu_over_25pct", "<I") >= 1
         assert d.read_symbol("GEO.timing.compute_cpu_max_us", "<d") >= cpu_us
         assert abs(took[0]["t"] * 1000 - round(took[0]["t"] * 1000)) < 1e-6  # a GEO cycle

@@ -15,10 +15,32 @@ def test_levels_hold_and_commands_are_edges() -> None:
     assert plc.apply(PlcWrite(PlcSignal.FEED_HOLD, 1.0))
     assert plc.apply(PlcWrite(PlcSignal.START, 1.0))
     assert plc.apply(PlcWrite(PlcSignal.M_ACK, 1.0))
+    plc.take()
     assert plc.inputs(None, 0.002) == GeoInputs(0.5, True, Command.START, True)
     assert plc.inputs(None, 0.003) == GeoInputs(0.5, True, Command.NONE, False)  # levels stay
     plc.apply(PlcWrite(PlcSignal.OVERRIDE, 7.0))
+    plc.take()
     assert plc.inputs(None, 0.004).override == 2.0  # clamped to 200 %
+
+
+def test_a_write_takes_effect_in_the_cycle_after_the_one_that_reads_it() -> None:
+    """The read and its event in one cycle, the re-plan it causes in the next: the loop calls
+    `apply` for what it drains and `take` at the start of the following cycle."""
+    plc = PlcInputs(auto=False, ack_delay_s=0.02)
+    assert plc.apply(PlcWrite(PlcSignal.OVERRIDE, 0.5))
+    assert plc.apply(PlcWrite(PlcSignal.STOP, 1.0))
+    assert plc.apply(PlcWrite(PlcSignal.M_ACK, 1.0))
+    assert plc.staged
+    assert plc.inputs(None, 0.001) == GeoInputs()  # the cycle that read them: not yet
+    plc.take()
+    assert not plc.staged
+    assert plc.inputs(None, 0.002) == GeoInputs(0.5, False, Command.STOP, True)
+    # a level written back before it took effect changes nothing against what is staged
+    assert plc.apply(PlcWrite(PlcSignal.OVERRIDE, 1.0))
+    assert not plc.apply(PlcWrite(PlcSignal.OVERRIDE, 1.0))
+    assert plc.inputs(None, 0.003).override == 0.5
+    plc.take()
+    assert plc.inputs(None, 0.004) == GeoInputs()
 
 
 def test_the_automatic_plc_acknowledges_but_never_undoes_a_plc_stop() -> None:
@@ -28,7 +50,9 @@ def test_the_automatic_plc_acknowledges_but_never_undoes_a_plc_stop() -> None:
     held = snapshot(state=ChannelState.HOLD)
     assert plc.inputs(held, 0.020).command is Command.START  # after M00: continued
     plc.apply(PlcWrite(PlcSignal.STOP, 1.0))
+    plc.take()
     assert plc.inputs(snapshot(), 0.030).command is Command.STOP
     assert plc.inputs(held, 0.040).command is Command.NONE  # stopped by the PLC: stays held
     plc.apply(PlcWrite(PlcSignal.START, 1.0))
+    plc.take()
     assert plc.inputs(held, 0.050).command is Command.START
