@@ -4,6 +4,7 @@ came late or dipped, short blocks that crawled, and what the summary reports."""
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 
@@ -136,7 +137,7 @@ def test_a_cut_override_request_costs_a_few_re_plans_not_one_a_cycle(after_up: f
     assert 1 <= len(grants) <= 3 and grants == sorted(set(grants)) and grants[-1] < 2.0
     end = task.lift.records[0].t_end
     ov = [s.override for s in snaps if t0 < s.t < end]
-    assert all(b >= a for a, b in zip(ov, ov[1:], strict=False))  # monotone under the request
+    assert all(b >= a for a, b in itertools.pairwise(ov))  # monotone under the request
     assert set(ov[1:]) <= {*grants, ov[0]}  # what it runs at is what the events said
 
 
