@@ -126,7 +126,9 @@ class GeoLoop:
             self.machine.replace(i, task)
             words[LOADING] += 1
             common = self.pending_cfg
-            self.plcs[i] = PlcInputs(common.m_ack_auto, common.m_ack_delay_s)
+            plc = PlcInputs(common.m_ack_auto, common.m_ack_delay_s)
+            plc.keep_staged(self.plcs[i])  # what this cycle read still takes effect
+            self.plcs[i] = plc
             self.events.send(Event("geo.reloaded", snap.t, 0, 0.0, pending.program_name),
                              self.tags[i])  # fmt: skip
             if pending.autostart:

@@ -80,6 +80,15 @@ class PlcInputs:
             self.commands.append(cmd)
             self.plc_stopped = cmd is Command.STOP
 
+    def keep_staged(self, old: PlcInputs) -> None:
+        """Take over what `old` staged: a reload replaces a channel's inputs at the end of the
+        cycle, and a write read in that cycle was logged as taking effect in the next."""
+        if old.staged:
+            self.staged = True
+            self.next_override, self.next_feed_hold = old.next_override, old.next_feed_hold
+            self.next_m_ack = old.next_m_ack
+            self.next_commands.extend(old.next_commands)
+
     def request(self, cmd: Command) -> None:
         """A command of the loop itself (program repeat)."""
         self.commands.append(cmd)

@@ -56,3 +56,22 @@ def test_the_automatic_plc_acknowledges_but_never_undoes_a_plc_stop() -> None:
     plc.apply(PlcWrite(PlcSignal.START, 1.0))
     plc.take()
     assert plc.inputs(held, 0.050).command is Command.START
+
+
+def test_a_reload_keeps_what_was_staged_and_nothing_else() -> None:
+    """The loop replaces a channel's inputs when it takes a new configuration; a write it read
+    in that cycle was logged as taking effect in the next one, so it must."""
+    old = PlcInputs(auto=False, ack_delay_s=0.02)
+    old.apply(PlcWrite(PlcSignal.OVERRIDE, 0.4))
+    old.take()  # in effect in the old program: a reload starts from 100 % as before
+    new = PlcInputs(auto=False, ack_delay_s=0.02)
+    new.keep_staged(old)
+    assert not new.staged and new.inputs(None, 0.001) == GeoInputs()
+    assert new.apply(PlcWrite(PlcSignal.OVERRIDE, 0.4))  # the same level is a change here
+    old.apply(PlcWrite(PlcSignal.START, 1.0))
+    old.apply(PlcWrite(PlcSignal.OVERRIDE, 0.7))
+    new = PlcInputs(auto=False, ack_delay_s=0.02)
+    new.keep_staged(old)
+    assert new.staged
+    new.take()
+    assert new.inputs(None, 0.002) == GeoInputs(0.7, False, Command.START, False)
