@@ -230,6 +230,8 @@ class TimeBasedLift(LiftMotion):
         granting an override that passes it can never make Z late. While a request that was
         cut stands, the verdict is re-examined every cycle but granted higher only in steps of
         OVERRIDE_STEP, one bound evaluation a cycle while the next step does not fit."""
+        if ov_req != self.cut_request:
+            self.cut_request = -1.0  # a new request (also the same one again after another)
         phase = self.gen.phase
         if phase is DONE or phase is HOLD_LIMIT or phase is IDLE:
             return OverrideVerdict(ov_req, MAX_OVERRIDE)
@@ -247,7 +249,7 @@ class TimeBasedLift(LiftMotion):
         if not changing or path.stopped_at is not None or need <= 0.0:
             return OverrideVerdict(ov_req, ov_max)
         floor = 0.0 if was_holding else ov_eff
-        if not was_holding and ov_req == self.cut_request:
+        if not was_holding and ov_req == self.cut_request and ov_eff >= MIN_LIFT_OVERRIDE:
             # the cut request stands: T(ov) falls with ov, so if the next step does not fit,
             # nothing higher does, and the override in effect stays (as when nothing changes)
             step = min(ov_eff + OVERRIDE_STEP, ov_req)
