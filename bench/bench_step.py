@@ -23,7 +23,8 @@ producer re-plan).
 
 `--cold [NAME ...]` times the cycles that do more than move (a PLC override write every 0.5 s
 through 60/80/100/150/200 %, lift starts and ends, M functions, …; the two cycles before each
-lift start, which prime it: `LiftAhead._prime_lift`) and every 50th plain cycle
+lift start, which prime it: `LiftAhead._prime_lift`; the cycle of a wait that chooses the
+profile the path will leave with: `Interpolator.prime_leaving`) and every 50th plain cycle
 with the caches cold: 64 MiB written just before the step, as the GEO process finds them after
 its 1 ms sleep beside the daemon and its clients (its plain cycles take 10–20× the hot step).
 Per kind of cycle p50 / p90 / max over the minimum of 2 runs, in µs: what an event cycle costs
@@ -240,11 +241,14 @@ def cold_cycles(name: str, text: str, runs: int = 2, every: int = 50) -> dict[st
             timed = r > 0 and k in kinds
             if timed:
                 flush += 1.0
+            primed = task.interp._leaving_key if r == 0 else None
             c0 = clock()
             snap = task.step(inputs, t)
             took = (clock() - c0) / 1e3
             if r == 0:
                 names = sorted({e.name for e in snap.events})
+                if not names and task.interp._leaving_key != primed:
+                    names.append("prime leaving")  # the resume's profile (`prime_leaving`)
                 if last is not None and inputs.override != last.override_requested:
                     names.append("override write")
                 if names or k % every == 0:

@@ -284,7 +284,10 @@ class GeoTask(LiftAhead):
                 self._close_lift(t, self.line)
         self._settle(t)
         if not self.events and not self._started:
-            self._prime_lift()
+            if self.interp.stopped_at is None:
+                self._prime_lift()
+            elif self.state is ACTIVE:
+                self.interp.prime_leaving()  # the resume's profile, in a quiet cycle of the wait
         positions = self._positions()
         self._monitor(positions, t)
         snap = self._snapshot(t, inputs, positions)

@@ -27,7 +27,7 @@ from liftd.cnc.path.bounds import lower_bound_time
 from liftd.cnc.path.plan import Crossing
 from liftd.cnc.path.program import PathProgram
 from liftd.cnc.path.table import PathTable
-from liftd.cnc.path.tracker import Tracker
+from liftd.cnc.path.tracker import Primed, Tracker
 from liftd.cnc.path.velocity import projected_velocity
 from liftd.cnc.release import ReleaseBins
 
@@ -110,6 +110,11 @@ class Interpolator:
         # (boundary, restarts) of the last lower bound: it stays a lower bound while the
         # future it was computed on stands (`arrival_bound`)
         self._loose_key = (-1, -1)
+        # the profile the path will leave the stop it rests at with (`prime_leaving`), and
+        # (restarts, acks) when it was made: it holds while neither changed
+        self._leaving: Primed | None = None
+        self._leaving_key = (-1, -1)
+        self._acks = 0  # conditional M functions acknowledged (one changes the stop set)
 
     # -- errors of the producer (never expected; counted for the summary and events) ----------
     @property
@@ -167,16 +172,34 @@ class Interpolator:
         """An MVS_SNS M function was acknowledged before the path got there: no stop."""
         if boundary not in self.acked_conditional:
             self.acked_conditional.add(boundary)
+            self._acks += 1
             if self.stopped_at is None and boundary > self.segment:
                 self._restart()
 
     def resume(self, t: float) -> None:
         """Leave the boundary where the path rests (its actions are done) at time t."""
+        primed = self._leaving if self._leaving_key == (self.restarts, self._acks) else None
+        self._leaving = None
         self.stopped_at = None
         self.parked = False
         self.t_state = t
         self._restart()
         self.prod.resume(t)
+        if primed is not None:
+            self.prod.take_leaving(primed)
+
+    def prime_leaving(self) -> None:
+        """While the path rests at a stop: choose the profile it will leave it with now, in a
+        quiet cycle of the wait, not in the cycle of the resume (an M acknowledge's cycle,
+        the end of a dwell). Done once per wait; an event in between (a restart, a
+        conditional M acknowledged) makes the resume plan as before. The choice does not
+        depend on when the path leaves (`Tracker.plan_leaving`): the same run either way."""
+        key = (self.restarts, self._acks)
+        if self.stopped_at is None or self._leaving_key == key:
+            return
+        self._leaving_key = key
+        p = self.prod
+        self._leaving = p.plan_leaving(self.dt) if p.stopped_at == self.stopped_at else None
 
     # -- cycle ----------------------------------------------------------------------------------
     def _produce(self) -> bool:

@@ -50,6 +50,18 @@ from liftd.cnc.path.velocity import (
 from liftd.cnc.ruckig1 import ProfileError, Ruckig1
 
 
+class Primed:
+    """The profile a resting path will leave its stop with (`Tracker.plan_leaving`) and what
+    choosing it left behind in the tracker."""
+
+    __slots__ = ("last_error", "plan", "soft_from")
+
+    def __init__(self, plan: Plan, soft_from: int, last_error: str) -> None:
+        self.plan = plan
+        self.soft_from = soft_from
+        self.last_error = last_error
+
+
 class Tracker(Constraints):
     """Path state (t, s, v, a, seg) over one table; drive with `advance(t, dt)`."""
 
@@ -104,6 +116,36 @@ class Tracker(Constraints):
         self.stopped_at = None
         self.t = max(self.t, t)
         self.plan = None
+
+    def plan_leaving(self, dt: float) -> Primed | None:
+        """While resting at a stop: the profile the path will leave it with, as `_replan`
+        chooses it in the resume's cycle. From rest that choice depends on the state, the
+        inputs and the stop sets, never on the time (the time only starts the profile:
+        `take_leaving` sets it), so it can be made in a quiet cycle of the wait. None where
+        the choice is not that pure function (a hold, the program's end, a kept profile of the
+        boundary just passed, an error on the way): the resume then plans as before."""
+        b = self.stopped_at
+        if b is None or b >= self.n or self.hold or self.parked or self._passed is not None:
+            return None
+        errors, last, soft = self.errors, self.last_error, self._soft_from
+        self.stopped_at = None
+        self._replan(dt)
+        plan = self.plan
+        primed = Primed(plan, self._soft_from, self.last_error) if plan is not None else None
+        if self.errors != errors:
+            primed = None
+        self.stopped_at, self.plan = b, None
+        self.errors, self.last_error, self._soft_from = errors, last, soft
+        return primed
+
+    def take_leaving(self, primed: Primed) -> None:
+        """Leave the stop (`resume` done) with the profile `plan_leaving` made for it."""
+        plan = primed.plan
+        plan.t0 = self.t
+        self.plan = plan
+        self._passed = None
+        self._soft_from = primed.soft_from
+        self.last_error = primed.last_error
 
     # -- planning -------------------------------------------------------------------------------
     def _replan(self, dt: float, force: int | None = None) -> None:
