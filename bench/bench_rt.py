@@ -99,12 +99,14 @@ def baseline_result(proc: subprocess.Popen[str] | None) -> dict[str, object] | N
             "over_250us_pct": round(100 * over / max(total, 1), 4)}  # fmt: skip
 
 
-def probe_start(seconds: float, rt: bool, cpu: int = -1) -> subprocess.Popen[str]:
-    """bench/noise_probe.py for `seconds`: a constant workload on the same 1 ms grid with the
-    same RT settings (on the loop's cpu when it is pinned), whose cycles above 25 % are this
-    machine's compute stalls."""
+def probe_start(
+    seconds: float, rt: bool, cpu: int = -1, hot_us: float = 10.0
+) -> subprocess.Popen[str]:
+    """bench/noise_probe.py for `seconds`: a constant workload of `hot_us` (warm) on the same
+    1 ms grid with the same RT settings (on the loop's cpu when it is pinned), whose cycles
+    above 25 % are this machine's compute stalls."""
     cmd = [sys.executable, str(ROOT / "bench" / "noise_probe.py"), "--seconds", str(seconds),
-           "--priority", "80" if rt else "0", "--cpu", str(cpu)]  # fmt: skip
+           "--priority", "80" if rt else "0", "--cpu", str(cpu), "--hot-us", str(hot_us)]  # fmt: skip
     return subprocess.Popen(cmd, stdout=subprocess.PIPE, text=True)
 
 
@@ -123,7 +125,12 @@ def exposure(over: int, mean_us: float, cycles: int,
     meets about twice the null loop's 15 µs count for nothing of its own. `expected_from_machine`
     is that count for the loop's compute (with the null loop's Poisson 95 % range); `excess`
     what the loop had beyond it, an upper bound of its own share (a stall shorter than 250 µs
-    also takes a cycle of 140 µs over, never the null loop's: those count as ours here)."""
+    also takes a cycle of 140 µs over, never the null loop's: those count as ours here).
+    That bound is loose by as much: the rate per second of compute rises with the compute of
+    a cycle. The null loop alone, 2 minutes each, alternating on 2026-12-02: 14.2 and 5.1 per
+    second at a mean of 33 and 26 µs a cycle (`--probe-hot-us 10`), 23.0 and 7.2 at 47 and
+    52 µs (25), i.e. 2.3 and 2.8 times the count for 1.4 and 2 times the compute. So compare
+    the loop with a null loop of about its own mean compute (`--probe-hot-us 25`)."""
     if not probe or not cycles or not mean_us:
         return None
     probe_s = float(probe["compute_s"])  # type: ignore[arg-type]
@@ -188,9 +195,11 @@ def over_kinds(logs: list[dict[str, object]]) -> dict[str, object]:
 def one_run(minutes: float, rt: bool, pollers: int = 4, notifiers: int = 1,
             subscriptions: int = 10, window_s: float = 60.0,
             override_every_s: float = 1.0,
-            spin: dict[str, object] | None = None) -> dict[str, object]:  # fmt: skip
+            spin: dict[str, object] | None = None,
+            probe_hot_us: float = 10.0) -> dict[str, object]:  # fmt: skip
     """One daemon run under client load; exceed counts are also reported per window_s.
-    `spin`: [rt] keys of the busy-waiting loop (idle = spin, pinned)."""
+    `spin`: [rt] keys of the busy-waiting loop (idle = spin, pinned); `probe_hot_us`: the null
+    loop's workload."""
     seconds = minutes * 60
     with tempfile.TemporaryDirectory() as tmp:
         tmpd = Path(tmp)
@@ -211,7 +220,7 @@ def one_run(minutes: float, rt: bool, pollers: int = 4, notifiers: int = 1,
             cpu = spin.get("cpu", -1) if spin else -1
             cpu = cpu if isinstance(cpu, int) else -1
             baseline = baseline_start(seconds, rt, cpu)
-            probe = probe_start(seconds, rt, cpu)
+            probe = probe_start(seconds, rt, cpu, probe_hot_us)
             rss: list[tuple[float | None, float | None]] = []
             exceeded: list[tuple[float, int]] = []
             end = time.monotonic() + seconds
@@ -301,6 +310,12 @@ def main() -> None:
         default=1.0,
         help="seconds between override writes (0: none)",
     )
+    ap.add_argument(
+        "--probe-hot-us",
+        type=float,
+        default=10.0,
+        help="the null loop's warm workload in µs (25: about the loop's own mean compute)",
+    )
     args = ap.parse_args()
     spin: dict[str, object] | None = {"spin": {"idle": "spin", "cpu": 1}, "pinned": {"cpu": 1}}.get(
         args.mode
@@ -313,7 +328,13 @@ def main() -> None:
         "pinned": (True,),
     }
     for rt in runs[args.mode]:
-        rec = one_run(args.minutes, rt, override_every_s=args.override_every, spin=spin)
+        rec = one_run(
+            args.minutes,
+            rt,
+            override_every_s=args.override_every,
+            spin=spin,
+            probe_hot_us=args.probe_hot_us,
+        )
         print(json.dumps(rec), flush=True)
 
 
