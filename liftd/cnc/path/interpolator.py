@@ -191,15 +191,20 @@ class Interpolator:
     def prime_leaving(self) -> None:
         """While the path rests at a stop: choose the profile it will leave it with now, in a
         quiet cycle of the wait, not in the cycle of the resume (an M acknowledge's cycle,
-        the end of a dwell). Done once per wait; an event in between (a restart, a
-        conditional M acknowledged) makes the resume plan as before. The choice does not
-        depend on when the path leaves (`Tracker.plan_leaving`): the same run either way."""
+        the end of a dwell), and read its pieces (`Evaluator.prepare`: the resume's first
+        state is then native too; through the binding it was 16 % of that cycle cold). Done
+        once per wait; an event in between (a restart, a conditional M acknowledged) makes
+        the resume plan as before. The choice does not depend on when the path leaves
+        (`Tracker.plan_leaving`): the same run either way."""
         key = (self.restarts, self._acks)
         if self.stopped_at is None or self._leaving_key == key:
             return
         self._leaving_key = key
         p = self.prod
-        self._leaving = p.plan_leaving(self.dt) if p.stopped_at == self.stopped_at else None
+        primed = p.plan_leaving(self.dt) if p.stopped_at == self.stopped_at else None
+        if primed is not None:
+            primed.plan.ev.prepare()
+        self._leaving = primed
 
     # -- cycle ----------------------------------------------------------------------------------
     def _produce(self) -> bool:

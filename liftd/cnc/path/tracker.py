@@ -131,9 +131,9 @@ class Tracker(Constraints):
         self.stopped_at = None
         self._replan(dt)
         plan = self.plan
-        primed = Primed(plan, self._soft_from, self.last_error) if plan is not None else None
-        if self.errors != errors:
-            primed = None
+        primed = None
+        if plan is not None and self.errors == errors:
+            primed = Primed(plan, self._soft_from, self.last_error)
         self.stopped_at, self.plan = b, None
         self.errors, self.last_error, self._soft_from = errors, last, soft
         return primed

@@ -68,6 +68,9 @@ def _run(
         calls = ip.prod.calc.calls
         last = task.step(plc.inputs(last, k * dt, schedule), k * dt)
         snaps.append(last)
+        primed = task.interp._leaving
+        # primed with its pieces read: the resume's first state is evaluated natively too
+        assert primed is None or primed.plan.ev.phases is not None
         if leaving >= 0:  # the cycle after the one the path left in (a wait that ended on
             resume_solves.append(leaving + ip.prod.calc.calls - calls)  # the grid: its first)
             leaving = -1
