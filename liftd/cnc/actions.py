@@ -188,6 +188,7 @@ class BoundaryActions:
         self.z_rest = (self.lift.axis_index, self.lift.z)  # Z while the path rests here
         rec = self.lift.finish(t)
         if rec is not None:
+            self.interp.nominal_flush()  # a step an event's cycle left (`nominal_step`)
             nominal = self.interp.nominal_arrival
             start = rec.departure if rec.departure is not None else rec.t_start
             if rng is not None and rng.k_end > rng.k_start and nominal is not None:

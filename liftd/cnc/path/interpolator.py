@@ -57,6 +57,17 @@ class _Entry:
         self.parked = parked
 
 
+class _Due:
+    """A step of the nominal run left to the next cycle (`Interpolator.nominal_step`)."""
+
+    __slots__ = ("hold", "override", "t")
+
+    def __init__(self, t: float, override: float, hold: bool) -> None:
+        self.t = t
+        self.override = override
+        self.hold = hold
+
+
 class Interpolator:
     """Path state over one path program (see the module docstring)."""
 
@@ -102,6 +113,10 @@ class Interpolator:
         self._virtual = False  # the nominal run is the path itself (not parted yet)
         self.nominal_arrival: float | None = None
         self.nominal_override = 1.0
+        self._event = False  # a restart since the last `nominal_step`
+        # False: the nominal run steps in an event's cycle too (the same run: tests compare)
+        self.nominal_later = True
+        self._nominal_due: _Due | None = None  # its step an event's cycle left to the next
         # the last lower bound `arrival` computed and its inputs (boundary, producer state,
         # override): the lift asks for the same one twice when nothing moved in between
         self._bound_key: tuple[int, float, float, float, float, int, float] | None = None
@@ -142,6 +157,7 @@ class Interpolator:
         self.k_next = int(self.t_state / self.dt + 1e-6) + 1
         self._fresh = True
         self._quiet = False
+        self._event = True  # (`nominal_step`)
 
     def start(self, t: float) -> None:
         """The program starts: at rest at boundary 0 from time t (its actions run first)."""
@@ -298,6 +314,7 @@ class Interpolator:
         """Start the nominal run toward boundary `target` from the given state (the path
         leaving the range's start). Unless the lifts' limits change the path (`differs`), it
         is the path itself until they part (`nominal_step`): no second tracker meanwhile."""
+        self.nominal_flush()
         self._shadow_target = target
         self._shadow_table = table
         self.nominal_arrival = t if seg >= target else None
@@ -325,7 +342,12 @@ class Interpolator:
         return self.stopped_at is not None and self.stopped_at < target
 
     def nominal_step(self, t: float, override: float, hold: bool) -> None:
-        """Advance the nominal run to t with the requested override and feed hold."""
+        """Advance the nominal run to t with the requested override and feed hold. In the
+        cycle of an event (a restart: the path's re-plan is its work) the nominal run's step,
+        often its own re-plan (40 % of such an override write's cycle cold), is left to the
+        next cycle: the same calls in the same order, one cycle later (`nominal_flush`)."""
+        self.nominal_flush()
+        event, self._event = self._event, False
         self.nominal_override = override
         if self.nominal_arrival is not None or self._shadow_target < 0:
             return
@@ -334,6 +356,22 @@ class Interpolator:
                 return  # it arrives when the path does (`_consume`)
             self._virtual = False
             self._shadow_from(self.t_state, self.s, self.v, self.a, self.segment)
+        if self._shadow is None:
+            return
+        if event and self.nominal_later:
+            self._nominal_due = _Due(t, override, hold)
+            return
+        self._nominal_advance(t, override, hold)
+
+    def nominal_flush(self) -> None:
+        """Make the nominal run's step an event's cycle left (`nominal_step`), before anything
+        else touches or reads the nominal run."""
+        due = self._nominal_due
+        if due is not None:
+            self._nominal_due = None
+            self._nominal_advance(due.t, due.override, due.hold)
+
+    def _nominal_advance(self, t: float, override: float, hold: bool) -> None:
         sh = self._shadow
         if sh is None:
             return
@@ -348,6 +386,7 @@ class Interpolator:
             sh.resume(sh.t)  # waits do not count in the nominal run
 
     def nominal_stop(self) -> None:
+        self.nominal_flush()
         self._shadow_target = -1
         self.nominal_arrival = None
         self._virtual = False
