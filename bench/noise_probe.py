@@ -54,6 +54,19 @@ def work(iterations: int) -> int:
     return acc
 
 
+PAGE = 4096
+SPREAD = bytearray(24 << 20)  # `--pages`: one byte of each of N pages spread over 24 MiB
+
+
+def touch(pages: int) -> None:
+    """Write one byte in each of `pages` pages spread evenly over SPREAD: the memory side of a
+    cycle that touches many objects (the GEO step reads and writes hundreds of pages), which a
+    64 KiB copy does not have."""
+    step = len(SPREAD) // PAGE // max(pages, 1) * PAGE
+    for i in range(0, pages * step, step):
+        SPREAD[i] ^= 1
+
+
 def calibrate(hot_us: float) -> tuple[int, float]:
     """Iterations whose warm median is `hot_us`, and that median (µs)."""
 
@@ -95,8 +108,11 @@ def take_rt(priority: int, cpu: int) -> list[str]:
 
 
 def run(
-    seconds: float, priority: int, hot_us: float, cpu: int = -1, period_ns: int = 1_000_000
-) -> dict[str, object]:
+    seconds: float, priority: int, hot_us: float, cpu: int = -1, period_ns: int = 1_000_000,
+    pages: int = 0,
+) -> dict[str, object]:  # fmt: skip
+    for _ in range(3):
+        touch(len(SPREAD) // PAGE)  # every page of SPREAD mapped before mlockall
     taken = take_rt(priority, cpu) if priority > 0 else []
     iterations, hot = calibrate(hot_us)
     gc.collect()
@@ -113,6 +129,8 @@ def run(
         wake = now()
         wake_cpu = cpu_now()
         work(iterations)
+        if pages:
+            touch(pages)
         end_cpu = cpu_now()
         end = now()
         times[k] = end - wake
@@ -131,6 +149,7 @@ def run(
 
     return {
         "tool": "noise_probe", "cycles": n, "hot_us": round(hot, 1), "iterations": iterations,
+        "pages": pages,
         "compute_us": {"0.5": q(0.5), "0.99": q(0.99), "0.999": q(0.999),
                        "max": round(times[-1] / 1e3, 1)},
         "compute_mean_us": round(total_ns / 1e3 / max(n, 1), 2),
@@ -147,8 +166,17 @@ def main() -> None:
     ap.add_argument("--priority", type=int, default=80, help="SCHED_FIFO priority (0: none)")
     ap.add_argument("--hot-us", type=float, default=10.0, help="warm cost of the workload")
     ap.add_argument("--cpu", type=int, default=-1, help="pin to this cpu (-1: any)")
+    ap.add_argument(
+        "--pages",
+        type=int,
+        default=0,
+        help="also write a byte in each of this many pages spread over 24 MiB",
+    )
     args = ap.parse_args()
-    print(json.dumps(run(args.seconds, args.priority, args.hot_us, args.cpu)), flush=True)
+    print(
+        json.dumps(run(args.seconds, args.priority, args.hot_us, args.cpu, pages=args.pages)),
+        flush=True,
+    )
 
 
 if __name__ == "__main__":
