@@ -21,10 +21,12 @@ runs (the run is deterministic, so the minimum filters out the VM's noise), spli
 the cycle did (a lift moving, the producer filling more than one entry after an event, a
 producer re-plan).
 
-`--cold [NAME ...]` times the cycles that do more than move (a PLC override write every 0.5 s
-through 60/80/100/150/200 %, lift starts and ends, M functions, …; the two cycles before each
-lift start, which prime it: `LiftAhead._prime_lift`; the cycle of a wait that chooses the
-profile the path will leave with: `Interpolator.prime_leaving`) and every 50th plain cycle
+`--cold [--writes-every S] [NAME ...]` times the cycles that do more than move (a PLC override
+write every S seconds, 0.5 by default, through 60/80/100/150/200 %: a write inside a lift
+range whose nominal run re-plans, and the cycle after it, are kinds of their own; lift starts
+and ends, M functions, …; the two cycles before each lift start, which prime it:
+`LiftAhead._prime_lift`; the cycle of a wait that chooses the profile the path will leave
+with: `Interpolator.prime_leaving`) and every 50th plain cycle
 with the caches cold: 64 MiB written just before the step, as the GEO process finds them after
 its 1 ms sleep beside the daemon and its clients (its plain cycles take 10–20× the hot step).
 Per kind of cycle p50 / p90 / max over the minimum of 2 runs, in µs: what an event cycle costs
@@ -210,14 +212,23 @@ def breakdown(name: str, text: str, schedule: Schedule, runs: int = 3) -> dict[s
     return out
 
 
-def _override_writes(duration: float) -> Schedule:
+def _override_writes(duration: float, period: float = 0.5) -> Schedule:
     steps = (0.6, 0.8, 1.0, 1.5, 2.0)
-    return Schedule(override=tuple((0.5 * (k + 1) - 0.0004, steps[k % len(steps)])
-                                   for k in range(int(duration / 0.5))))  # fmt: skip
+    return Schedule(override=tuple((period * (k + 1) - 0.0004, steps[k % len(steps)])
+                                   for k in range(int(duration / period))))  # fmt: skip
 
 
-def cold_cycles(name: str, text: str, runs: int = 2, every: int = 50) -> dict[str, object]:
-    """Step time by kind of cycle with the caches flushed just before the step (`--cold`)."""
+def _nominal_calls(task: object) -> int:
+    shadow = task.interp._shadow  # type: ignore[attr-defined]
+    return int(shadow.calc.calls) if shadow is not None else 0
+
+
+def cold_cycles(
+    name: str, text: str, runs: int = 2, every: int = 50, writes_every: float = 0.5
+) -> dict[str, object]:
+    """Step time by kind of cycle with the caches flushed just before the step (`--cold`).
+    An override write inside a lift range whose nominal run re-plans (in its cycle, or since
+    8105330 in the next) is its own kind, with the cycle after it."""
     import numpy as np  # noqa: PLC0415
 
     from liftd.cnc.geo_task import GeoTask  # noqa: PLC0415
@@ -225,11 +236,12 @@ def cold_cycles(name: str, text: str, runs: int = 2, every: int = 50) -> dict[st
 
     ch = load_settings(str(ROOT / "config" / "liftd.toml")).channel
     first = simulate(ch, text, Schedule(), 0.02, max_time=3600.0)
-    schedule = _override_writes(first.summary.duration_s)
+    schedule = _override_writes(first.summary.duration_s, writes_every)
     flush = np.zeros((64 << 20) // 8)
     clock = time.perf_counter_ns
     kinds: dict[int, str] = {}
     best: dict[int, float] = {}
+    replans: set[int] = set()  # cycles in which the nominal run re-planned
     for r in range(runs + 1):  # run 0 (hot) finds the cycles to time
         task, plc, last = GeoTask(ch, text), SimPlc(0.02), None
         gc.collect()
@@ -242,10 +254,13 @@ def cold_cycles(name: str, text: str, runs: int = 2, every: int = 50) -> dict[st
             if timed:
                 flush += 1.0
             primed = task.interp._leaving_key if r == 0 else None
+            nominal = _nominal_calls(task) if r == 0 else 0
             c0 = clock()
             snap = task.step(inputs, t)
             took = (clock() - c0) / 1e3
             if r == 0:
+                if _nominal_calls(task) != nominal:
+                    replans.add(k)
                 names = sorted({e.name for e in snap.events})
                 if not names and task.interp._leaving_key != primed:
                     names.append("prime leaving")  # the resume's profile (`prime_leaving`)
@@ -265,6 +280,10 @@ def cold_cycles(name: str, text: str, runs: int = 2, every: int = 50) -> dict[st
                 for j in (k - 2, k - 1):
                     if kinds.get(j, "plain") == "plain":
                         kinds[j] = "before lift.start"
+            for k in [k for k, kind in kinds.items() if kind == "override write"]:
+                if k in replans or k + 1 in replans:
+                    kinds[k] = "override write, nominal re-plans"
+                    kinds[k + 1] = "after such a write"
     out: dict[str, object] = {"bench": "step_cold", "program": name, "runs": runs}
     groups: dict[str, list[float]] = {}
     for k, kind in kinds.items():
@@ -330,9 +349,14 @@ def main() -> None:
                 print(json.dumps(repeat_starts(name, text)), flush=True)
         return
     if "--cold" in sys.argv:
+        every = 0.5
+        if "--writes-every" in sys.argv:
+            value = sys.argv[sys.argv.index("--writes-every") + 1]
+            every = float(value)
+            wanted.remove(value)
         for name, (text, _) in programs().items():
             if name in (wanted or ["demo"]):
-                print(json.dumps(cold_cycles(name, text)), flush=True)
+                print(json.dumps(cold_cycles(name, text, writes_every=every)), flush=True)
         return
     if "--breakdown" in sys.argv:
         for name, (text, schedule_for) in programs().items():
