@@ -32,6 +32,7 @@ COMPILED: tuple[str, ...] = (
     "liftd.cnc.path.geometry",
     "liftd.cnc.path.interpolator",
     "liftd.cnc.path.limits",
+    "liftd.cnc.path.nominal",
     "liftd.cnc.path.plan",
     "liftd.cnc.path.program",
     "liftd.cnc.path.table",
