@@ -8,7 +8,8 @@ the GEO process sampled every 10 s, and lift changes lost by the notification cl
 the run's trace. Once with the RT settings (SCHED_FIFO 80, mlockall, /dev/cpu_dma_latency) and
 once without (--mode both|rt|nort); --mode spin runs the RT settings with the loop busy-waiting
 between cycles on cpu 1 ([rt] idle = "spin", cpu = 1; liftd refuses it while the kernel limits
-the real-time share, sched_rt_runtime_us ≠ -1: measure it with -1).
+the real-time share, sched_rt_runtime_us ≠ -1: measure it with -1, under `taskset -c 0`;
+cyclictest and the null loop then run on cpu 0, as they cannot share cpu 1 with it).
 
 Issue 14 adds a PLC client writing a new override every --override-every seconds (60/80/100/
 150/200 %, each write restarts the committed path) and, in the same run, a cyclictest-style
@@ -44,6 +45,7 @@ sys.path.insert(0, str(ROOT))
 from bench import load  # noqa: E402
 from bench.bench_ads import RT_OFF, RT_ON  # noqa: E402
 from liftd.runtime.geo_process import rss_mb  # noqa: E402
+from liftd.runtime.rt import rt_runtime_us  # noqa: E402
 from tests.support.daemon import Daemon, Notify, write_config  # noqa: E402
 
 
@@ -192,6 +194,17 @@ def over_kinds(logs: list[dict[str, object]]) -> dict[str, object]:
     return out
 
 
+def baseline_cpu(spin: dict[str, object] | None) -> int:
+    """Where cyclictest and the null loop run: on the loop's cpu when it is pinned and sleeps
+    (its noise, not the other one's); beside a loop that spins on its cpu they would never run
+    there (same SCHED_FIFO priority, and the loop never yields), so on the other one (cpu 0,
+    where the daemon and the clients run under `taskset -c 0`); -1: anywhere."""
+    cpu = spin.get("cpu", -1) if spin else -1
+    if not isinstance(cpu, int) or cpu < 0:
+        return -1
+    return 0 if spin and spin.get("idle") == "spin" else cpu
+
+
 def one_run(minutes: float, rt: bool, pollers: int = 4, notifiers: int = 1,
             subscriptions: int = 10, window_s: float = 60.0,
             override_every_s: float = 1.0,
@@ -217,10 +230,9 @@ def one_run(minutes: float, rt: bool, pollers: int = 4, notifiers: int = 1,
             geo = geo_pid(d.proc.pid)
             procs, out = load.start(d.net_id, d.address, seconds, pollers, 1000.0, notifiers, 10,
                                     subscriptions, override_every_s)  # fmt: skip
-            cpu = spin.get("cpu", -1) if spin else -1
-            cpu = cpu if isinstance(cpu, int) else -1
-            baseline = baseline_start(seconds, rt, cpu)
-            probe = probe_start(seconds, rt, cpu, probe_hot_us)
+            base_cpu = baseline_cpu(spin)
+            baseline = baseline_start(seconds, rt, base_cpu)
+            probe = probe_start(seconds, rt, base_cpu, probe_hot_us)
             rss: list[tuple[float | None, float | None]] = []
             exceeded: list[tuple[float, int]] = []
             end = time.monotonic() + seconds
@@ -278,6 +290,8 @@ def one_run(minutes: float, rt: bool, pollers: int = 4, notifiers: int = 1,
             "lift_status_vs_trace": status,
             "exceeded_per_window": windows(exceeded, window_s), "window_s": window_s,
             "rt_settings": rt_settings, "stop_s": stopped.get("stop_seconds"),
+            "pollers": len(pollers), "notifiers": len(notifiers), "baseline_cpu": base_cpu,
+            "sched_rt_runtime_us": rt_runtime_us(),
         }  # fmt: skip
 
 
@@ -311,6 +325,13 @@ def main() -> None:
         help="seconds between override writes (0: none)",
     )
     ap.add_argument(
+        "--pollers",
+        type=int,
+        default=4,
+        help="pyads clients polling lift_active at 1 kHz (4: issue 7's load; 0: issue 14's "
+        "figure as written, the override writer and the notification client alone)",
+    )
+    ap.add_argument(
         "--probe-hot-us",
         type=float,
         default=10.0,
@@ -331,6 +352,7 @@ def main() -> None:
         rec = one_run(
             args.minutes,
             rt,
+            pollers=args.pollers,
             override_every_s=args.override_every,
             spin=spin,
             probe_hot_us=args.probe_hot_us,
