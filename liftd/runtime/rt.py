@@ -9,6 +9,7 @@ FIFO process spinning.
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import ctypes.util
 import os
@@ -139,6 +140,27 @@ def apply(req: RtRequest) -> RtState:
     return state
 
 
+def keep_off_cpu(cpu: int) -> RtResult:
+    """Move every thread of this process (the daemon) off `cpu`, the one the GEO loop spins
+    on; threads started later inherit the main thread's set. A SCHED_OTHER task on the
+    spinning loop's CPU is not starved: the kernel's fair server (Linux >= 6.12) gives it up to
+    50 ms of every second, also with sched_rt_runtime_us = -1, and the loop stands still that
+    long (measured on this VM's 6.18 kernel: a SCHED_FIFO spinner beside a busy SCHED_OTHER
+    task lost 14 stretches of 50 ms in 15 s, alone none above 10 ms; docs/measurements.md).
+    The machine's other processes are the operator's to keep off (isolcpus=, systemd's
+    CPUAffinity=, taskset)."""
+    others = os.sched_getaffinity(0) - {cpu}
+    if not others:
+        return RtResult("daemon_cpus", False, f"kept: no cpu but {cpu} to move to")
+    try:
+        for tid in os.listdir("/proc/self/task"):
+            with contextlib.suppress(ProcessLookupError):  # a thread that just ended
+                os.sched_setaffinity(int(tid), others)
+    except OSError as exc:
+        return RtResult("daemon_cpus", False, exc.strerror or str(exc))
+    return RtResult("daemon_cpus", True, f"cpus {','.join(map(str, sorted(others)))}, off {cpu}")
+
+
 def rt_runtime_us() -> int | None:
     """/proc/sys/kernel/sched_rt_runtime_us: the real-time tasks' share of each second of a
     CPU (-1: unlimited); None where it cannot be read."""
@@ -153,7 +175,11 @@ def spin_refusal(fifo: bool, runtime_us: int | None) -> str | None:
     """Why the loop must not busy-wait, or None. A SCHED_FIFO task that never sleeps uses up
     the kernel's real-time share of its CPU and is stopped for the rest of each second:
     measured here with the default 950000 µs, the loop stood still ~50 ms every second (5 %
-    of its cycles exceeded, `bench/bench_rt.py --mode spin`, 2026-12-01)."""
+    of its cycles exceeded, `bench/bench_rt.py --mode spin`, 2026-12-01). Linux 6.12 replaced
+    that throttling by the fair server only where RT_GROUP_SCHED is off (commit "sched/rt:
+    Remove default bandwidth control"); this VM's 6.18 kernel has it on and still throttles (a
+    C spinner alone on its cpu: 15 stops of 50 ms in 15 s at 950000, none above 10 ms at -1,
+    2026-12-03), so the share is read, not the kernel's version."""
     if fifo and runtime_us is not None and runtime_us >= 0:
         return (
             f"refused, the loop sleeps: sched_rt_runtime_us is {runtime_us}, so the kernel "

@@ -40,7 +40,7 @@ from liftd.runtime.core import core_build
 from liftd.runtime.geo_process import GeoFailure, GeoGone, GeoProcess, GeoStartError, rss_mb
 from liftd.runtime.loop_config import ChannelConfig, LoopConfig
 from liftd.runtime.records import pack_input
-from liftd.runtime.rt import RtRequest
+from liftd.runtime.rt import RtRequest, keep_off_cpu
 from liftd.runtime.shared import Shared
 from liftd.service import control, logs, systemd
 from liftd.service.adsconfig import server_config, service_limits
@@ -182,6 +182,7 @@ class Daemon:
             cfg = self._loop_config(self.settings)
             self._install_signals()
             await self.geo.start(cfg)
+            self._keep_off_geo_cpu()
             await self._listen()
             self._start_trace(trace_file)
             await self._start_metrics()
@@ -208,6 +209,17 @@ class Daemon:
                            detail="ADS now reports ERROR; exiting for a restart")  # fmt: skip
         await self.shutdown()
         return failure is None
+
+    def _keep_off_geo_cpu(self) -> None:
+        """A loop that spins on its cpu owns it: the daemon's threads go to the others (the GEO
+        process has pinned itself already; README "Running it as a service")."""
+        rt = self.settings.config.rt
+        if rt.idle != "spin" or rt.cpu < 0:
+            return
+        res = keep_off_cpu(rt.cpu)
+        (self.log.info if res.ok else self.log.warning)(
+            "daemon.rt_setting", text=f"{res.setting}: {'ok' if res.ok else 'skipped'} "
+            f"({res.detail})")  # fmt: skip
 
     async def _serve(self) -> GeoFailure | None:
         keep_alive = asyncio.create_task(systemd.keep_alive(self.geo.advancing))

@@ -124,8 +124,8 @@ class RtSection(_Section):
     # how the loop waits for its next cycle: "sleep" (clock_nanosleep) or "spin" (busy-wait:
     # the CPU never idles, so each cycle starts with warm caches; costs that CPU entirely, pin
     # it with `cpu`; refused with SCHED_FIFO while the kernel limits real-time tasks'
-    # share, sched_rt_runtime_us ≠ -1, which would stop the loop 50 ms a second; README
-    # "Running it as a service")
+    # share, sched_rt_runtime_us ≠ -1, which would stop the loop 50 ms a second; with a cpu,
+    # the daemon's threads keep off it; README "Running it as a service")
     idle: Literal["sleep", "spin"] = "sleep"
     # the daemon stops serving and exits 3 when the GEO cycle counter stands still this long
     # (a stopped or hung loop; with no systemd watchdog, e.g. in Docker, this is the restart)

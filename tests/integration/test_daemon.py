@@ -4,6 +4,7 @@ of a real-time run against `liftd simulate`."""
 
 from __future__ import annotations
 
+import os
 import signal
 import socket
 import subprocess
@@ -102,6 +103,46 @@ def test_run_trace_is_identical_to_simulate(tmp_path: Path, idle: str) -> None:
     # every cycle, bit for bit (9 decimals of mm); on a mismatch, say which cycles the run's
     # trace lacks and what the daemon said about its trace (a rare lost row is open, issue 14)
     assert got[: len(expected)] == expected, (missing_cycles(got), trace_logs(d.logs))
+
+
+def cpus_allowed(pid: int) -> dict[int, frozenset[int]]:
+    """Each thread of `pid` and the cpus it may run on (Cpus_allowed_list: "0-2,4")."""
+    out = {}
+    for task in Path(f"/proc/{pid}/task").iterdir():
+        text = (task / "status").read_text().split("Cpus_allowed_list:")[1].split()[0]
+        cpus: set[int] = set()
+        for part in text.split(","):
+            lo, _, hi = part.partition("-")
+            cpus.update(range(int(lo), int(hi or lo) + 1))
+        out[int(task.name)] = frozenset(cpus)
+    return out
+
+
+@pytest.mark.skipif(len(os.sched_getaffinity(0)) < 2, reason="needs two cpus")
+def test_a_spinning_loop_owns_its_cpu(tmp_path: Path) -> None:
+    """[rt] idle = "spin" with a cpu: the GEO process runs there alone, the daemon's threads
+    (ADS server, log writer, executor) on the others, as a SCHED_OTHER thread beside the
+    spinning loop would stall it up to 50 ms a second (the kernel's fair server)."""
+    cpus = sorted(os.sched_getaffinity(0))
+    geo_cpu, others = cpus[-1], cpus[:-1]
+    # without SCHED_FIFO the spin is granted whatever sched_rt_runtime_us says
+    cfg = write_config(tmp_path, rt={"idle": "spin", "cpu": geo_cpu, "sched_fifo_priority": 0})
+    d = Daemon(cfg)
+    try:
+        d.ready()
+        said = [r.get("text", "") for r in d.logs if r.get("event") == "daemon.rt_setting"]
+        assert any(t.startswith("daemon_cpus: ok") for t in said), said
+        with connect(d) as plc:  # a connection's threads too
+            assert read(plc, "GEO.cycle") is not None
+        children = subprocess.run(["pgrep", "-P", str(d.proc.pid), "-f", "liftd.runtime"],
+                                  capture_output=True, text=True, check=False).stdout.split()  # fmt: skip
+        assert len(children) == 1, children
+        assert set(cpus_allowed(int(children[0])).values()) == {frozenset({geo_cpu})}
+        daemon = cpus_allowed(d.proc.pid)
+        assert len(daemon) >= 2, daemon  # the log writer at least, besides the main thread
+        assert set(daemon.values()) == {frozenset(others)}, daemon
+    finally:
+        assert d.stop() == 0
 
 
 def test_run_with_plc_writes_is_identical_to_simulate_with_their_schedule(tmp_path: Path) -> None:
