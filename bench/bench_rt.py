@@ -8,8 +8,11 @@ the GEO process sampled every 10 s, and lift changes lost by the notification cl
 the run's trace. Once with the RT settings (SCHED_FIFO 80, mlockall, /dev/cpu_dma_latency) and
 once without (--mode both|rt|nort); --mode spin runs the RT settings with the loop busy-waiting
 between cycles on cpu 1 ([rt] idle = "spin", cpu = 1; liftd refuses it while the kernel limits
-the real-time share, sched_rt_runtime_us ≠ -1: measure it with -1, under `taskset -c 0`;
-cyclictest and the null loop then run on cpu 0, as they cannot share cpu 1 with it).
+the real-time share, sched_rt_runtime_us ≠ -1: measure it with -1). The daemon then keeps its
+own threads off cpu 1, and this bench does the same for itself, its clients, cyclictest and the
+null loop (cpu 0): a SCHED_OTHER task on cpu 1 would stall the spinning loop up to 50 ms a
+second (the kernel's fair server), as the machine's other processes would, which are the
+operator's to keep off (isolcpus=, systemd CPUAffinity=).
 
 Issue 14 adds a PLC client writing a new override every --override-every seconds (60/80/100/
 150/200 %, each write restarts the committed path) and, in the same run, a cyclictest-style
@@ -45,7 +48,7 @@ sys.path.insert(0, str(ROOT))
 from bench import load  # noqa: E402
 from bench.bench_ads import RT_OFF, RT_ON  # noqa: E402
 from liftd.runtime.geo_process import rss_mb  # noqa: E402
-from liftd.runtime.rt import rt_runtime_us  # noqa: E402
+from liftd.runtime.rt import keep_off_cpu, rt_runtime_us  # noqa: E402
 from tests.support.daemon import Daemon, Notify, write_config  # noqa: E402
 
 
@@ -214,6 +217,9 @@ def one_run(minutes: float, rt: bool, pollers: int = 4, notifiers: int = 1,
     `spin`: [rt] keys of the busy-waiting loop (idle = spin, pinned); `probe_hot_us`: the null
     loop's workload."""
     seconds = minutes * 60
+    base_cpu = baseline_cpu(spin)
+    cpu = spin.get("cpu", -1) if spin else -1
+    spin_cpu = cpu if isinstance(cpu, int) else -1
     with tempfile.TemporaryDirectory() as tmp:
         tmpd = Path(tmp)
         rt_keys = {**(RT_ON if rt else RT_OFF), **(spin or {})}
@@ -228,9 +234,10 @@ def one_run(minutes: float, rt: bool, pollers: int = 4, notifiers: int = 1,
                 time.sleep(0.001)
             to_ready = time.monotonic() - t0
             geo = geo_pid(d.proc.pid)
+            if base_cpu >= 0 and base_cpu != spin_cpu:  # the loop spins on spin_cpu: keep off
+                keep_off_cpu(spin_cpu)  # (this thread; the clients and the baseline inherit it)
             procs, out = load.start(d.net_id, d.address, seconds, pollers, 1000.0, notifiers, 10,
                                     subscriptions, override_every_s)  # fmt: skip
-            base_cpu = baseline_cpu(spin)
             baseline = baseline_start(seconds, rt, base_cpu)
             probe = probe_start(seconds, rt, base_cpu, probe_hot_us)
             rss: list[tuple[float | None, float | None]] = []
