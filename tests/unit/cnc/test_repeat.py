@@ -97,3 +97,77 @@ def test_a_task_created_mid_run_starts_its_path_in_its_first_cycle() -> None:
     steps = [max(abs(a - b) for a, b in zip(p.positions, q.positions, strict=True))
              for p, q in itertools.pairwise(snaps)]  # fmt: skip
     assert max(steps) <= max(ax.v_max for ax in ch.axes) * ch.cycle_time * (1 + 1e-9)
+
+
+SHORT = """N10 G90 G01 X0 Y0 Z1 F12000
+N20 X40
+N30 Z[LIFT_START POS=20 POS_LIMIT=40]
+N40 X43 F30000
+N50 Z[LIFT_END]
+N60 X80 Y10
+N70 M30
+"""
+
+
+def run_repeats(
+    text: str, near_end: tuple[float, ...], at_start: GeoInputs, prime: bool, runs: int = 3
+) -> tuple[list[GeoSnapshot], list[int]]:
+    """`runs` runs back to back (each START in the cycle after the end, with `at_start`'s
+    override and hold); from the cycle the arrival at a run's end is committed, the override
+    steps through `near_end`, a value a cycle, and keeps its last (1.0 before). `prime`: False keeps the run built ahead from priming
+    (`Interpolator.prime_start` returns at once), the code before it. Every snapshot, and the
+    path's ruckig solves in each repeat START's cycle and the one after it."""
+    ch = make_channel(LiftMethod.ADVANCED, lift_min_dist=0.005)
+    dt = ch.cycle_time
+    task = GeoTask(ch, text, autostart=False)
+    task.prepare_next_run()
+    plc, last, k = SimPlc(0.02), None, 0
+    snaps: list[GeoSnapshot] = []
+    solves: list[int] = []
+    for run in range(runs):
+        since = -1  # cycles since the arrival at the end was committed (an override step
+        for n in itertools.count():  # discards it: the override stays on `near_end` then)
+            k += 1
+            ahead = task.next_runs.ahead
+            if not prime and ahead is not None:
+                ahead.interp._start_inputs = None
+            if n == 0:
+                inputs = at_start._replace(command=Command.START)
+                calls = ahead.interp.prod.calc.calls if ahead is not None else 0
+            else:
+                if since >= 0 or task.interp.near_end:
+                    since += 1
+                ov = near_end[min(since, len(near_end) - 1)] if since >= 0 else 1.0
+                inputs = plc.inputs(last, k * dt, Schedule(override=((0.0, ov),)))
+            last = task.step(inputs, k * dt)
+            snaps.append(last)
+            if n == 1 and run > 0:
+                solves.append(task.interp.prod.calc.calls - calls)
+            if last.state is not ChannelState.ACTIVE and n > 0:
+                break
+    assert task.runs == runs
+    return snaps, solves
+
+
+def test_a_repeat_start_primed_before_it_is_the_run_never_primed() -> None:
+    """The run built ahead chooses the profile its path leaves boundary 0 with in a quiet cycle
+    before its START (`prime_start`, for that cycle's override and hold, again when they
+    change). The START's cycle uses it only where its own inputs are the same; every other
+    case, an override changed in the START's cycle, a feed hold or override 0 at the START,
+    runs as if nothing was primed. Cycle for cycle, the same runs as with no priming."""
+    cases = [
+        ((1.0,), GeoInputs(), True),  # the common repeat: primed and used
+        ((1.5,), GeoInputs(override=1.5), True),
+        ((1.2,) * 50 + (1.6,), GeoInputs(override=1.6), True),  # primed again, kept
+        ((1.5,), GeoInputs(override=0.8), False),  # changed in the START's cycle
+        ((1.5,), GeoInputs(override=1.5, feed_hold=True), False),  # a hold at the START
+        ((1.5,), GeoInputs(override=0.0), False),  # override 0 at the START
+    ]
+    for text in (SHORT, DEMO):
+        for near_end, at_start, used in cases:
+            got, got_solves = run_repeats(text, near_end, at_start, prime=True)
+            want, want_solves = run_repeats(text, near_end, at_start, prime=False)
+            assert_same_run(got, want)
+            # primed and taken: one ruckig solve fewer in the START's cycle (or the next)
+            fewer = [w - g for g, w in zip(got_solves, want_solves, strict=True)]
+            assert fewer == [1 if used else 0] * 2, (near_end, at_start, fewer)
