@@ -73,7 +73,6 @@ class GeoTask(LiftAhead):
         self.t_cycle = 0.0
         self.ov_eff = 1.0
         self.ov_req = 1.0
-        self.feed_hold = False  # this cycle's input
         self.ov_max = MAX_OVERRIDE
         self.was_holding = False
         self.stop_requested = False
@@ -146,8 +145,7 @@ class GeoTask(LiftAhead):
             self.runs += 1
             self._started = True
             self.state = ACTIVE
-            # the inputs this cycle applies to the new run: a fresh lift does not limit them
-            self.interp.start(t, self.ov_req, self.feed_hold)
+            self.interp.start(t)
             self.waiting = list(self.prog.path.boundaries[0].actions)
             self.wait_since = t
             self._emit("geo.program_start", t, self.prog.first_line)
@@ -158,14 +156,6 @@ class GeoTask(LiftAhead):
             self.state = ACTIVE
             self._emit("geo.resume", t, self.line)
         self.stop_requested = False
-
-    def _prime_next_start(self) -> None:
-        """Near the end of a run (its arrival at the end committed): the run built ahead for a
-        repeat START chooses the profile its path leaves boundary 0 with, for this cycle's
-        inputs (`Interpolator.prime_start`; again only when they change)."""
-        ahead = self.next_runs.ahead
-        if ahead is not None and ahead.lift is not None:
-            ahead.interp.prime_start(self.ov_req, self.feed_hold)
 
     def _command(self, cmd: Command, t: float) -> None:
         if cmd is START and self.state is not ERROR:
@@ -265,13 +255,12 @@ class GeoTask(LiftAhead):
         t_in = self.t_cycle if self.cycle > 1 else (round(t / dt) - 1) * dt
         self.t_cycle = t
         self.events = []
-        self.ov_req = min(max(inputs.override, 0.0), MAX_OVERRIDE)
-        self.feed_hold = inputs.feed_hold
         if self.autostart and self.runs == 0:
             self._start(t_in)
         self._command(inputs.command, t_in)
         if inputs.m_ack and self.m_pending >= 0:
             self._acknowledge(self.m_pending, t_in)
+        self.ov_req = min(max(inputs.override, 0.0), MAX_OVERRIDE)
         holding = inputs.feed_hold or self.stop_requested or self.state is not ACTIVE
         self.ov_eff = self._limit_override(self.ov_req, holding)
         self.was_holding = holding
@@ -299,8 +288,7 @@ class GeoTask(LiftAhead):
         self._settle(t)
         if not self.events and not self._started:
             if self.interp.stopped_at is None:
-                if not self._prime_lift() and self.interp.near_end:
-                    self._prime_next_start()
+                self._prime_lift()
             elif self.state is ACTIVE:
                 self.interp.prime_leaving()  # the resume's profile, in a quiet cycle of the wait
         positions = self._positions()

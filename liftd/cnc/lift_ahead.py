@@ -40,7 +40,7 @@ class LiftAhead(BoundaryActions):
                 return k
         return rng.k_end
 
-    def _prime_lift(self) -> bool:
+    def _prime_lift(self) -> None:
         """Work of the next lift start's cycle done in the two quiet cycles before it, once
         the path's crossing of its LIFT_START is committed: the lift's first rising cycle
         (`AdvancedLift.prime`, a ruckig solve), then the lower bound of the path's arrival at
@@ -49,21 +49,21 @@ class LiftAhead(BoundaryActions):
         with cold caches cost up to 250 µs without them. Both are memos of pure functions: the
         start cycle takes them where its inputs are the same ones, else computes them as it
         did before (an event that discarded the committed future primes again); the
-        snapshots are the same either way (the core digests). True: it did a piece."""
+        snapshots are the same either way (the core digests)."""
         ip = self.interp
         i = self.prime_next
         if ip.restarts != self._prime_restarts or i != self._prime_for:
             self._prime_restarts, self._prime_for, self._prime_stage = ip.restarts, i, 0
         stage = self._prime_stage
         if stage >= 2 or i >= len(self.lift_ranges):
-            return False
+            return
         rng = self.lift_ranges[i]
         t_at = ip.arrivals.get(rng.k_start)
         if t_at is None or t_at > self.t_cycle + 2.5 * self.dt:
-            return False
+            return
         found = ip.crossing_within(rng.k_start, 2)
         if found is None:
-            return False
+            return
         k, c = found
         self._prime_stage = stage + 1
         if stage == 0:
@@ -77,4 +77,3 @@ class LiftAhead(BoundaryActions):
                     horizon = b
                     break
             ip.arrival_bound(horizon)
-        return True

@@ -108,9 +108,6 @@ class Interpolator(NominalRun):
         self._leaving: Primed | None = None
         self._leaving_key = (-1, -1)
         self._acks = 0  # conditional M functions acknowledged (one changes the stop set)
-        # the inputs (override, hold) its leaving of boundary 0 was primed for before its START
-        # (`prime_start`; none yet: (-1, False)); None once it started
-        self._start_inputs: tuple[float, bool] | None = (-1.0, False)
 
     # -- errors of the producer (never expected; counted for the summary and events) ----------
     @property
@@ -140,41 +137,11 @@ class Interpolator(NominalRun):
         self._quiet = False
         self._event = True  # (`nominal_step`)
 
-    def start(self, t: float, override: float = 1.0, hold: bool = False) -> None:
-        """The program starts: at rest at boundary 0 from time t (its actions run first), with
-        the inputs the START's cycle gives (`override`, `hold`). A leaving profile primed for
-        those inputs (`prime_start`) stays for the resume; otherwise the run starts from the
-        state of a run never primed (inputs 1.0 / no hold until `set_inputs`)."""
-        primed = self._leaving is not None and self._leaving_key == (self.restarts, self._acks)
-        if not (primed and self._start_inputs == (override, hold)):
-            primed = False
-            self._leaving = None
-            self.override, self.hold = 1.0, False
-        self._start_inputs = None
+    def start(self, t: float) -> None:
+        """The program starts: at rest at boundary 0 from time t (its actions run first)."""
         self.t_state = t
         self.stopped_at = 0
         self._restart()
-        if primed:
-            self._leaving_key = (self.restarts, self._acks)
-
-    def prime_start(self, override: float, hold: bool) -> None:
-        """Before the START of a run built ahead (`Runs`): choose the profile its path will
-        leave boundary 0 with, for these inputs, in a quiet cycle of the run before it, not in
-        the START's cycle (that choice was about 40 % of a repeat START's cycle, perf). Again
-        only when the inputs change; `start` keeps it only for the same inputs, and the resume
-        takes it only while the stop sets and acknowledgements it was made for stand, else
-        the run plans as before: the same run either way (test_repeat.py)."""
-        if self._start_inputs is None or self._start_inputs == (override, hold):
-            return
-        self._start_inputs = (override, hold)
-        self.override, self.hold = override, hold
-        self._restart()  # the state `start` sets, at t = 0: the choice does not depend on t
-        self.prime_leaving()
-
-    @property
-    def near_end(self) -> bool:
-        """The path's arrival at the program's end is committed (in the queue)."""
-        return self.table.n in self.arrivals
 
     def set_inputs(self, override: float, hold: bool) -> None:
         """Override (fraction) and feed hold from the time of the current state on."""
