@@ -33,9 +33,10 @@ Per kind of cycle p50 / p90 / max over the minimum of 2 runs, in µs: what an ev
 in the daemon, without its RT noise (bench_rt.py measures the same cycles there).
 
 `--repeat [NAME ...]` times the repeat STARTs of the demo and the 500-part job (or the programs
-named) run as `[program] repeat` runs them: each START's cycle and the largest cycle after it.
+named) run as `[program] repeat` runs them: each START's cycle and the largest cycle after it. With
+`--cold`: 60 repeats of the demo, 64 MiB written before each START (min / p50 / max).
 
-Run: .venv/bin/python bench/bench_step.py [--breakdown | --cold | --repeat] [NAME ...]   (~5 min)
+Run: .venv/bin/python bench/bench_step.py [--breakdown | --cold | --repeat [--cold]] [NAME ...]   (~5 min)
 """
 
 from __future__ import annotations
@@ -296,11 +297,16 @@ def cold_cycles(
     return out
 
 
-def repeat_starts(name: str, text: str, runs: int = 4, after: int = 300) -> dict[str, object]:
+def repeat_starts(
+    name: str, text: str, runs: int = 4, after: int = 300, cold: bool = False
+) -> dict[str, object]:
     """A program repeated as `[program] repeat` runs it in the GEO loop (prepare_next_run
     before the first START, each START in the cycle after the program ended): the step time
     of each repeat START's cycle, and the largest of the `after` cycles that follow it (where
-    the next run is built and the last one released, a piece per cycle), in µs."""
+    the next run is built and the last one released, a piece per cycle), in µs. `cold`: 64 MiB
+    written just before each START's step (as the GEO process meets it after its sleep)."""
+    import numpy as np  # noqa: PLC0415
+
     from liftd.cnc.geo_task import GeoTask  # noqa: PLC0415
     from liftd.cnc.plc import SimPlc  # noqa: PLC0415
     from liftd.cnc.snapshot import ChannelState, Command, GeoInputs  # noqa: PLC0415
@@ -311,12 +317,15 @@ def repeat_starts(name: str, text: str, runs: int = 4, after: int = 300) -> dict
     clock, dt, k, last = time.perf_counter_ns, ch.cycle_time, 0, None
     starts: list[float] = []
     following: list[float] = []
+    flush = np.zeros((64 << 20) // 8) if cold else None
     gc.collect()
     gc.freeze()
     gc.disable()
     try:
         for run in range(runs + 1):
             k += 1
+            if flush is not None:
+                flush += 1.0
             c0 = clock()
             last = task.step(GeoInputs(command=Command.START), k * dt)
             if run:  # the first START is not a repeat (its run was built before the loop)
@@ -335,6 +344,12 @@ def repeat_starts(name: str, text: str, runs: int = 4, after: int = 300) -> dict
     finally:
         gc.enable()
         gc.unfreeze()
+    if cold:
+        cut = sorted(starts)
+        return {"bench": "step_repeat_start_cold", "program": name, "repeats": runs,
+                "start_us": {"min": round(cut[0], 1), "p50": round(cut[len(cut) // 2], 1),
+                             "max": round(cut[-1], 1)},
+                "decoded_in_a_cycle": task.programs.loads - 2}  # fmt: skip
     return {"bench": "step_repeat_start", "program": name, "repeats": runs,
             "start_us": [round(v, 1) for v in starts],
             f"max_of_next_{after}_us": [round(v, 1) for v in following],
@@ -344,9 +359,15 @@ def repeat_starts(name: str, text: str, runs: int = 4, after: int = 300) -> dict
 def main() -> None:
     wanted = [a for a in sys.argv[1:] if not a.startswith("--")]
     if "--repeat" in sys.argv:
+        cold = "--cold" in sys.argv  # 60 repeats of the demo, 64 MiB written before each START
         for name, (text, _) in programs().items():
-            if name in (wanted or ["demo", "nesting-500"]):
-                print(json.dumps(repeat_starts(name, text)), flush=True)
+            if name in (wanted or (["demo"] if cold else ["demo", "nesting-500"])):
+                rec = (
+                    repeat_starts(name, text, runs=60, cold=True)
+                    if cold
+                    else repeat_starts(name, text)
+                )
+                print(json.dumps(rec), flush=True)
         return
     if "--cold" in sys.argv:
         every = 0.5
