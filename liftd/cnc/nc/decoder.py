@@ -32,11 +32,13 @@ from liftd.cnc.nc.blocks import (
     Severity,
     chain_text,
 )
+from liftd.cnc.nc.calls import SubroutineCalls
 from liftd.cnc.nc.commands import CommandKind, CommandResult, parse_command
 from liftd.cnc.nc.context import DecoderContext
-from liftd.cnc.nc.lexer import LexError, Token, tokenize
-from liftd.cnc.nc.modal import MOTION_G, SMOOTHING_CMD, AlreadyReported, ModalDecoder, attempt
-from liftd.cnc.nc.sources import Frame, Section, Source, parse_source, sequence_args, sequence_range
+from liftd.cnc.nc.gfunctions import MOTION_G, SMOOTHING_CMD
+from liftd.cnc.nc.lexer import LexError, tokenize
+from liftd.cnc.nc.modal import AlreadyReported, attempt
+from liftd.cnc.nc.sources import Frame, Source, parse_source
 from liftd.cnc.nc.trc import TrcFault
 from liftd.cnc.nc.words import Template, Words, collect_plain, template
 from liftd.cnc.params import LiftMethod, SlopeType
@@ -58,7 +60,7 @@ def iter_decode(text: str, ctx: DecoderContext) -> tuple[Iterator[Block], _Decod
     return dec.run(text), dec
 
 
-class _Decoder(ModalDecoder):
+class _Decoder(SubroutineCalls):
     def __init__(self, ctx: DecoderContext) -> None:
         super().__init__(ctx)
         self.out: list[Block] = []
@@ -182,10 +184,6 @@ class _Decoder(ModalDecoder):
             frame.pos = frame.start
             return
         self.stack.pop()
-
-    def _file(self, frame: Frame | None = None) -> str:
-        f = frame or (self.stack[-1] if self.stack else None)
-        return f.source.name if f is not None else self.ctx.sources.program
 
     def _chain(self) -> tuple[CallSite, ...]:
         return tuple(f.site for f in self.stack if f.site is not None)
@@ -348,82 +346,6 @@ class _Decoder(ModalDecoder):
             self._emit(block)
         if w.call is not None:
             self._call(frame, w.call, lineno)
-
-    # -- subroutines ---------------------------------------------------------------------------
-    def _call(self, frame: Frame, tok: Token, lineno: int) -> None:
-        kind, name, col = tok.letter, tok.text, tok.column
-        written = (
-            f"{'LL ' if kind == 'LL' else 'L '}{name}"
-            if kind != "SEQ"
-            else (f"L SEQUENCE [{name}]")
-        )
-        if len(self.stack) > self.ctx.max_call_depth:
-            # https://infosys.beckhoff.com/content/1033/tf5200_diagnosis/251402891.html
-            raise NcFault(
-                ErrorId.CALL_DEPTH,
-                col,
-                f"{written}: subroutines nested deeper than {self.ctx.max_call_depth} levels "
-                "(endless recursion?)",
-            )
-        reps = 0
-        if kind == "LL":
-            source = frame.source
-            section: Section | None = source.locals.get(name.upper())
-            if section is None:
-                raise NcFault(
-                    ErrorId.SUBROUTINE_NOT_FOUND,
-                    col,
-                    f"LL {name}: no local subroutine %L {name} in this file",
-                )
-            start, end = section.start, section.end
-        else:
-            target = name
-            if kind == "SEQ":
-                target, first, last, reps = sequence_args(name, col)
-            source = frame.source if kind == "SEQ" and not target else self._global(target, col)
-            if kind == "SEQ":
-                # without NAME the sequence runs in the current program part, else in the
-                # named file's main program part
-                own = (frame.start, frame.end) if not target else None
-                start, end = sequence_range(source, first, last, col, own)
-            else:
-                if source.main is None:
-                    raise NcFault(
-                        ErrorId.PROGRAM_STRUCTURE,
-                        col,
-                        f"L {name}: the file has no main program part to run",
-                    )
-                start, end = source.main.start, source.main.end
-        if self.stopped:  # checking only: each body once
-            key = (source.name, start)
-            if key in self.visited_after_stop:
-                return
-            self.visited_after_stop.add(key)
-            reps = 0
-        site = CallSite(self._file(frame) or "(program)", lineno, written)
-        tag = "" if source.name == self.ctx.sources.program else source.name
-        self.stack.append(Frame(source, start, end, site, reps, tag))
-
-    def _global(self, name: str, col: int) -> Source:
-        cached = self.files.get(name)
-        if cached is not None:
-            return cached
-        if name in self.missing:  # one root cause, one error
-            raise AlreadyReported
-        nc_file = self.ctx.sources.find(name)
-        if nc_file is None or nc_file.text is None:
-            self.missing.add(name)
-            reason = nc_file.error if nc_file is not None and nc_file.error else "not found"
-            self._error(ErrorId.FILE_NOT_FOUND, col, f"L {name}: global subroutine {reason}")
-            raise AlreadyReported
-        source = parse_source(nc_file.path, nc_file.text, called=True)
-        self.files[name] = source
-        self._source_problems(source)
-        return source
-
-    def _source_problems(self, source: Source) -> None:
-        for p in source.problems:
-            self._error(p.error_id, 1, p.message, line=p.line, file=source.name)
 
     # -- # commands ----------------------------------------------------------------------------
     def _command(self, lineno: int, n: int | None, cmd: CommandResult) -> None:
