@@ -197,13 +197,19 @@ def over_kinds(logs: list[dict[str, object]]) -> dict[str, object]:
     return out
 
 
+def spin_cpu(spin: dict[str, object] | None) -> int:
+    """The cpu the loop is pinned to ([rt] cpu), -1: not pinned."""
+    cpu = spin.get("cpu", -1) if spin else -1
+    return cpu if isinstance(cpu, int) and cpu >= 0 else -1
+
+
 def baseline_cpu(spin: dict[str, object] | None) -> int:
     """Where cyclictest and the null loop run: on the loop's cpu when it is pinned and sleeps
     (its noise, not the other one's); beside a loop that spins on its cpu they would never run
-    there (same SCHED_FIFO priority, and the loop never yields), so on the other one (cpu 0,
-    where the daemon and the clients run under `taskset -c 0`); -1: anywhere."""
-    cpu = spin.get("cpu", -1) if spin else -1
-    if not isinstance(cpu, int) or cpu < 0:
+    there (same SCHED_FIFO priority, and the loop never yields), so on cpu 0, which `one_run`
+    keeps the bench, its clients and the baseline on; -1: anywhere."""
+    cpu = spin_cpu(spin)
+    if cpu < 0:
         return -1
     return 0 if spin and spin.get("idle") == "spin" else cpu
 
@@ -217,9 +223,7 @@ def one_run(minutes: float, rt: bool, pollers: int = 4, notifiers: int = 1,
     `spin`: [rt] keys of the busy-waiting loop (idle = spin, pinned); `probe_hot_us`: the null
     loop's workload."""
     seconds = minutes * 60
-    base_cpu = baseline_cpu(spin)
-    cpu = spin.get("cpu", -1) if spin else -1
-    spin_cpu = cpu if isinstance(cpu, int) else -1
+    base_cpu, loop_cpu = baseline_cpu(spin), spin_cpu(spin)
     with tempfile.TemporaryDirectory() as tmp:
         tmpd = Path(tmp)
         rt_keys = {**(RT_ON if rt else RT_OFF), **(spin or {})}
@@ -234,8 +238,8 @@ def one_run(minutes: float, rt: bool, pollers: int = 4, notifiers: int = 1,
                 time.sleep(0.001)
             to_ready = time.monotonic() - t0
             geo = geo_pid(d.proc.pid)
-            if base_cpu >= 0 and base_cpu != spin_cpu:  # the loop spins on spin_cpu: keep off
-                keep_off_cpu(spin_cpu)  # (this thread; the clients and the baseline inherit it)
+            if base_cpu >= 0 and base_cpu != loop_cpu:  # the loop spins on loop_cpu: keep off
+                keep_off_cpu(loop_cpu)  # (every thread; the clients and the baseline inherit it)
             procs, out = load.start(d.net_id, d.address, seconds, pollers, 1000.0, notifiers, 10,
                                     subscriptions, override_every_s)  # fmt: skip
             baseline = baseline_start(seconds, rt, base_cpu)

@@ -146,7 +146,7 @@ def keep_off_cpu(cpu: int) -> RtResult:
     spinning loop's CPU is not starved: the kernel's fair server (Linux >= 6.12) gives it up to
     50 ms of every second, also with sched_rt_runtime_us = -1, and the loop stands still that
     long (measured on this VM's 6.18 kernel: a SCHED_FIFO spinner beside a busy SCHED_OTHER
-    task lost 14 stretches of 50 ms in 15 s, alone none above 10 ms; docs/measurements.md).
+    task lost 14 stretches of ~50 ms in 15 s, alone none; `bench/rt_share_probe.py`).
     The machine's other processes are the operator's to keep off (isolcpus=, systemd's
     CPUAffinity=, taskset)."""
     others = os.sched_getaffinity(0) - {cpu}
@@ -178,8 +178,8 @@ def spin_refusal(fifo: bool, runtime_us: int | None) -> str | None:
     of its cycles exceeded, `bench/bench_rt.py --mode spin`, 2026-12-01). Linux 6.12 replaced
     that throttling by the fair server only where RT_GROUP_SCHED is off (commit "sched/rt:
     Remove default bandwidth control"); this VM's 6.18 kernel has it on and still throttles (a
-    C spinner alone on its cpu: 15 stops of 50 ms in 15 s at 950000, none above 10 ms at -1,
-    2026-12-03), so the share is read, not the kernel's version."""
+    spinner alone on its cpu: 13–15 stops of ~50 ms in 15 s at 950000, none at -1,
+    `bench/rt_share_probe.py`, 2026-12-03), so the share is read, not the kernel's version."""
     if fifo and runtime_us is not None and runtime_us >= 0:
         return (
             f"refused, the loop sleeps: sched_rt_runtime_us is {runtime_us}, so the kernel "
