@@ -207,7 +207,9 @@ def _objects(ch: ChannelParams, index: int = 0) -> list[CncObject]:
     ]  # fmt: skip
     if index == 0:
         out += [
-            CncObject("cycle", "GEO.cycle", UNS64, "-", lambda v: v.snapshot.cycle,
+            # the loop's count, not the channel task's: a reload replaces the task (whose own
+            # count restarts at 0), and a health check or PLC watchdog needs one that only rises
+            CncObject("cycle", "GEO.cycle", UNS64, "-", lambda v: v.stats.cycles,
                       "GEO cycles since start"),
             CncObject("exceeded", "GEO.timing.exceeded", UNS32, "-", lambda v: v.stats.exceeded,
                       "cycles that finished after their deadline"),

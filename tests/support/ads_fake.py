@@ -53,7 +53,7 @@ class Silent:
 
 def make_server() -> AdsServer:
     catalog = Catalog(make_channel())
-    view = GeoView(snapshot(), LoopStats())
+    view = GeoView(snapshot(), LoopStats(cycles=1))  # the loop after its first cycle
     provider = CncProvider(catalog, lambda: view, lambda w: None)
     cfg = ServerConfig(host="127.0.0.1", port=0, net_ids=frozenset({NET}),
                        max_frame_bytes=4096, write_queue_frames=QUEUE)  # fmt: skip

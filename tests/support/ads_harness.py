@@ -46,7 +46,7 @@ class Harness:
         self.net_id = f"127.0.0.{next(_net) % 250 + 1}.1.1"  # AdsLib routes one NetId per IP
         cfg = ServerConfig(host="127.0.0.1", port=0, net_ids=frozenset({net_id_bytes(self.net_id)}))
         self.config = dataclasses.replace(cfg, **config)
-        self.view: GeoView | None = GeoView(snapshot(), LoopStats())
+        self.view: GeoView | None = GeoView(snapshot(), LoopStats(cycles=1))  # after one cycle
         self.writes: list[PlcWrite] = []
         self.busy = False
         self.catalog = Catalog(ch)

@@ -137,3 +137,12 @@ def test_plc_inputs(w: World) -> None:
     ro = w.p.find_symbol("GEO.ch1.override")
     assert w.code(w.p.write, ro.index_group, ro.index_offset, struct.pack("<H", 5)) == 0x704
     assert w.p.read(sym.index_group, sym.index_offset, 2) == struct.pack("<H", 1000)  # requested
+
+
+def test_geo_cycle_is_the_loops_count_which_a_reload_does_not_reset(w: World) -> None:
+    """A reload replaces the channel's GEO task, whose own count starts again at 0: GEO.cycle
+    (what `liftd status` and a PLC watchdog see advance) is the loop's count of cycles."""
+    sym = w.p.find_symbol("GEO.cycle")
+    assert sym is not None
+    w.view = GeoView(w.view.snapshot._replace(cycle=3), LoopStats(cycles=90_000))  # type: ignore[union-attr]
+    assert w.p.read(sym.index_group, sym.index_offset, 8) == struct.pack("<Q", 90_000)
