@@ -17,6 +17,7 @@ from liftd.ads.wire import net_id_bytes
 from liftd.settings.model import AdsSection
 from tests.support.daemon import Daemon, write_config
 from tests.support.paths import REPO
+from tests.support.wait import wait_for
 
 pytestmark = pytest.mark.integration
 LIFT = struct.pack("<III", 0x121301, 0x30095, 1)
@@ -84,8 +85,8 @@ def test_netids_and_write_rights_as_configured(tmp_path: Path) -> None:
         viewer.close()
         plc = RawClient(port, target, source=net_id_bytes(PLC))
         assert write_override(plc, 500) == 0
-        time.sleep(0.05)
-        assert plc.read_by_name("GEO.ch1.override_requested", 2) == (0, struct.pack("<H", 500))
+        assert wait_for(lambda: plc.read_by_name("GEO.ch1.override_requested", 2)
+                        == (0, struct.pack("<H", 500)))  # fmt: skip
         plc.close()
     finally:
         assert d.stop() == 0

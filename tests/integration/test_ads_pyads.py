@@ -14,17 +14,9 @@ import pytest
 from liftd.cnc.snapshot import PlcSignal, PlcWrite
 from tests.support.ads_harness import Harness
 from tests.support.channel import make_channel
+from tests.support.wait import wait_for
 
 pytestmark = pytest.mark.integration
-
-
-def wait_for(cond: Callable[[], bool], timeout: float = 3.0) -> bool:
-    end = time.monotonic() + timeout
-    while time.monotonic() < end:
-        if cond():
-            return True
-        time.sleep(0.005)
-    return cond()
 
 
 @pytest.fixture

@@ -8,13 +8,13 @@ import re
 import shutil
 import subprocess
 import sys
-import time
 import tomllib
 from pathlib import Path
 
 import pytest
 
 from tests.support.paths import REPO
+from tests.support.wait import wait_for
 
 pytestmark = pytest.mark.integration
 UNIT = REPO / "systemd" / "liftd.service"
@@ -145,8 +145,7 @@ def test_the_daemon_runs_without_writable_executable_memory(tmp_path: Path) -> N
         d.ready()
         assert d.read_symbol("GEO.ch1.state", "<I") == 4
         cycles = d.read_symbol("GEO.cycle", "<Q")
-        time.sleep(0.2)
-        assert d.read_symbol("GEO.cycle", "<Q") > cycles + 100
+        assert wait_for(lambda: d.read_symbol("GEO.cycle", "<Q") > cycles + 100)
     finally:
         assert d.stop() == 0
     assert "Traceback" not in "".join(d.raw)

@@ -12,6 +12,7 @@ import pyads
 import pytest
 
 from tests.support.daemon import Daemon, write_config
+from tests.support.wait import wait_for
 
 pytestmark = pytest.mark.integration
 
@@ -23,8 +24,7 @@ def test_a_full_disk_stops_the_trace_not_the_loop(tmp_path: Path) -> None:
         rec = d.event("trace.stopped", 15)
         assert rec is not None and "space" in rec["reason"].lower()
         c1 = d.read_symbol("GEO.cycle", "<Q")
-        time.sleep(0.2)
-        assert d.read_symbol("GEO.cycle", "<Q") > c1 + 100  # the loop runs on
+        assert wait_for(lambda: d.read_symbol("GEO.cycle", "<Q") > c1 + 100)  # the loop runs on
         assert d.read_exceeded() == 0 or d.proc.poll() is None
     finally:
         assert d.stop() == 0
@@ -60,8 +60,8 @@ def test_sigkill_and_restart_with_clients_connected(tmp_path: Path) -> None:
                     plc.open()
                     plc.set_timeout(500)
                     time.sleep(0.1)
-            time.sleep(0.05)
-            assert plc.read_by_name("GEO.cycle", pyads.PLCTYPE_ULINT) > after  # live, not stale
+            # live, not stale
+            assert wait_for(lambda: plc.read_by_name("GEO.cycle", pyads.PLCTYPE_ULINT) > after)
             assert plc.read(0x121301, 0x30095, pyads.PLCTYPE_BOOL) in (True, False)
             assert plc.read_state()[0] == 5
         finally:
