@@ -19,6 +19,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from bench.cli import parser  # noqa: E402
 from bench.gen import nesting_program  # noqa: E402
 from liftd.cnc.geo_program import _couple_lifts  # noqa: E402
 from liftd.cnc.lift.ranges import find_ranges  # noqa: E402
@@ -177,6 +178,7 @@ def planning_cost(ch: ChannelParams) -> None:
 
 
 def main() -> None:
+    parser(__doc__).parse_args()
     ch = load_settings(str(ROOT / "config" / "liftd.toml")).channel
     clearance(ch)
     override_step(ch)

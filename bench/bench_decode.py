@@ -25,6 +25,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from bench.cli import parser
 from bench.gen import count_blocks, nesting_program, repeated_program, subroutine_program
 from liftd.cnc.nc import DecoderContext, decode
 from liftd.cnc.nc.decoder import iter_decode
@@ -43,6 +44,7 @@ def best_of(n: int, fn: object) -> float:
 
 
 def main() -> None:
+    parser(__doc__).parse_args()
     settings = load_settings(str(Path(__file__).resolve().parents[1] / "config" / "liftd.toml"))
     ctx = DecoderContext.from_channel(settings.channel)
     for parts in (715, 3572, 7143):  # ~10 000, 50 000, 100 000 blocks

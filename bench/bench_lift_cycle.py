@@ -19,6 +19,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from bench.cli import parser  # noqa: E402
 from liftd.cnc.geo_task import GeoTask  # noqa: E402
 from liftd.cnc.lift.advanced import AdvancedLift, Phase  # noqa: E402
 from liftd.cnc.lift.profile import LiftProfiles  # noqa: E402
@@ -114,6 +115,7 @@ def geo_task() -> None:
 
 
 if __name__ == "__main__":
+    parser(__doc__).parse_args()
     gc.disable()
     generator()
     geo_task()

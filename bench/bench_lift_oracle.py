@@ -24,6 +24,7 @@ from scipy.optimize import linprog
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from bench.cli import parser
 from liftd.cnc.lift.advanced import AdvancedLift
 from liftd.cnc.lift.profile import LiftProfiles
 
@@ -140,6 +141,7 @@ class Oracle:
 
 
 def main() -> None:
+    parser(__doc__).parse_args()
     worst_peak = worst_mean = 1.0
     for c in CASES:
         t0 = time.perf_counter()

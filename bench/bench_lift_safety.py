@@ -26,17 +26,21 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from bench.cli import parser
 from bench.stress_cases import describe, scenario, violations, wide_scenario
 from liftd.cnc.params import LiftMethod
 from tests.support.closed_loop import run_task
 
 
 def main() -> None:
-    wide = "--wide" in sys.argv
-    args = [a for a in sys.argv[1:] if a != "--wide"]
-    runs = int(args[0]) if args else 1000
-    first = int(args[1]) if len(args) > 1 else 0
-    method = LiftMethod(args[2]) if len(args) > 2 else LiftMethod.ADVANCED
+    ap = parser(__doc__)
+    ap.add_argument("--wide", action="store_true", help="the whole input space (issue 14)")
+    ap.add_argument("runs", nargs="?", type=int, default=1000, help="seeded runs (1000)")
+    ap.add_argument("first_seed", nargs="?", type=int, default=0, help="the first seed (0)")
+    ap.add_argument("method", nargs="?", default="advanced", choices=["advanced", "lifting"],
+                    help="lift method (advanced)")  # fmt: skip
+    args = ap.parse_args()
+    wide, runs, first, method = args.wide, args.runs, args.first_seed, LiftMethod(args.method)
     make = wide_scenario if wide else scenario
     failures: list[dict[str, object]] = []
     cycles = lifts = 0

@@ -21,6 +21,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from bench.cli import parser  # noqa: E402
 from bench.gen import count_blocks, nesting_program  # noqa: E402
 from liftd.cnc.geo_task import GeoTask  # noqa: E402
 from liftd.cnc.plc import Schedule  # noqa: E402
@@ -86,6 +87,7 @@ def run(
 
 
 def main() -> None:
+    parser(__doc__).parse_args()
     demo = (ROOT / "config" / "programs" / "demo.nc").read_text()
     run("demo.nc", demo, trace=False)
     run("demo.nc", demo, trace=True)

@@ -51,6 +51,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from bench.cli import parser  # noqa: E402
 from bench.gen import count_blocks, nesting_program  # noqa: E402
 from liftd.cnc.params import ChannelParams  # noqa: E402
 from liftd.cnc.plc import Schedule  # noqa: E402
@@ -357,10 +358,26 @@ def repeat_starts(
 
 
 def main() -> None:
-    wanted = [a for a in sys.argv[1:] if not a.startswith("--")]
-    if "--repeat" in sys.argv:
-        cold = "--cold" in sys.argv  # 60 repeats of the demo, 64 MiB written before each START
-        for name, (text, _) in programs().items():
+    ap = parser(__doc__)
+    mode = ap.add_mutually_exclusive_group()
+    mode.add_argument(
+        "--breakdown", action="store_true", help="where the time goes, per cycle kind"
+    )
+    mode.add_argument("--repeat", action="store_true", help="the repeat STARTs")
+    ap.add_argument("--cold", action="store_true", help="64 MiB written before each timed step")
+    ap.add_argument("--writes-every", type=float, default=0.5, metavar="S",
+                    help="with --cold: a PLC override write every S seconds (0.5)")  # fmt: skip
+    ap.add_argument("names", nargs="*", metavar="NAME", help="programs to run (all, or per mode)")
+    args = ap.parse_args()
+    if args.breakdown and args.cold:
+        ap.error("--breakdown times every cycle hot; --cold is a mode of its own")
+    progs = programs()
+    wanted: list[str] = args.names
+    if unknown := [n for n in wanted if n not in progs]:
+        ap.error(f"no program {', '.join(map(repr, unknown))}; there are: {', '.join(progs)}")
+    if args.repeat:
+        cold = args.cold  # 60 repeats of the demo, 64 MiB written before each START
+        for name, (text, _) in progs.items():
             if name in (wanted or (["demo"] if cold else ["demo", "nesting-500"])):
                 rec = (
                     repeat_starts(name, text, runs=60, cold=True)
@@ -369,25 +386,21 @@ def main() -> None:
                 )
                 print(json.dumps(rec), flush=True)
         return
-    if "--cold" in sys.argv:
-        every = 0.5
-        if "--writes-every" in sys.argv:
-            value = sys.argv[sys.argv.index("--writes-every") + 1]
-            every = float(value)
-            wanted.remove(value)
-        for name, (text, _) in programs().items():
+    if args.cold:
+        for name, (text, _) in progs.items():
             if name in (wanted or ["demo"]):
-                print(json.dumps(cold_cycles(name, text, writes_every=every)), flush=True)
+                print(json.dumps(cold_cycles(name, text, writes_every=args.writes_every)),
+                      flush=True)  # fmt: skip
         return
-    if "--breakdown" in sys.argv:
-        for name, (text, schedule_for) in programs().items():
+    if args.breakdown:
+        for name, (text, schedule_for) in progs.items():
             if name in (wanted or ["demo"]):
                 schedule = schedule_for(3600.0)
                 print(json.dumps(breakdown(name, text, schedule)), flush=True)
         return
     print(json.dumps({"bench": "step_clock_noise", "wall_us": clock_noise(time.perf_counter_ns),
                       "cpu_us": clock_noise(time.thread_time_ns)}), flush=True)  # fmt: skip
-    for name, (text, schedule_for) in programs().items():
+    for name, (text, schedule_for) in progs.items():
         if wanted and name not in wanted:
             continue
         print(json.dumps(measure(name, text, schedule_for)), flush=True)

@@ -22,6 +22,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from bench.cli import parser  # noqa: E402
 from bench.gen_library import write_library  # noqa: E402
 
 CONFIG = str(ROOT / "config" / "liftd.toml")
@@ -57,6 +58,7 @@ def study(library: Path, jobs: int, out: Path) -> dict[str, object]:
 
 
 def main() -> None:
+    parser(__doc__).parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         base = Path(tmp)
         library = base / "library"

@@ -21,6 +21,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from bench.cli import parser  # noqa: E402
 from liftd.cnc.path.velocity import reach_velocity  # noqa: E402
 from liftd.settings import load_settings  # noqa: E402
 from tests.support.closed_loop import fd_ratios, run_task  # noqa: E402
@@ -32,6 +33,7 @@ LINE_M = 0.3
 
 
 def main() -> None:
+    parser(__doc__).parse_args()
     base = load_settings(str(ROOT / "config" / "liftd.toml")).channel
     worst = 1e9
     for setting, look in LOOK_AHEAD.items():
