@@ -48,6 +48,7 @@ class Harness:
         self.config = dataclasses.replace(cfg, **config)
         self.view: GeoView | None = GeoView(snapshot(), LoopStats(cycles=1))  # after one cycle
         self.writes: list[PlcWrite] = []
+        self.logs = structlog.testing.CapturingLogger()  # the server's log lines, kept here
         self.busy = False
         self.catalog = Catalog(ch)
         self.provider = CncProvider(self.catalog, lambda: self.view, self._sink)
@@ -70,7 +71,8 @@ class Harness:
         self.thread.start()
 
         async def start() -> int:
-            self.server = AdsServer(self.config, self.service, structlog.get_logger("test"))
+            log = structlog.wrap_logger(self.logs, processors=[])  # not the global config
+            self.server = AdsServer(self.config, self.service, log)
             return await self.server.start()
 
         self.port = asyncio.run_coroutine_threadsafe(start(), self.loop).result(5)
