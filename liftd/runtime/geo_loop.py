@@ -127,7 +127,7 @@ class GeoLoop:
             words[LOADING] += 1
             common = self.pending_cfg
             plc = PlcInputs(common.m_ack_auto, common.m_ack_delay_s)
-            plc.keep_staged(self.plcs[i])  # what this cycle read still takes effect
+            plc.carry_over(self.plcs[i])  # the PLC's levels, and what this cycle read
             self.plcs[i] = plc
             self.events.send(Event("geo.reloaded", snap.t, 0, 0.0, pending.program_name),
                              self.tags[i])  # fmt: skip

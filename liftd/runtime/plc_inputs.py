@@ -80,12 +80,16 @@ class PlcInputs:
             self.commands.append(cmd)
             self.plc_stopped = cmd is Command.STOP
 
-    def keep_staged(self, old: PlcInputs) -> None:
-        """Take over what `old` staged: a reload replaces a channel's inputs at the end of the
-        cycle, and a write read in that cycle was logged as taking effect in the next."""
+    def carry_over(self, old: PlcInputs) -> None:
+        """Take over the PLC's levels and what `old` staged: a reload replaces a channel's
+        inputs at the end of a cycle. The override and the feed hold are levels the PLC owns
+        (it wrote them once, over ADS, and reads them back as override_requested/feed_hold):
+        a new configuration must not release a feed hold or put the path back to 100 %. A
+        write read in that cycle was logged as taking effect in the next, so it does."""
+        self.override, self.feed_hold = old.override, old.feed_hold
+        self.next_override, self.next_feed_hold = old.next_override, old.next_feed_hold
         if old.staged:
             self.staged = True
-            self.next_override, self.next_feed_hold = old.next_override, old.next_feed_hold
             self.next_m_ack = old.next_m_ack
             self.next_commands.extend(old.next_commands)
 

@@ -17,10 +17,12 @@ import time
 import urllib.request
 from pathlib import Path
 
+import pyads
 import pytest
 
 from tests.support.daemon import Daemon, Notify, free_port, write_config
 from tests.support.paths import REPO
+from tests.support.wait import wait_for
 
 pytestmark = pytest.mark.integration
 SHIPPED = REPO / "config"
@@ -150,6 +152,45 @@ def test_without_a_program_the_daemon_idles_and_liftd_reload_brings_one(tmp_path
         assert d.read_symbol("GEO.timing.compute_cpu_over_25pct", "<I") >= 1
         assert d.read_symbol("GEO.timing.compute_cpu_max_us", "<d") >= cpu_us
         assert abs(took[0]["t"] * 1000 - round(took[0]["t"] * 1000)) < 1e-6  # a GEO cycle
+    finally:
+        assert d.stop() == 0
+
+
+def test_a_reload_keeps_the_plcs_feed_hold_and_override(tmp_path: Path) -> None:
+    """The PLC wrote its levels once, over ADS: a new configuration (here one that brings a
+    program, which autostarts) must not release the feed hold or put the path back to 100 %."""
+    runtime = tmp_path / "run"
+    runtime.mkdir()
+    env = {"RUNTIME_DIRECTORY": str(runtime)}
+    cfg = write_config(tmp_path, program={"autostart": True})
+    demo = str(REPO / "config" / "programs" / "demo.nc")
+    cfg.write_text(cfg.read_text().replace(f'file = "{demo}"\n', ""))
+    d = Daemon(cfg, env=env)
+    try:
+        d.ready()
+        plc = pyads.Connection(d.net_id, 551, d.address)
+        plc.open()
+        try:
+            plc.write_by_name("PLC.ch1.override", 500, pyads.PLCTYPE_UINT)
+            plc.write_by_name("PLC.ch1.feed_hold", True, pyads.PLCTYPE_BOOL)
+            assert wait_for(lambda: plc.read_by_name("GEO.ch1.feed_hold") is True)
+            assert plc.read_by_name("GEO.ch1.override_requested") == 500
+            cfg.write_text(cfg.read_text().replace("[program]", f'[program]\nfile = "{demo}"'))
+            r = liftd("reload", env=env)
+            assert r.returncode == 0 and "applied" in r.stdout, r.stderr
+            assert d.event("geo.reloaded", 10) is not None
+            assert wait_for(lambda: plc.read_by_name("GEO.ch1.state") != 3, 10)  # started
+            held_until = time.monotonic() + 0.3
+            while time.monotonic() < held_until:  # the new program waits for the hold
+                assert plc.read_by_name("GEO.ch1.feed_hold") is True
+                assert plc.read_by_name("GEO.ch1.path_velocity") == 0.0
+                assert plc.read_by_name("GEO.ch1.override_requested") == 500
+                time.sleep(0.02)
+            plc.write_by_name("PLC.ch1.feed_hold", False, pyads.PLCTYPE_BOOL)
+            assert wait_for(lambda: plc.read_by_name("GEO.ch1.path_velocity") > 0.0, 10)
+            assert plc.read_by_name("GEO.ch1.override") == 500  # at 50 %, not 100 %
+        finally:
+            plc.close()
     finally:
         assert d.stop() == 0
 

@@ -58,20 +58,29 @@ def test_the_automatic_plc_acknowledges_but_never_undoes_a_plc_stop() -> None:
     assert plc.inputs(held, 0.050).command is Command.START
 
 
-def test_a_reload_keeps_what_was_staged_and_nothing_else() -> None:
-    """The loop replaces a channel's inputs when it takes a new configuration; a write it read
-    in that cycle was logged as taking effect in the next one, so it must."""
+def test_a_reload_keeps_the_plcs_levels_and_what_was_staged() -> None:
+    """The loop replaces a channel's inputs when it takes a new configuration. The override
+    and the feed hold the PLC wrote stay in effect (a new configuration neither releases a
+    feed hold nor puts the path back to 100 %); a write read in that cycle was logged as taking
+    effect in the next one, so it does; edges already taken (an acknowledge, a START) are not
+    repeated."""
     old = PlcInputs(auto=False, ack_delay_s=0.02)
     old.apply(PlcWrite(PlcSignal.OVERRIDE, 0.4))
-    old.take()  # in effect in the old program: a reload starts from 100 % as before
+    old.apply(PlcWrite(PlcSignal.FEED_HOLD, 1.0))
+    old.apply(PlcWrite(PlcSignal.START, 1.0))
+    old.take()
+    assert old.inputs(None, 0.001) == GeoInputs(0.4, True, Command.START, False)
     new = PlcInputs(auto=False, ack_delay_s=0.02)
-    new.keep_staged(old)
-    assert not new.staged and new.inputs(None, 0.001) == GeoInputs()
-    assert new.apply(PlcWrite(PlcSignal.OVERRIDE, 0.4))  # the same level is a change here
+    new.carry_over(old)
+    assert not new.staged and new.inputs(None, 0.002) == GeoInputs(0.4, True, Command.NONE, False)
+    assert not new.apply(PlcWrite(PlcSignal.OVERRIDE, 0.4))  # the same level again: no change
+    assert new.apply(PlcWrite(PlcSignal.FEED_HOLD, 0.0))  # the hold's release is one
     old.apply(PlcWrite(PlcSignal.START, 1.0))
     old.apply(PlcWrite(PlcSignal.OVERRIDE, 0.7))
+    old.apply(PlcWrite(PlcSignal.M_ACK, 1.0))
     new = PlcInputs(auto=False, ack_delay_s=0.02)
-    new.keep_staged(old)
+    new.carry_over(old)
     assert new.staged
+    assert new.inputs(None, 0.003) == GeoInputs(0.4, True, Command.NONE, False)  # not yet
     new.take()
-    assert new.inputs(None, 0.002) == GeoInputs(0.7, False, Command.START, False)
+    assert new.inputs(None, 0.004) == GeoInputs(0.7, True, Command.START, True)
