@@ -268,6 +268,12 @@ class GeoTask(LiftAhead):
         self.interp.nominal_step(t, self.ov_req, holding)
         if self.state is ACTIVE:
             self._run_path(t)
+        elif self.state is HOLD and self.interp.stopped_at is None:
+            # a PLC STOP holds the path at rest mid-block: its time goes on, as in a feed
+            # hold, so that START leaves from here and now (a path left at the stop's time
+            # jumped on START to where it would have been without the stop, further the
+            # longer it was held), and a lift's remaining time is measured from now
+            self.interp.advance(t)
         m = self.lift.motion
         if m is not None:
             ip = self.interp
