@@ -59,7 +59,7 @@ OVERRUN_EVENT_EVERY_NS = 1_000_000_000  # at most one geo.overrun event per seco
 # COMPUTE_OVER_BURST events refilled at one per COMPUTE_OVER_EVENT_EVERY_NS
 COMPUTE_OVER_EVENT_EVERY_NS = 100_000_000
 COMPUTE_OVER_BURST = 10
-READY: Final = ChannelState.READY  # a C static: `ChannelState.READY` is two lookups a use
+PROGRAM_END: Final = "geo.program_end"  # the event of a program's end (a repeat starts it again)
 
 
 class _Events:
@@ -160,7 +160,7 @@ class GeoLoop:
         staged = False  # a channel has PLC writes that take effect in the next cycle
         over_tokens, over_refilled = COMPUTE_OVER_BURST, 0
         sleep_until = rt.spin_until if self.spin else rt.sleep_until
-        tags, plcs, tasks, step = self.tags, self.plcs, self.machine.tasks, self.machine.step
+        tags, plcs, step = self.tags, self.plcs, self.machine.step
         send = self.events.send
         start = Command.START
         while not words[STOP]:
@@ -203,14 +203,17 @@ class GeoLoop:
             publish(record)
             if trace is not None:
                 trace.put(record)
+            ends: list[int] | None = None  # channels whose program ended in this cycle
             for i in channels:
-                snap, before = snaps[i], last[i]
-                for ev in snap.events:
+                for ev in snaps[i].events:
                     send(ev, tags[i])
-                ended = snap.state is READY and (before is None or before.state is not READY)
-                if ended and self.current[i].repeat and tasks[i].runs:
-                    plcs[i].request(start)
+                    if ev.name == PROGRAM_END:  # not any way into READY: a RESET is not one
+                        ends = [i] if ends is None else [*ends, i]
             reloaded = self._check_reload(snaps)
+            if ends is not None:  # `repeat` as the configuration in effect now has it
+                for i in ends:
+                    if self.current[i].repeat:
+                        plcs[i].request(start)
             last = list(snaps)
             end_cpu = cpu_ns()
             end = now_ns()

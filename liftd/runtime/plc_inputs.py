@@ -85,17 +85,20 @@ class PlcInputs:
         inputs at the end of a cycle. The override and the feed hold are levels the PLC owns
         (it wrote them once, over ADS, and reads them back as override_requested/feed_hold):
         a new configuration must not release a feed hold or put the path back to 100 %. A
-        write read in that cycle was logged as taking effect in the next, so it does."""
+        write read in that cycle was logged as taking effect in the next, so it does; a command
+        already delivered to the GEO task is not repeated."""
         self.override, self.feed_hold = old.override, old.feed_hold
         self.next_override, self.next_feed_hold = old.next_override, old.next_feed_hold
+        self.commands.extend(old.commands)  # written by the PLC, not yet delivered (one a cycle)
         if old.staged:
             self.staged = True
             self.next_m_ack = old.next_m_ack
             self.next_commands.extend(old.next_commands)
 
     def request(self, cmd: Command) -> None:
-        """A command of the loop itself (program repeat)."""
-        self.commands.append(cmd)
+        """A command of the loop itself (program repeat, autostart after a reload): once."""
+        if cmd not in self.commands:
+            self.commands.append(cmd)
 
     def inputs(self, last: GeoSnapshot | None, t: float) -> GeoInputs:
         base = _IDLE

@@ -195,6 +195,55 @@ def test_a_reload_keeps_the_plcs_feed_hold_and_override(tmp_path: Path) -> None:
         assert d.stop() == 0
 
 
+def test_a_reset_ends_a_repeating_job_and_a_reload_does_not(tmp_path: Path) -> None:
+    """`repeat` starts the program again at its end; a RESET is not its end (the channel stays
+    READY until the PLC starts it), and a reload at a program boundary of a job the PLC
+    started (autostart off) lets the job go on with the new configuration."""
+    runtime = tmp_path / "run"
+    runtime.mkdir()
+    env = {"RUNTIME_DIRECTORY": str(runtime)}
+    short = tmp_path / "short.nc"
+    short.write_text("N10 G01 X20 F6000\nN20 G01 X0\nN30 M30\n")  # 0.4 s and the ramps
+    cfg = write_config(tmp_path, program={"autostart": False, "repeat": True})
+    cfg.write_text(cfg.read_text().replace(
+        str(REPO / "config" / "programs" / "demo.nc"), str(short)))  # fmt: skip
+    d = Daemon(cfg, env=env)
+
+    def starts() -> int:
+        return sum(rec.get("event") == "geo.program_start" for rec in list(d.logs))
+
+    try:
+        d.ready()
+        plc = pyads.Connection(d.net_id, 551, d.address)
+        plc.open()
+        try:
+            time.sleep(0.3)
+            assert starts() == 0 and plc.read_by_name("GEO.ch1.state") == 3  # waits for START
+            plc.write_by_name("PLC.ch1.start", True, pyads.PLCTYPE_BOOL)
+            assert wait_for(lambda: starts() >= 2, 10)  # it repeats
+            r = liftd("reload", env=env)
+            assert r.returncode == 0 and "applied" in r.stdout, r.stderr
+            assert d.event("geo.reloaded", 10) is not None
+            after = starts()
+            assert wait_for(lambda: starts() >= after + 2, 10)  # and goes on repeating
+            assert wait_for(lambda: plc.read_by_name("GEO.ch1.path_velocity") > 0.0, 10)
+            plc.write_by_name("PLC.ch1.reset", True, pyads.PLCTYPE_BOOL)
+            assert d.event("geo.reset", 10) is not None
+            assert wait_for(lambda: plc.read_by_name("GEO.ch1.state") == 3)
+            reset_at = starts()
+            held_until = time.monotonic() + 0.5
+            while time.monotonic() < held_until:  # READY, until the PLC starts it again
+                assert plc.read_by_name("GEO.ch1.state") == 3
+                time.sleep(0.02)
+            assert starts() == reset_at
+            plc.write_by_name("PLC.ch1.start", True, pyads.PLCTYPE_BOOL)
+            assert wait_for(lambda: starts() >= reset_at + 2, 10)
+        finally:
+            plc.close()
+    finally:
+        assert d.stop() == 0
+
+
 def test_reload_fails_for_a_rejected_configuration_and_succeeds_when_applied(
     tmp_path: Path,
 ) -> None:

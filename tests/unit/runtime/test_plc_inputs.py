@@ -84,3 +84,22 @@ def test_a_reload_keeps_the_plcs_levels_and_what_was_staged() -> None:
     assert new.inputs(None, 0.003) == GeoInputs(0.4, True, Command.NONE, False)  # not yet
     new.take()
     assert new.inputs(None, 0.004) == GeoInputs(0.7, True, Command.START, True)
+
+
+def test_the_loops_own_start_is_requested_once_and_undelivered_commands_survive_a_reload() -> None:
+    """A reload's autostart and a repeat may both ask for START at one program boundary: one
+    START. Two PLC commands read in one cycle reach the task one a cycle; a reload between them
+    does not drop the second."""
+    plc = PlcInputs(auto=False, ack_delay_s=0.02)
+    plc.request(Command.START)
+    plc.request(Command.START)
+    assert plc.inputs(None, 0.001).command is Command.START
+    assert plc.inputs(None, 0.002).command is Command.NONE
+    plc.apply(PlcWrite(PlcSignal.STOP, 1.0))
+    plc.apply(PlcWrite(PlcSignal.START, 1.0))
+    plc.take()
+    assert plc.inputs(None, 0.003).command is Command.STOP
+    new = PlcInputs(auto=False, ack_delay_s=0.02)
+    new.carry_over(plc)
+    assert new.inputs(None, 0.004).command is Command.START
+    assert new.inputs(None, 0.005).command is Command.NONE
