@@ -104,6 +104,11 @@ def cmd_plc(args: argparse.Namespace) -> int:
     if host in ("0.0.0.0", "::", ""):
         host = "127.0.0.1"  # the daemon listens on every address; reach it on loopback
     ch = channel_arg(settings, args.channel).params
+    names = [ax.name for ax in ch.axes]
+    if args.axis is not None and args.axis not in names:
+        print(f"liftd plc: --axis {args.axis}: channel {ch.channel_id} of the configuration "
+              f"(-c) has the axes {', '.join(names)}", file=sys.stderr)  # fmt: skip
+        return EXIT_CONFIG
     target = plc.Target(
         host=host, tcp_port=tcp_port, net_id=args.net_id or ads.net_id, ams_port=args.port,
         channel=ch.channel_id, axis=args.axis or ch.lift_axis,

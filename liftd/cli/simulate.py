@@ -38,6 +38,9 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     if args.compare and args.method != "config":
         print("liftd simulate: --compare runs both methods; drop --method", file=sys.stderr)
         return EXIT_CONFIG
+    if not args.max_time > 0:  # also NaN
+        print(f"liftd simulate: --max-time {args.max_time}: must be > 0 s", file=sys.stderr)
+        return EXIT_CONFIG
     if args.plot and not plot.available():
         print(f"liftd simulate: --plot: {plot.HINT}", file=sys.stderr)
         return EXIT_RUNTIME
@@ -62,7 +65,8 @@ def cmd_simulate(args: argparse.Namespace) -> int:
                 return _simulate_machine(args, settings, schedule, stack)
             return _simulate(args, settings, program, text, schedule, traces.get(args.method))
     except OSError as exc:
-        print(f"{exc.filename}: error: cannot write the trace: {exc.strerror}", file=sys.stderr)
+        what = "the plot" if args.plot and exc.filename == args.plot else "the trace"
+        print(f"{exc.filename}: error: cannot write {what}: {exc.strerror}", file=sys.stderr)
         return EXIT_RUNTIME
 
 

@@ -186,6 +186,9 @@ def test_a_range_open_when_an_error_stops_the_program_is_listed(tmp_path: Path) 
         (["--override", "x"], 2, "expected T:PERCENT"),
         (["--feedhold", "1:-2"], 2, "DURATION > 0"),
         (["--trace", "/nonexistent/dir/x.csv"], 3, "cannot write the trace"),
+        (["--plot", "/nonexistent/dir/x.png"], 3, "x.png: error: cannot write the plot"),
+        (["--max-time", "-1"], 2, "--max-time -1.0: must be > 0 s"),
+        (["--max-time", "0"], 2, "must be > 0 s"),
     ],
 )
 def test_bad_options(args: list[str], code: int, fragment: str) -> None:
