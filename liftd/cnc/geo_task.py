@@ -84,6 +84,7 @@ class GeoTask(LiftAhead):
         self.events = []
         self.waiting = []
         self.z_rest = None
+        self.z_hold: tuple[int, float] | None = None  # (axis, Z) a RESET in a range left
         self.wait_since = 0.0
         self.ack_time = 0.0
         self.runs = 0
@@ -142,6 +143,7 @@ class GeoTask(LiftAhead):
         if self.state is READY:
             if self.runs:
                 self._load(self._positions())  # a new run from where the last one ended
+                self.z_hold = None  # the new run starts there
             self.runs += 1
             self._started = True
             self.state = ACTIVE
@@ -158,31 +160,48 @@ class GeoTask(LiftAhead):
         self.stop_requested = False
 
     def _command(self, cmd: Command, t: float) -> None:
-        if cmd is START and self.state is not ERROR:
-            self._start(t)
+        if cmd is START and self.state is not ERROR and not self.reset_requested:
+            self._start(t)  # (a RESET under way ends the program first)
         elif cmd is STOP and self.state is ACTIVE:
             self.stop_requested = True
         elif cmd is RESET:
+            if self.lift.current is not None and self.state is not ERROR:
+                # the program ends inside a lift range: Z rises to POS_LIMIT and stays, the
+                # vendor's reaction to an error in a range (§2.4), never down onto the path
+                # it leaves between LIFT_START and LIFT_END
+                self.lift.error_in_range(t)
             self.reset_requested = True
             self.stop_requested = self.state is ACTIVE
 
     def _settle(self, t: float) -> None:
         """STOP and RESET complete once the path is at rest."""
         at_rest = self.interp.v == 0.0 and self.interp.a == 0.0
-        if self.stop_requested and at_rest and self.state is ACTIVE:
+        if self.stop_requested and at_rest and self.state is ACTIVE and not self.reset_requested:
             self.stop_requested = False
             self.state = HOLD
             self._emit("geo.stopped", t, self.line)
-        if self.reset_requested and (at_rest or self.state is not ACTIVE):
+        lift = self.lift
+        if (
+            self.reset_requested
+            and (at_rest or self.state is not ACTIVE)
+            and (lift.current is None or (lift.vz == 0.0 and lift.az == 0.0))
+        ):
+            # every axis at rest, the lift axis too: a lift it was in ends where Z is
+            # (at POS_LIMIT: `_command`)
             self.reset_requested = self.stop_requested = False
             self.state = READY
             self.error_id = self.error_line = 0
             self.m_pending = -1
             self.waiting = []
-            # Z stays where it is (e.g. at POS_LIMIT after an error); the next START loads the
-            # program from the current positions.
-            self.lift.active = self.lift.suppressed = False
-            self._emit("geo.reset", t, self.line)
+            line = self.line
+            if lift.current is not None:
+                # Z stays there (not the path's Z inside the range) until the next START
+                # loads the program from the current positions
+                self.z_hold = (lift.axis_index, lift.z)
+                lift.abort()
+                self._emit("lift.aborted", t, line, self.z_hold[1])
+            lift.active = lift.suppressed = False
+            self._emit("geo.reset", t, line)
 
     def _end_of_program(self, t: float, line: int) -> None:
         err = self.prog.error
@@ -225,6 +244,9 @@ class GeoTask(LiftAhead):
         if self.lift.current is not None:
             z = self.lift.axis_index
             pos = (*pos[:z], self.lift.z, *pos[z + 1 :])
+        elif self.z_hold is not None:  # a RESET inside a range left Z there
+            z, value = self.z_hold
+            pos = (*pos[:z], value, *pos[z + 1 :])
         return pos
 
     # -- override -------------------------------------------------------------------------------

@@ -52,6 +52,7 @@ EVENT_NAMES = (
     "geo.reloaded",
     "geo.plan_error",
     "geo.plc_input",
+    "lift.aborted",
 )
 EVENT_IDS = {name: i for i, name in enumerate(EVENT_NAMES)}
 

@@ -202,6 +202,16 @@ class LiftController:
         self.ending = False
         return rec
 
+    def abort(self) -> None:
+        """A RESET ends the program inside the range, the lift axis at rest where its motion
+        took it: the range closes without a landing (no record: it never reached LIFT_END)."""
+        self.current = None
+        self.motion = None
+        self.record = None
+        self.active = False
+        self.suppressed = False
+        self.ending = False
+
     # -- cycle ------------------------------------------------------------------------------------
     def step(self, t_new: float, s: float, v: float, a: float, t_rem: float,
              override: float, refine: Refine | None = None) -> None:  # fmt: skip

@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.params import LiftMethod
 from liftd.cnc.plc import Schedule, SimPlc
 from liftd.cnc.snapshot import ChannelState, Command, GeoInputs, GeoSnapshot
@@ -77,3 +78,66 @@ def test_start_after_a_stop_goes_on_from_where_the_path_stopped(
     assert not events(snaps, "lift.late")
     assert all(r.arrival_error <= 1e-6 for r in task.lift.records)
     assert len(task.lift.records) == 5
+
+
+class ResetThenStart:
+    """The simulated PLC, plus a RESET at t_reset and a START `after` seconds after the channel
+    reported READY."""
+
+    def __init__(self, t_reset: float, after: float) -> None:
+        self.plc = SimPlc(0.02)
+        self.t_reset, self.after = t_reset, after
+        self.t_ready: float | None = None
+        self.started = False
+
+    def __call__(self, t: float, last: GeoSnapshot | None) -> GeoInputs:
+        inputs = self.plc.inputs(last, t, Schedule())
+        if abs(t - self.t_reset) < 1e-9:
+            return inputs._replace(command=Command.RESET)
+        ready = last is not None and last.state is ChannelState.READY
+        if t > self.t_reset and ready and self.t_ready is None:
+            self.t_ready = last.t  # type: ignore[union-attr]
+        if self.t_ready is not None and not self.started and t >= self.t_ready + self.after:
+            self.started = True
+            return inputs._replace(command=Command.START)
+        return inputs
+
+
+@pytest.mark.parametrize("method", [LiftMethod.ADVANCED, LiftMethod.LIFTING])
+@pytest.mark.parametrize("t_reset", [5.45, 5.8, 6.1, 12.6])
+def test_a_reset_inside_a_lift_leaves_every_axis_at_rest_and_the_lift_ended(
+    method: LiftMethod, t_reset: float
+) -> None:
+    """READY comes when the path and the lift axis are at rest; Z rises to POS_LIMIT and stays
+    there (not the path's Z inside the range), the lift's objects read no lift (flags FALSE, phase
+    NONE), `lift.aborted` says so; START runs the program again from there."""
+    ch = make_channel(method)
+    plc = ResetThenStart(t_reset, 0.3)
+    task, snaps = GeoTask(ch, DEMO), []
+    last: GeoSnapshot | None = None
+    for k in range(1, 60_000):  # until the program's end after the START (the driver of
+        t = k * ch.cycle_time  # `simulate` stops at the first READY)
+        last = task.step(plc(t, last), t)
+        snaps.append(last)
+        if plc.started and last.state is ChannelState.READY and last.t > plc.t_ready + 0.31:  # type: ignore[operator]
+            break
+    assert plc.started and last is not None and last.state is ChannelState.READY
+    assert len(events(snaps, "geo.program_end")) == 1  # the second run went to its end
+    at_reset = next(s for s in snaps if s.t >= t_reset)
+    assert at_reset.lift_active and at_reset.lift_phase != 0
+    ready = [s for s in snaps if plc.t_ready is not None and plc.t_ready <= s.t < plc.t_ready + 0.3]
+    assert len(ready) >= 299 and all(s.state is ChannelState.READY for s in ready)
+    assert all(s.positions == ready[0].positions for s in ready)  # every axis at rest
+    assert all(not s.lift_active and not s.lift_suppressed and s.lift_phase == 0 for s in ready)
+    z_high = ready[0].positions[2]
+    # up at the range's POS_LIMIT, as after an error in a range: not down onto the path
+    limit = 0.060  # POS_LIMIT of the ranges these RESETs fall into
+    assert z_high == pytest.approx(limit, abs=1e-9) and z_high >= at_reset.positions[2]
+    assert len(events(snaps, "lift.aborted")) == 1
+    (reset,) = events(snaps, "geo.reset")
+    assert reset[0] == pytest.approx(plc.t_ready, abs=1e-9)
+    ratios = fd_ratios(ch, snaps)
+    assert ratios[:, :2].max() <= 1.0 + 1e-6, ratios
+    z = ratios[:, 2] if method is LiftMethod.ADVANCED else ratios[:1, 2]
+    assert z.max() <= 1.0 + 1e-6, ratios
+    assert not events(snaps, "geo.error") and not events(snaps, "lift.late")
