@@ -154,7 +154,11 @@ class GeoTask(LiftAhead):
         elif self.state is HOLD:
             if self.waiting and self.waiting[0].kind is ActionKind.M00:
                 self.waiting.pop(0)
-                self.wait_since = t
+            # a path held at a boundary leaves it no earlier than now: its waits may have
+            # ended while it was held (Z arrived, an M function was acknowledged), and left
+            # at their time it jumped ahead by the time it was held (a dwell under way
+            # starts again)
+            self.wait_since = max(self.wait_since, t)
             self.state = ACTIVE
             self._emit("geo.resume", t, self.line)
         self.stop_requested = False

@@ -6,9 +6,12 @@ where it stopped with a jerk-limited ramp, every axis within its limits, and Z l
 
 from __future__ import annotations
 
+import random
+
 import numpy as np
 import pytest
 
+from bench.stress_cases import describe, violations, wide_scenario
 from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.params import LiftMethod
 from liftd.cnc.plc import Schedule, SimPlc
@@ -21,20 +24,22 @@ DEMO = (REPO / "config" / "programs" / "demo.nc").read_text()
 
 
 class StopThenStart:
-    """The simulated PLC, plus a STOP at t_stop and a START `held` seconds after the channel
-    reported HOLD."""
+    """The simulated PLC (with `schedule`), plus a STOP at t_stop and a START `held` seconds
+    after the channel reported HOLD."""
 
-    def __init__(self, t_stop: float, held: float) -> None:
+    def __init__(self, t_stop: float, held: float, schedule: Schedule | None = None) -> None:
         self.plc = SimPlc(0.02)
+        self.schedule = schedule or Schedule()
         self.t_stop, self.held = t_stop, held
         self.t_hold: float | None = None
-        self.started = False
+        self.stopped = self.started = False
 
     def __call__(self, t: float, last: GeoSnapshot | None) -> GeoInputs:
-        inputs = self.plc.inputs(last, t, Schedule())
+        inputs = self.plc.inputs(last, t, self.schedule)
         if last is not None and last.state is ChannelState.HOLD and self.t_hold is None:
             self.t_hold = last.t
-        if abs(t - self.t_stop) < 1e-9:
+        if not self.stopped and t >= self.t_stop - 1e-9:  # the first cycle from t_stop on
+            self.stopped = True
             return inputs._replace(command=Command.STOP)
         if self.t_hold is not None and not self.started:
             if t >= self.t_hold + self.held - 1e-9:
@@ -141,3 +146,27 @@ def test_a_reset_inside_a_lift_leaves_every_axis_at_rest_and_the_lift_ended(
     z = ratios[:, 2] if method is LiftMethod.ADVANCED else ratios[:1, 2]
     assert z.max() <= 1.0 + 1e-6, ratios
     assert not events(snaps, "geo.error") and not events(snaps, "lift.late")
+
+
+@pytest.mark.parametrize("method", [LiftMethod.ADVANCED, LiftMethod.LIFTING])
+@pytest.mark.parametrize("seed", range(15))
+def test_a_stop_at_a_random_moment_keeps_every_promise(method: LiftMethod, seed: int) -> None:
+    """The whole input space of bench_lift_safety --wide (long ranges over short blocks, every
+    look-ahead, ranges back to back, waits, override steps, feed holds), with a PLC STOP at a
+    random moment (inside a lift range in two of three runs) and START after a random hold:
+    every axis within its limits, Z never beyond POS_LIMIT, landing on time."""
+    sc = wide_scenario(seed, method)
+    ref, _ = run_task(sc.channel, sc.text, sc.schedule, max_time=300)
+    rnd = random.Random(seed)
+    lifts = ref.lift.records
+    if lifts and rnd.random() < 2 / 3:
+        rec = rnd.choice(lifts)
+        t_stop = rec.t_start + rnd.uniform(0.0, rec.t_end - rec.t_start)
+    else:
+        t_stop = rnd.uniform(0.0, ref.t_cycle)
+    t_stop = round(t_stop, 3)
+    plc = StopThenStart(t_stop, round(rnd.uniform(0.001, 2.0), 3), sc.schedule)
+    task, snaps = run_task(sc.channel, sc.text, inputs=plc, max_time=300)
+    assert violations(sc, snaps, task.lift.records) == [], (t_stop, plc.held, describe(sc))
+    assert task.interp.plan_errors == 0, (task.interp.last_plan_error, describe(sc))
+    assert plc.started or t_stop >= snaps[-1].t - 0.1  # the stop came (unless at the very end)
