@@ -8,13 +8,17 @@ differences), no excursion beyond POS_LIMIT or the software limits (+0.1 µm), a
 Path-based Lifting (METHOD = lifting) is checked the same way except Z's acceleration, which
 may reach a_max·(1 + P442/1000·override²) by the method's design (lift/path_based.py).
 
+With --stops every run also gets a PLC STOP at a random moment (inside a lift range in two of
+three runs; the moment from a first run without it) and START after a random hold of 1 ms–2 s
+(tests/unit/cnc/test_stop_start.py runs the first seeds).
+
 With --wide (issue 14) the scenarios cover the whole input space: ranges of up to 400 short
 blocks (longer than every look-ahead), slightly bent polylines, ranges without path motion,
 ranges back to back, waits before and inside ranges, every look-ahead size, override steps of
 0–200 % at random moments and feed holds. Every run (not only --wide) also fails on any error
 of the path tracker (a refused profile, a run boundary passed with acceleration).
 
-Run: .venv/bin/python bench/bench_lift_safety.py [--wide] [RUNS [FIRST_SEED [advanced|lifting]]]
+Run: .venv/bin/python bench/bench_lift_safety.py [--wide] [--stops] [RUNS [FIRST_SEED [advanced|lifting]]]
 """
 
 from __future__ import annotations
@@ -30,11 +34,13 @@ from bench.cli import parser
 from bench.stress_cases import describe, scenario, violations, wide_scenario
 from liftd.cnc.params import LiftMethod
 from tests.support.closed_loop import run_task
+from tests.unit.cnc.test_stop_start import stop_and_start
 
 
 def main() -> None:
     ap = parser(__doc__)
     ap.add_argument("--wide", action="store_true", help="the whole input space (issue 14)")
+    ap.add_argument("--stops", action="store_true", help="a PLC STOP and START in every run")
     ap.add_argument("runs", nargs="?", type=int, default=1000, help="seeded runs (1000)")
     ap.add_argument("first_seed", nargs="?", type=int, default=0, help="the first seed (0)")
     ap.add_argument("method", nargs="?", default="advanced", choices=["advanced", "lifting"],
@@ -48,7 +54,11 @@ def main() -> None:
     for seed in range(first, first + runs):
         sc = make(seed, method)
         try:
-            task, snaps = run_task(sc.channel, sc.text, sc.schedule, max_time=300)
+            if args.stops:
+                task, snaps = run_task(sc.channel, sc.text, inputs=stop_and_start(sc, seed),
+                                       max_time=300)  # fmt: skip
+            else:
+                task, snaps = run_task(sc.channel, sc.text, sc.schedule, max_time=300)
         except Exception as exc:  # a crash is a failure to report, not the end of the bench
             bad = [f"exception {type(exc).__name__}: {exc}"]
         else:
@@ -66,7 +76,8 @@ def main() -> None:
     print(
         json.dumps(
             {
-                "bench": "lift_safety_wide" if wide else "lift_safety",
+                "bench": ("lift_safety_wide" if wide else "lift_safety")
+                + ("_stops" if args.stops else ""),
                 "method": method.value,
                 "runs": runs,
                 "first_seed": first,

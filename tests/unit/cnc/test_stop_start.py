@@ -11,7 +11,7 @@ import random
 import numpy as np
 import pytest
 
-from bench.stress_cases import describe, violations, wide_scenario
+from bench.stress_cases import Scenario, describe, violations, wide_scenario
 from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.params import LiftMethod
 from liftd.cnc.plc import Schedule, SimPlc
@@ -156,6 +156,16 @@ def test_a_stop_at_a_random_moment_keeps_every_promise(method: LiftMethod, seed:
     random moment (inside a lift range in two of three runs) and START after a random hold:
     every axis within its limits, Z never beyond POS_LIMIT, landing on time."""
     sc = wide_scenario(seed, method)
+    plc = stop_and_start(sc, seed)
+    task, snaps = run_task(sc.channel, sc.text, inputs=plc, max_time=300)
+    assert violations(sc, snaps, task.lift.records) == [], (plc.t_stop, plc.held, describe(sc))
+    assert task.interp.plan_errors == 0, (task.interp.last_plan_error, describe(sc))
+    assert plc.started or plc.t_stop >= snaps[-1].t - 0.1  # the stop came (unless at the end)
+
+
+def stop_and_start(sc: Scenario, seed: int) -> StopThenStart:
+    """The scenario's PLC with a STOP at a random moment of its run (inside a lift range in
+    two of three, when it has one) and START after a random hold of 1 ms–2 s."""
     ref, _ = run_task(sc.channel, sc.text, sc.schedule, max_time=300)
     rnd = random.Random(seed)
     lifts = ref.lift.records
@@ -164,9 +174,4 @@ def test_a_stop_at_a_random_moment_keeps_every_promise(method: LiftMethod, seed:
         t_stop = rec.t_start + rnd.uniform(0.0, rec.t_end - rec.t_start)
     else:
         t_stop = rnd.uniform(0.0, ref.t_cycle)
-    t_stop = round(t_stop, 3)
-    plc = StopThenStart(t_stop, round(rnd.uniform(0.001, 2.0), 3), sc.schedule)
-    task, snaps = run_task(sc.channel, sc.text, inputs=plc, max_time=300)
-    assert violations(sc, snaps, task.lift.records) == [], (t_stop, plc.held, describe(sc))
-    assert task.interp.plan_errors == 0, (task.interp.last_plan_error, describe(sc))
-    assert plc.started or t_stop >= snaps[-1].t - 0.1  # the stop came (unless at the very end)
+    return StopThenStart(round(t_stop, 3), round(rnd.uniform(0.001, 2.0), 3), sc.schedule)
