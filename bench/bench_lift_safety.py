@@ -34,7 +34,7 @@ from bench.cli import parser
 from bench.stress_cases import describe, scenario, violations, wide_scenario
 from liftd.cnc.params import LiftMethod
 from tests.support.closed_loop import run_task
-from tests.unit.cnc.test_stop_start import stop_and_start
+from tests.support.stops import stop_and_start
 
 
 def main() -> None:

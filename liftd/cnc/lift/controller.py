@@ -194,17 +194,12 @@ class LiftController:
             if not rec.late:  # else measured when the path passed LIFT_END
                 rec.arrival_error = abs(self.z - rec.range.start.target)
             self.records.append(rec)
-        self.current = None
-        self.motion = None
-        self.record = None
-        self.active = False
-        self.suppressed = False
-        self.ending = False
+        self.abort()
         return rec
 
     def abort(self) -> None:
-        """A RESET ends the program inside the range, the lift axis at rest where its motion
-        took it: the range closes without a landing (no record: it never reached LIFT_END)."""
+        """Close the range (`finish` after its record; a RESET inside the range without one,
+        the lift axis at rest where its motion took it: it never reached LIFT_END)."""
         self.current = None
         self.motion = None
         self.record = None

@@ -6,12 +6,10 @@ where it stopped with a jerk-limited ramp, every axis within its limits, and Z l
 
 from __future__ import annotations
 
-import random
-
 import numpy as np
 import pytest
 
-from bench.stress_cases import Scenario, describe, violations, wide_scenario
+from bench.stress_cases import describe, violations, wide_scenario
 from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.params import LiftMethod
 from liftd.cnc.plc import Schedule, SimPlc
@@ -19,35 +17,9 @@ from liftd.cnc.snapshot import ChannelState, Command, GeoInputs, GeoSnapshot
 from tests.support.channel import make_channel
 from tests.support.closed_loop import events, fd_ratios, run_task
 from tests.support.paths import REPO
+from tests.support.stops import StopThenStart, stop_and_start
 
 DEMO = (REPO / "config" / "programs" / "demo.nc").read_text()
-
-
-class StopThenStart:
-    """The simulated PLC (with `schedule`), plus a STOP at t_stop and a START `held` seconds
-    after the channel reported HOLD."""
-
-    def __init__(self, t_stop: float, held: float, schedule: Schedule | None = None) -> None:
-        self.plc = SimPlc(0.02)
-        self.schedule = schedule or Schedule()
-        self.t_stop, self.held = t_stop, held
-        self.t_hold: float | None = None
-        self.stopped = self.started = False
-
-    def __call__(self, t: float, last: GeoSnapshot | None) -> GeoInputs:
-        inputs = self.plc.inputs(last, t, self.schedule)
-        if last is not None and last.state is ChannelState.HOLD and self.t_hold is None:
-            self.t_hold = last.t
-        if not self.stopped and t >= self.t_stop - 1e-9:  # the first cycle from t_stop on
-            self.stopped = True
-            return inputs._replace(command=Command.STOP)
-        if self.t_hold is not None and not self.started:
-            if t >= self.t_hold + self.held - 1e-9:
-                self.started = True
-                return inputs._replace(command=Command.START)
-            # a PLC STOP is not undone by the automatic PLC (it continues only after M00)
-            return inputs._replace(command=Command.NONE)
-        return inputs
 
 
 @pytest.mark.parametrize("method", [LiftMethod.ADVANCED, LiftMethod.LIFTING])
@@ -161,17 +133,3 @@ def test_a_stop_at_a_random_moment_keeps_every_promise(method: LiftMethod, seed:
     assert violations(sc, snaps, task.lift.records) == [], (plc.t_stop, plc.held, describe(sc))
     assert task.interp.plan_errors == 0, (task.interp.last_plan_error, describe(sc))
     assert plc.started or plc.t_stop >= snaps[-1].t - 0.1  # the stop came (unless at the end)
-
-
-def stop_and_start(sc: Scenario, seed: int) -> StopThenStart:
-    """The scenario's PLC with a STOP at a random moment of its run (inside a lift range in
-    two of three, when it has one) and START after a random hold of 1 ms–2 s."""
-    ref, _ = run_task(sc.channel, sc.text, sc.schedule, max_time=300)
-    rnd = random.Random(seed)
-    lifts = ref.lift.records
-    if lifts and rnd.random() < 2 / 3:
-        rec = rnd.choice(lifts)
-        t_stop = rec.t_start + rnd.uniform(0.0, rec.t_end - rec.t_start)
-    else:
-        t_stop = rnd.uniform(0.0, ref.t_cycle)
-    return StopThenStart(round(t_stop, 3), round(rnd.uniform(0.001, 2.0), 3), sc.schedule)
