@@ -108,6 +108,7 @@ class Plc:
         self.timeout_ms = timeout_ms
         self.labels = target.symbols()
         self.written: dict[str, Any] = {}
+        self.found: dict[str, Any] = {}  # the levels as this PLC found them, restored at exit
         self.start_pending = start
 
     def open(self) -> tuple[str, int]:
@@ -124,7 +125,36 @@ class Plc:
                 self.conn.get_symbol(symbol)
             except (pyads.ADSError, RuntimeError, OSError) as exc:
                 raise PlcError(_describe(exc, self.target, f"looking up {symbol}")) from None
+        ch = f"PLC.ch{self.target.channel}"
+        levels = [f"{ch}.override"] * bool(self.schedule.override)
+        levels += [f"{ch}.feed_hold"] * bool(self.schedule.feed_hold)
+        if levels:
+            try:
+                found = self.conn.read_list_by_name(levels)
+            except (pyads.ADSError, RuntimeError, OSError) as exc:
+                raise PlcError(_describe(exc, self.target, "reading the PLC levels")) from None
+            for symbol, value in found.items():
+                if isinstance(value, str):  # a failed sub-read comes back as its error text
+                    raise PlcError(f"reading {symbol} failed: {value}")
+            self.found = found
         return str(name), int(state)
+
+    def restore(self) -> list[tuple[str, Any]]:
+        """Write back the levels (override, feed hold) this PLC changed, as it found them: the
+        channel keeps a level until someone writes it (a reload too), so a schedule that ended
+        inside a hold would otherwise hold the machine after this PLC has gone."""
+        done = []
+        for symbol, value in self.found.items():
+            if symbol not in self.written or self.written[symbol] == value:
+                continue
+            plc_type = pyads.PLCTYPE_UINT if symbol.endswith("override") else pyads.PLCTYPE_BOOL
+            try:
+                self.conn.write_by_name(symbol, value, plc_type)
+            except (pyads.ADSError, RuntimeError, OSError) as exc:
+                raise PlcError(_describe(exc, self.target, f"restoring {symbol}")) from None
+            self.written[symbol] = value
+            done.append((symbol, _plain(value)))
+        return done
 
     def close(self) -> None:
         self.conn.close()
@@ -249,6 +279,7 @@ def run(target: Target, schedule: Schedule, cycle_ms: float, duration_s: float |
     quiet_adslib()
     plc = Plc(target, schedule, timeout_ms, start)
     printer = Printer(out, as_json, target.axis)
+    t0 = time.monotonic()
     try:
         name, state = plc.open()
         if not as_json:
@@ -262,7 +293,13 @@ def run(target: Target, schedule: Schedule, cycle_ms: float, duration_s: float |
     except KeyboardInterrupt:
         counters = None
     finally:
-        plc.close()
+        try:
+            for symbol, value in plc.restore():
+                printer.wrote(time.monotonic() - t0, symbol, value)
+        except PlcError as exc:  # the daemon went away: nothing left to hold
+            print(f"liftd plc: warning: {exc}", file=sys.stderr)
+        finally:
+            plc.close()
     if counters is not None and not as_json:
         print(f"{counters['cycles']} PLC cycles, {counters['transitions']} transitions, "
               f"{counters['late_cycles']} late cycles", file=out)  # fmt: skip

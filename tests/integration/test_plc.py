@@ -61,11 +61,24 @@ def test_plc_sees_every_lift_and_its_writes_reach_the_loop(tmp_path: Path) -> No
         r = plc(cfg, "--host", f"127.0.0.1:{port}", "--start", "--override", "0:50",
                 "--duration", "3", "--json")  # fmt: skip
         assert r.returncode == 0, r.stderr
+        # a hold that outlasts the PLC: released when it exits, as it found it
+        held = plc(cfg, "--host", f"127.0.0.1:{port}", "--feedhold", "0:100", "--duration", "0.3",
+                   "--json")  # fmt: skip
+        assert held.returncode == 0, held.stderr
+        after = plc(cfg, "--host", f"127.0.0.1:{port}", "--duration", "0.1", "--json")
+        assert after.returncode == 0, after.stderr
     finally:
         assert d.stop() == 0
     records = [json.loads(line) for line in r.stdout.splitlines()]
-    writes = {rec["write"]: rec["value"] for rec in records if "write" in rec}
-    assert writes == {"PLC.ch1.override": 500, "PLC.ch1.start": True}
+    writes = [(rec["write"], rec["value"]) for rec in records if "write" in rec]
+    # the schedule, then at exit the override as the PLC found it (100 %)
+    assert writes == [("PLC.ch1.override", 500), ("PLC.ch1.start", 1), ("PLC.ch1.override", 1000)]
+    hold = [json.loads(line) for line in held.stdout.splitlines()]
+    assert [(rec["write"], rec["value"]) for rec in hold if "write" in rec] == [
+        ("PLC.ch1.feed_hold", 1), ("PLC.ch1.feed_hold", 0)]  # fmt: skip
+    assert [rec["to"] for rec in hold if rec.get("object") == "feed_hold"][:2] == [0, 1]
+    assert [rec["to"] for rec in map(json.loads, after.stdout.splitlines())
+            if rec.get("object") == "feed_hold"] == [0]  # fmt: skip
     seen = [rec for rec in records if rec.get("object") == "Z.lift_active"]
     ups = [rec["t"] for rec in seen if rec["to"] == 1]
     assert [rec["to"] for rec in seen] == [0, 1, 0, 1, 0]
