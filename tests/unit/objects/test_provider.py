@@ -88,6 +88,7 @@ def test_error_codes(w: World) -> None:
     assert w.code(w.p.read, 0x121301, 0x40095, 1) == AdsErr.INVALIDOFFSET  # AID 4
     assert w.code(w.p.read, 0x121301, 0x30096, 1) == AdsErr.INVALIDOFFSET  # element
     assert w.code(w.p.read, 0x121301, 0x15, 4) == AdsErr.INVALIDSIZE  # REAL64 into 4 bytes
+    assert len(w.p.read(0x121301, 0x30095, 4)) == 1  # a longer read: the BOOL's one byte
     assert w.code(w.p.write, 0x121301, 0x30095, b"\x01") == AdsErr.INVALIDACCESS
     assert w.code(w.p.read_write, 0x121301, 0x30095, 8, bytes(8)) == AdsErr.SRVNOTSUPP
     w.view = None  # the GEO task is not running
