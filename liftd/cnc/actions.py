@@ -16,7 +16,9 @@ from liftd.cnc.path.program import Action, ActionKind
 from liftd.cnc.snapshot import ChannelState, Event, new_event
 
 LANDING_TOL = 1e-6  # m: Z counts as at POS when the path passes LIFT_END (1 µm)
-LANDING_TIME_TOL = 1e-6  # s: … and as at rest when its descent ends within 1 µs of that
+LANDING_TIME_TOL = 1e-6  # s: … and as at rest when its descent ends within 1 µs of that,
+LANDING_V_TOL = 1e-6  # m/s: … or when it moves slower than 1 µm/s and ends within
+LANDING_SETTLE_MAX = 1e-4  # s: 0.1 ms (then it moves less than 1e-10 m more)
 ACK_SYNCS = (MSync.MVS_SVS, MSync.MVS_SNS, MSync.MNS_SNS, MSync.MNE_SNS)
 # enum members as C statics of the compiled module (a dict and a type lookup each otherwise)
 ACTIVE: Final = ChannelState.ACTIVE
@@ -160,9 +162,14 @@ class BoundaryActions:
         rec = lift.record
         error = abs(lift.z - lift.current.start.target)
         # Z at POS but its descent ends a rounding later than the path's crossing (≤ 1 µs; wide
-        # seed 1965: 2e-17 m, 0.5 µs): landed. It finishes that descent as planned, and the
-        # lift closes when it has (snapping it to rest here would be a jerk).
-        settling = m.uses_time and not lift.z_done and m.needed_time() <= LANDING_TIME_TOL
+        # seed 1965: 2e-17 m, 0.5 µs), or a few µs later at a crawl (wide --stops seed 983: the
+        # path braking for a STOP comes to rest on LIFT_END; Z 3e-15 m from POS at 3e-9 m/s,
+        # 2.8 µs to go): landed. It finishes that descent as planned, and the lift closes when
+        # it has (snapping it to rest here would be a jerk).
+        need = m.needed_time() if m.uses_time and not lift.z_done else -1.0
+        settling = 0.0 <= need <= LANDING_TIME_TOL or (
+            0.0 <= need <= LANDING_SETTLE_MAX and abs(lift.vz) <= LANDING_V_TOL
+        )
         if error <= LANDING_TOL and settling:
             lift.ending = True
             return True

@@ -133,3 +133,17 @@ def test_a_stop_at_a_random_moment_keeps_every_promise(method: LiftMethod, seed:
     assert violations(sc, snaps, task.lift.records) == [], (plc.t_stop, plc.held, describe(sc))
     assert task.interp.plan_errors == 0, (task.interp.last_plan_error, describe(sc))
     assert plc.started or plc.t_stop >= snaps[-1].t - 0.1  # the stop came (unless at the end)
+
+
+def test_a_stop_whose_braking_path_comes_to_rest_on_lift_end_lands_on_time() -> None:
+    """Wide --stops seed 983: the path braking for the STOP comes to rest exactly on LIFT_END
+    in the cycle Z's descent ends, Z 3e-15 m from POS at 3e-9 m/s, 2.8 µs still to go. That
+    is a landing (within 1 µm, at a crawl), not a late lift; it used to be reported late."""
+    sc = wide_scenario(983, LiftMethod.ADVANCED)
+    plc = stop_and_start(sc, 983)
+    task, snaps = run_task(sc.channel, sc.text, inputs=plc, max_time=300)
+    assert plc.started
+    assert not events(snaps, "lift.late"), describe(sc)
+    assert violations(sc, snaps, task.lift.records) == [], describe(sc)
+    (rec,) = task.lift.records
+    assert not rec.late and rec.arrival_error <= 1e-6
