@@ -60,6 +60,7 @@ OVERRUN_EVENT_EVERY_NS = 1_000_000_000  # at most one geo.overrun event per seco
 COMPUTE_OVER_EVENT_EVERY_NS = 100_000_000
 COMPUTE_OVER_BURST = 10
 PROGRAM_END: Final = "geo.program_end"  # the event of a program's end (a repeat starts it again)
+RESET_DONE: Final = "geo.reset"  # a RESET completed: READY stands until the PLC starts
 
 
 class _Events:
@@ -131,7 +132,9 @@ class GeoLoop:
             self.plcs[i] = plc
             self.events.send(Event("geo.reloaded", snap.t, 0, 0.0, pending.program_name),
                              self.tags[i])  # fmt: skip
-            if pending.autostart:
+            # autostart: as at start-up, unless a RESET made this boundary: after a RESET the
+            # channel stays READY, whatever it loaded, until the PLC starts it
+            if pending.autostart and not any(ev.name == RESET_DONE for ev in snap.events):
                 self.plcs[i].request(Command.START)
         if not any(self.pending):
             self.cfg = self.pending_cfg  # every channel has it

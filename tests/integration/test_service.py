@@ -244,6 +244,48 @@ def test_a_reset_ends_a_repeating_job_and_a_reload_does_not(tmp_path: Path) -> N
         assert d.stop() == 0
 
 
+def test_a_reload_a_reset_applies_does_not_start_the_program_by_itself(tmp_path: Path) -> None:
+    """`autostart` starts a program a reload brings, but not at a RESET: the PLC aborted the
+    job and expects READY until its own START, whatever configuration came meanwhile."""
+    runtime = tmp_path / "run"
+    runtime.mkdir()
+    env = {"RUNTIME_DIRECTORY": str(runtime)}
+    short = tmp_path / "short.nc"
+    short.write_text("N10 G01 X20 F6000\nN20 G01 X0\nN30 M30\n")
+    cfg = write_config(tmp_path, program={"autostart": True, "repeat": True})
+    d = Daemon(cfg, env=env)
+
+    def starts() -> int:
+        return sum(rec.get("event") == "geo.program_start" for rec in list(d.logs))
+
+    try:
+        d.ready()
+        plc = pyads.Connection(d.net_id, 551, d.address)
+        plc.open()
+        try:
+            assert wait_for(lambda: plc.read_by_name("GEO.ch1.path_velocity") > 0.0, 10)
+            cfg.write_text(cfg.read_text().replace(
+                str(REPO / "config" / "programs" / "demo.nc"), str(short)))  # fmt: skip
+            r = liftd("reload", env=env)  # waits for the demo's end (14 s): pending
+            assert r.returncode == 0 and "applied" in r.stdout, r.stderr
+            assert plc.read_by_name("GEO.ch1.state") == 4
+            plc.write_by_name("PLC.ch1.reset", True, pyads.PLCTYPE_BOOL)
+            reloaded = d.event("geo.reloaded", 10)
+            assert reloaded is not None and reloaded["text"] == str(short), reloaded
+            reset_at = starts()
+            held_until = time.monotonic() + 0.5
+            while time.monotonic() < held_until:  # READY, until the PLC starts it
+                assert plc.read_by_name("GEO.ch1.state") == 3
+                time.sleep(0.02)
+            assert starts() == reset_at
+            plc.write_by_name("PLC.ch1.start", True, pyads.PLCTYPE_BOOL)
+            assert wait_for(lambda: starts() >= reset_at + 2, 10)  # the new one, repeating
+        finally:
+            plc.close()
+    finally:
+        assert d.stop() == 0
+
+
 def test_reload_fails_for_a_rejected_configuration_and_succeeds_when_applied(
     tmp_path: Path,
 ) -> None:
