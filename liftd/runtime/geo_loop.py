@@ -61,6 +61,7 @@ COMPUTE_OVER_EVENT_EVERY_NS = 100_000_000
 COMPUTE_OVER_BURST = 10
 PROGRAM_END: Final = "geo.program_end"  # the event of a program's end (a repeat starts it again)
 RESET_DONE: Final = "geo.reset"  # a RESET completed: READY stands until the PLC starts
+PROGRAM_START: Final = "geo.program_start"  # a START ran the program: a RESET's READY is over
 
 
 class _Events:
@@ -92,6 +93,9 @@ class GeoLoop:
         several = len(cfg.channels) > 1
         self.tags = [c.channel.channel_id if several else 0 for c in cfg.channels]
         self.pending: list[ChannelConfig | None] = [None] * len(cfg.channels)
+        # the channel is READY because a RESET ended its job (or an NC error's ERROR, which
+        # only a RESET leaves): nothing but the PLC's START moves it, no reload's `autostart`
+        self.reset_ready = [False] * len(cfg.channels)
         self.pending_cfg = cfg
         self.reload_gen = 0
 
@@ -112,10 +116,11 @@ class GeoLoop:
             return took
         for i, pending in enumerate(self.pending):
             snap = snaps[i]
-            if pending is None or snap.state not in (ChannelState.READY, ChannelState.ERROR):
+            if pending is None or snap.state is not ChannelState.READY:
                 continue
             # the channel's program boundary: its new lists and program take effect from
-            # where its axes are; the other channels go on
+            # where its axes are; the other channels go on. Not in ERROR: an NC error is
+            # cleared by the PLC's RESET only (as on the CNC), whose READY is the boundary.
             self.pending[i] = None
             took = True
             self.current[i] = pending
@@ -132,9 +137,9 @@ class GeoLoop:
             self.plcs[i] = plc
             self.events.send(Event("geo.reloaded", snap.t, 0, 0.0, pending.program_name),
                              self.tags[i])  # fmt: skip
-            # autostart: as at start-up, unless a RESET made this boundary: after a RESET the
-            # channel stays READY, whatever it loaded, until the PLC starts it
-            if pending.autostart and not any(ev.name == RESET_DONE for ev in snap.events):
+            # autostart: as at start-up, unless a RESET made this READY: then the channel
+            # stays READY, whatever it loaded, until the PLC starts it
+            if pending.autostart and not self.reset_ready[i]:
                 self.plcs[i].request(Command.START)
         if not any(self.pending):
             self.cfg = self.pending_cfg  # every channel has it
@@ -210,8 +215,13 @@ class GeoLoop:
             for i in channels:
                 for ev in snaps[i].events:
                     send(ev, tags[i])
-                    if ev.name == PROGRAM_END:  # not any way into READY: a RESET is not one
+                    name = ev.name
+                    if name == PROGRAM_END:  # not any way into READY: a RESET is not one
                         ends = [i] if ends is None else [*ends, i]
+                    elif name == RESET_DONE:
+                        self.reset_ready[i] = True
+                    elif name == PROGRAM_START:
+                        self.reset_ready[i] = False
             reloaded = self._check_reload(snaps)
             if ends is not None:  # `repeat` as the configuration in effect now has it
                 for i in ends:

@@ -286,6 +286,64 @@ def test_a_reload_a_reset_applies_does_not_start_the_program_by_itself(tmp_path:
         assert d.stop() == 0
 
 
+def test_a_reload_waits_for_the_plcs_reset_of_an_nc_error_and_starts_nothing(
+    tmp_path: Path,
+) -> None:
+    """An NC error is cleared by the PLC's RESET only: a reload waits for it (before, it
+    cleared the error and, with autostart, moved the axes at once). And a channel READY after
+    a RESET stays there through any later reload until the PLC's START."""
+    runtime = tmp_path / "run"
+    runtime.mkdir()
+    env = {"RUNTIME_DIRECTORY": str(runtime)}
+    bad = tmp_path / "bad.nc"  # an error at run time, after a move
+    bad.write_text("N10 G01 X20 F6000\nN20 P1=0\nN30 P2=1/P1\nN40 G01 X0\nN50 M30\n")
+    short = tmp_path / "short.nc"
+    short.write_text("N10 G01 X20 F6000\nN20 G01 X0\nN30 M30\n")
+    cfg = write_config(tmp_path, program={"autostart": True, "repeat": True})
+    demo = str(REPO / "config" / "programs" / "demo.nc")
+    cfg.write_text(cfg.read_text().replace(demo, str(bad)))
+    d = Daemon(cfg, env=env)
+
+    def count(event: str) -> int:
+        return sum(rec.get("event") == event for rec in list(d.logs))
+
+    def stays(state: int, seconds: float = 0.5) -> None:
+        until = time.monotonic() + seconds
+        while time.monotonic() < until:
+            assert plc.read_by_name("GEO.ch1.state") == state
+            assert plc.read_by_name("GEO.ch1.path_velocity") == 0.0
+            time.sleep(0.02)
+
+    try:
+        d.ready()
+        plc = pyads.Connection(d.net_id, 551, d.address)
+        plc.open()
+        try:
+            assert wait_for(lambda: plc.read_by_name("GEO.ch1.state") == 6, 10)
+            assert plc.read_by_name("GEO.ch1.error_id") == 20396
+            cfg.write_text(cfg.read_text().replace(str(bad), str(short)))
+            r = liftd("reload", env=env)
+            assert r.returncode == 0 and "applied" in r.stdout, r.stderr
+            stays(6)  # the error stands until the PLC resets it
+            assert count("geo.reloaded") == 0 and plc.read_by_name("GEO.ch1.error_id") == 20396
+            starts = count("geo.program_start")
+            plc.write_by_name("PLC.ch1.reset", True, pyads.PLCTYPE_BOOL)
+            reloaded = d.event("geo.reloaded", 10)
+            assert reloaded is not None and reloaded["text"] == str(short), reloaded
+            stays(3)  # READY with the new program, not started
+            r = liftd("reload", env=env)  # a reload later: still nothing moves
+            assert r.returncode == 0, r.stderr
+            assert wait_for(lambda: count("geo.reloaded") == 2, 10)
+            stays(3)
+            assert count("geo.program_start") == starts
+            plc.write_by_name("PLC.ch1.start", True, pyads.PLCTYPE_BOOL)
+            assert wait_for(lambda: count("geo.program_start") >= starts + 2, 10)  # repeating
+        finally:
+            plc.close()
+    finally:
+        assert d.stop() == 0
+
+
 def test_reload_fails_for_a_rejected_configuration_and_succeeds_when_applied(
     tmp_path: Path,
 ) -> None:
