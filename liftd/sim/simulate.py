@@ -135,6 +135,12 @@ class StepTimer:
         )
 
 
+def at_rest(snap: GeoSnapshot) -> bool:
+    """The lift axis stands: a run ends with its program and the last motion it caused (after
+    an NC error inside a range Z still rises to POS_LIMIT, vendor §2.4: the trace shows it)."""
+    return snap.lift_vz == 0.0 and snap.lift_az == 0.0
+
+
 def run_cycles(
     task: GeoTask,
     plc: Plc,
@@ -159,7 +165,7 @@ def run_cycles(
             snap = task.step(inputs, t)
         yield snap
         last = snap
-        if snap.state in ENDED and task.runs:
+        if snap.state in ENDED and task.runs and at_rest(snap):
             return
 
 
@@ -295,7 +301,7 @@ def simulate_machine(
                     continue
                 run.timer.add(ns)
                 run.add(snap)
-                if snap.state in ENDED and machine.tasks[i].runs:
+                if snap.state in ENDED and machine.tasks[i].runs and at_rest(snap):
                     active[i] = False
     results = [run.result(task) for run, task in zip(runs, machine.tasks, strict=True)]
     back = [0] * len(order)

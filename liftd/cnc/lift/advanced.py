@@ -173,10 +173,13 @@ class AdvancedLift:
         self.first = FirstStep(rise.traj, q_target, q_limit, dt, nxt, desc.duration, fits)
 
     def rise_and_hold(self, t: float) -> None:
-        """Program error inside the range: go to POS_LIMIT and stay (vendor §2.1.3 case 2)."""
+        """Program error inside the range: go to POS_LIMIT and stay (vendor §2.1.3 case 2).
+        A moving Z's plan starts at its last output time, where its state is: from t (the
+        path's stop before the erroneous block, up to a cycle away) it lost or gained that
+        much motion in one cycle (40× its acceleration limit). A Z at rest starts at t."""
         self.target = max(self.limit, self.q) if self.limit >= self.target else self.limit
         self._on_rise = False
-        self._plan_direct(t)
+        self._plan_direct(max(self.t, t) if self.v == 0.0 and self.a == 0.0 else self.t)
         self.phase = HOLD_LIMIT
 
     @property

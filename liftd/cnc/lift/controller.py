@@ -181,8 +181,10 @@ class LiftController:
         if m is None or rng is None:
             return
         if not m.uses_time:
+            # from Z's state where it is valid: its last output time, unless at rest
+            t0 = max(m.t, t) if m.vz == 0.0 and m.az == 0.0 else m.t
             m = self.motion = TimeBasedLift(self.generator(rng.start.axis),
-                                            self.guard(rng.start.axis), rng, t, m.z, m.vz,
+                                            self.guard(rng.start.axis), rng, t0, m.z, m.vz,
                                             m.az)  # fmt: skip
         m.error_in_range(t)
 

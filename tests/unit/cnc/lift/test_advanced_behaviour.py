@@ -240,10 +240,44 @@ def test_error_inside_the_range_rises_to_pos_limit_and_stays() -> None:
     task, snaps = run_task(ch, text, max_time=5)
     last = snaps[-1]
     assert last.state is ChannelState.ERROR and (last.error_id, last.error_line) == (990001, 5)
-    for k in range(300):  # the channel stays in error; Z goes to POS_LIMIT and stays
-        last = task.step(GeoInputs(), last.t + (k + 1) * ch.cycle_time)
+    # simulate's driver runs on until Z is at rest: up at POS_LIMIT, as the vendor defines
+    assert last.positions[2] == pytest.approx(0.03, abs=1e-9)
+    assert last.lift_vz == 0.0 and last.lift_az == 0.0
+    t_end = last.t
+    for k in range(300):  # the channel stays in error; Z stays
+        last = task.step(GeoInputs(), t_end + (k + 1) * ch.cycle_time)
+        snaps.append(last)
     assert last.positions[2] == pytest.approx(0.03, abs=1e-9)
     assert last.positions[:2] == pytest.approx((0.12, 0.01), abs=1e-12)
+    # and continuously through the error's cycle: every axis within its limits
+    assert fd_ratios(ch, snaps).max() <= 1.0 + 1e-6, fd_ratios(ch, snaps)
+
+
+@pytest.mark.parametrize("method", [LiftMethod.ADVANCED, LiftMethod.LIFTING])
+@pytest.mark.parametrize("nc_error", ["G01 Z10\n", "Q1 oops\n", "P1=0\nP2=1/P1\n"])
+def test_an_error_while_z_rises_fast_continues_its_rise_without_a_jolt(
+    nc_error: str, method: LiftMethod
+) -> None:
+    """The error comes while Z still rises at full speed (exploratory session: `G01 Z10`
+    inside a range; Z lost 0.4 mm of motion in the error's cycle, 40× its acceleration
+    limit, and `simulate` stopped before Z reached POS_LIMIT). Path-based Lifting hands Z
+    over to the time-based rise (its own Z may exceed a_max by design before)."""
+    ch = make_channel(method)
+    text = (
+        START + f"X100\nZ[LIFT_START POS=1 POS_LIMIT=50]\nG01 X120 F24000\n{nc_error}X300\n"
+        "Z[LIFT_END]\nM30\n"
+    )
+    task, snaps = run_task(ch, text, max_time=5)
+    last = snaps[-1]
+    assert last.state is ChannelState.ERROR
+    at_error = next(s for s in snaps if s.state is ChannelState.ERROR)
+    # Advanced: rising fast when the error came (path-based Z rose with the path, which
+    # braked to the stop before the erroneous block: Z is at the limit by then)
+    assert at_error.lift_vz > 0.1 or method is LiftMethod.LIFTING
+    assert last.positions[2] == pytest.approx(0.05, abs=1e-9)
+    assert last.lift_vz == 0.0 and last.lift_az == 0.0
+    k = snaps.index(at_error) - 3 if method is LiftMethod.LIFTING else 0
+    assert fd_ratios(ch, snaps[k:]).max() <= 1.0 + 1e-6, fd_ratios(ch, snaps[k:])
 
 
 def test_program_end_without_lift_end_is_an_implicit_end() -> None:

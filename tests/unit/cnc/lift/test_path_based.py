@@ -24,7 +24,7 @@ from liftd.cnc.params import ChannelParams, LiftMethod, SlopeType
 from liftd.cnc.plc import Schedule, parse_feedhold_spec, parse_override_spec
 from liftd.cnc.snapshot import ChannelState, GeoInputs, GeoSnapshot, LiftPhase
 from tests.support.channel import make_channel
-from tests.support.closed_loop import events, run_task
+from tests.support.closed_loop import events, fd_ratios, run_task
 
 MM = 1e-3
 A, J = 10.0, 500.0
@@ -295,10 +295,16 @@ def test_program_error_inside_the_range_lifts_to_pos_limit_and_stays(inside: str
     task, snaps = run_task(ch, text, max_time=5.0)
     line = 3 + inside.count("\n")
     assert snaps[-1].state is ChannelState.ERROR and snaps[-1].error_line == line
+    # simulate's driver runs on until Z is at rest, up at POS_LIMIT
+    assert snaps[-1].positions[2] == pytest.approx(0.04, abs=1e-9)
+    assert snaps[-1].lift_vz == 0.0 and snaps[-1].lift_az == 0.0
     t0 = snaps[-1].t
-    snaps += [task.step(GeoInputs(), t0 + k * 1e-3) for k in range(1, 501)]  # Z goes on rising
+    snaps += [task.step(GeoInputs(), t0 + k * 1e-3) for k in range(1, 201)]  # and stays
     assert snaps[-1].positions[2] == pytest.approx(0.04, abs=1e-9)
     assert snaps[-1].lift_phase is LiftPhase.HOLD_LIMIT
+    # the time-based rise takes over from Z's state without a jolt (Z within its v, a, j)
+    k = next(i for i, s in enumerate(snaps) if s.state is ChannelState.ERROR)
+    assert fd_ratios(ch, snaps[k - 3 :])[:, 2].max() <= 1.0 + 1e-6
 
 
 def test_down_is_an_nc_error_and_step_slope_a_warning() -> None:
