@@ -7,12 +7,13 @@ raised by any command is printed once, in `main`."""
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from collections.abc import Sequence
 
 from liftd import __version__
 from liftd.cli.check import cmd_check
-from liftd.cli.common import EXIT_CONFIG, EXIT_UNHEALTHY
+from liftd.cli.common import EXIT_CONFIG, EXIT_SIGPIPE, EXIT_UNHEALTHY
 from liftd.cli.service import cmd_healthcheck, cmd_objects, cmd_plc, cmd_reload, cmd_run
 from liftd.cli.simulate import cmd_simulate, cmd_study
 from liftd.runtime.core import core_build
@@ -69,7 +70,10 @@ def build_parser() -> argparse.ArgumentParser:
     plc.add_argument("--cycle-ms", type=float, default=10.0, help="PLC cycle (default 10 ms)")
     plc.add_argument("--duration", type=float, metavar="S", help="stop after S seconds")
     plc.add_argument(
-        "--channel", type=int, metavar="N", help="channel whose objects are polled (default: 1)"
+        "--channel",
+        type=int,
+        metavar="N",
+        help="channel whose objects are polled (default: the [cnc] channel)",
     )
     plc.add_argument("--axis", help="axis whose lift status is polled (default: lift_axis)")
     plc.add_argument("--override", metavar="SPEC", help='write override steps "T:PERCENT,…"')
@@ -173,4 +177,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_CONFIG
     except KeyboardInterrupt:
         return 130
+    except BrokenPipeError:  # `liftd objects | head`: the reader has gone, as SIGPIPE ends a tool
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no error at exit
+        return EXIT_SIGPIPE
     return code

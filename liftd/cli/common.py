@@ -19,6 +19,7 @@ EXIT_PROGRAM = 1
 EXIT_CONFIG = 2
 EXIT_RUNTIME = 3
 EXIT_UNHEALTHY = 1  # healthcheck: the Docker HEALTHCHECK convention
+EXIT_SIGPIPE = 141  # stdout's reader closed it: what a shell shows for a tool SIGPIPE ended
 
 
 def load_config(args: argparse.Namespace, program: str | None = None) -> Settings:

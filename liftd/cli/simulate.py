@@ -44,6 +44,9 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     if args.plot and not plot.available():
         print(f"liftd simulate: --plot: {plot.HINT}", file=sys.stderr)
         return EXIT_RUNTIME
+    if args.plot and (why := plot.format_problem(args.plot)):
+        print(f"liftd simulate: --plot {args.plot}: {why}", file=sys.stderr)
+        return EXIT_CONFIG
     settings = load_config(args)
     program = Path(args.program)
     try:
@@ -54,6 +57,10 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     settings = with_program(settings, program, text)  # its subroutine files
     methods = ("advanced", "lifting") if args.compare else (args.method,)
     names = _trace_names(args.trace, methods) if args.trace else {}
+    if args.plot and any(Path(args.plot).resolve() == Path(n).resolve() for n in names.values()):
+        print(f"liftd simulate: --plot {args.plot} is a trace's file too: name another",
+              file=sys.stderr)  # fmt: skip
+        return EXIT_CONFIG
     traces: dict[str, TextIO] = {}
     try:
         with contextlib.ExitStack() as stack:
@@ -66,7 +73,9 @@ def cmd_simulate(args: argparse.Namespace) -> int:
             return _simulate(args, settings, program, text, schedule, traces.get(args.method))
     except OSError as exc:
         what = "the plot" if args.plot and exc.filename == args.plot else "the trace"
-        print(f"{exc.filename}: error: cannot write {what}: {exc.strerror}", file=sys.stderr)
+        # a failed write or close (ENOSPC, EIO) names no file: the traces it writes
+        name = exc.filename or ", ".join(names.values()) or args.plot
+        print(f"{name}: error: cannot write {what}: {exc.strerror}", file=sys.stderr)
         return EXIT_RUNTIME
 
 
@@ -259,7 +268,8 @@ def cmd_study(args: argparse.Namespace) -> int:
             summary = writer.finish(run, figures)
     except OSError as exc:
         bar.close()
-        print(f"{exc.filename}: error: cannot write the report: {exc.strerror}", file=sys.stderr)
+        name = exc.filename or out  # a failed write or close names no file
+        print(f"{name}: error: cannot write the report: {exc.strerror}", file=sys.stderr)
         return EXIT_RUNTIME
     for row in writer.aggregate.not_run:
         print(f"{row.program}: {row.status.value}: {row.why}", file=sys.stderr)

@@ -11,6 +11,7 @@ failed") are switched off: the terminal shows liftd's messages only.
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import dataclasses
 import datetime as dt
@@ -293,13 +294,16 @@ def run(target: Target, schedule: Schedule, cycle_ms: float, duration_s: float |
     except KeyboardInterrupt:
         counters = None
     finally:
+        restored: list[tuple[str, Any]] = []
         try:
-            for symbol, value in plc.restore():
-                printer.wrote(time.monotonic() - t0, symbol, value)
+            restored = plc.restore()
         except PlcError as exc:  # the daemon went away: nothing left to hold
             print(f"liftd plc: warning: {exc}", file=sys.stderr)
         finally:
             plc.close()
+        with contextlib.suppress(OSError):  # all restored first, even when stdout has gone
+            for symbol, value in restored:
+                printer.wrote(time.monotonic() - t0, symbol, value)
     if counters is not None and not as_json:
         print(f"{counters['cycles']} PLC cycles, {counters['transitions']} transitions, "
               f"{counters['late_cycles']} late cycles", file=out)  # fmt: skip

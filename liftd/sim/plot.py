@@ -24,6 +24,18 @@ def available() -> bool:
     return importlib.util.find_spec("matplotlib") is not None
 
 
+def format_problem(path: str) -> str | None:
+    """Why the figure cannot be written in the format its name says (matplotlib picks the
+    format from the suffix; none: PNG), or None."""
+    from matplotlib.backend_bases import FigureCanvasBase  # noqa: PLC0415
+
+    suffix = Path(path).suffix.lower().lstrip(".")
+    formats = FigureCanvasBase.get_supported_filetypes()
+    if not suffix or suffix in formats:
+        return None
+    return f"format '{suffix}' not supported (use {', '.join(sorted(formats))})"
+
+
 def _spans(t: np.ndarray, flag: np.ndarray) -> list[tuple[float, float]]:
     """Time intervals where flag is True."""
     edges = np.flatnonzero(np.diff(flag.astype(int)))

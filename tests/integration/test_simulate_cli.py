@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -218,3 +219,48 @@ def test_override_schedule_reaches_the_core(tmp_path: Path) -> None:
     assert r.returncode == 0
     rows = list(csv.reader(trace.open()))[1:]
     assert {r[6] for r in rows if float(r[0]) > 1.001} == {"0.500000"}
+
+
+def test_a_plot_it_cannot_write_is_a_bad_argument_before_the_run(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    """An unknown figure format, or the name of a trace it would overwrite, is exit 2 with one
+    line (before: a matplotlib traceback and exit 1, or the trace silently replaced)."""
+    cases = [
+        (["--plot", str(tmp_path / "p.xyz")], "format 'xyz' not supported"),
+        (["--trace", str(tmp_path / "s.png"), "--plot", str(tmp_path / "s.png")], "trace's file"),
+        (
+            [
+                "--compare",
+                "--trace",
+                str(tmp_path / "c.png"),
+                "--plot",
+                str(tmp_path / "c.advanced.png"),
+            ],
+            "trace's file",
+        ),
+    ]
+    for args, why in cases:
+        assert cli.main(["simulate", DEMO, *args]) == 2, args
+        err = capsys.readouterr().err
+        assert why in err and "Traceback" not in err, err
+    assert not list(tmp_path.iterdir())  # nothing written
+
+
+def test_a_trace_write_that_fails_names_the_file() -> None:
+    r = simulate(DEMO, "--trace", "/dev/full")
+    assert r.returncode == 3
+    assert r.stderr.startswith("/dev/full: error: cannot write the trace: No space left"), r.stderr
+
+
+def test_a_reader_that_closes_stdout_ends_the_command_quietly() -> None:
+    """`liftd objects | head -1`: exit 141 as for a tool SIGPIPE ended, no traceback (a pipe
+    whose reader has already gone, so that the first write fails)."""
+    read_end, write_end = os.pipe()
+    os.close(read_end)
+    try:
+        r = subprocess.run([sys.executable, "-m", "liftd", "objects"], stdout=write_end,
+                           stderr=subprocess.PIPE, text=True, timeout=60, check=False)  # fmt: skip
+    finally:
+        os.close(write_end)
+    assert r.returncode == 141 and "Traceback" not in r.stderr, r.stderr
