@@ -13,6 +13,7 @@ https://infosys.beckhoff.com/content/1033/tf5250_hsc_pack/475156491.html
 from __future__ import annotations
 
 import enum
+import math
 import re
 from dataclasses import dataclass
 
@@ -67,8 +68,8 @@ def parse_command(token: Token) -> CommandResult:
         return CommandResult(CommandKind.SLOPE, col, slope=slope)
     if text.startswith("#TIME"):
         value = text[len("#TIME") :].strip()
-        if NUMBER_RE.fullmatch(value) is None or float(value) < 0.0:
-            raise NcFault(ErrorId.DWELL_MISSING, col, "#TIME needs a time in seconds >= 0")
+        if NUMBER_RE.fullmatch(value) is None or not 0.0 <= float(value) < math.inf:
+            raise NcFault(ErrorId.DWELL_MISSING, col, "#TIME needs a finite time in seconds >= 0")
         return CommandResult(CommandKind.TIME, col, seconds=float(value))
     for name in ("#HSC", "#SPLINE", "#CONTOUR MODE"):
         if text == name or text.startswith((name + " ", name + "[")):

@@ -49,6 +49,7 @@ BRACKET_AFTER_FUNCTION = (
     20387  # https://infosys.beckhoff.com/content/1033/tf5200_diagnosis/251494283.html
 )
 SYNTAX = 990001
+NUMBER = 990002  # malformed number (1..2) or one beyond the float range (1e999)
 OVERFLOW = 990030  # result not a finite number
 DOMAIN = 990031  # argument outside the function's domain (SQRT[-1], LN[0], ASIN[2])
 
@@ -57,6 +58,7 @@ MAX_DEPTH = 64  # bracket nesting: bounds recursion on hostile input
 
 _NUMBER = re.compile(r"(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")
 _PLAIN_NUMBER = re.compile(r"[ \t]*((?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)")
+_NUMBER_RUN = re.compile(r"[0-9.eE]+")  # a malformed number as written, for its message
 _NAME = re.compile(r"[A-Za-z_][A-Za-z_0-9]*")
 _INDEX = re.compile(r"\d+")
 
@@ -339,7 +341,7 @@ class _Parser:
         m = _NUMBER.match(text, pos)
         if m is not None:
             self.pos = m.end()
-            return _const(float(m.group(0)))
+            return _const(_literal(text, m))
         if ch in "Pp" and pos + 1 < len(text) and (text[pos + 1].isdigit() or text[pos + 1] == "["):
             return self.parameter()
         m = _NAME.match(text, pos)
@@ -398,6 +400,24 @@ class _Parser:
         return Expr(0.0, operator.itemgetter(index))
 
 
+def _literal(text: str, m: re.Match[str], group: int = 0) -> float:
+    """The value of a number literal; 990002 when it runs on into a second decimal point
+    (1..2, 1.2.3) or lies beyond the float range (1e999)."""
+    end = m.end()
+    if end < len(text) and text[end] == ".":
+        written = _NUMBER_RUN.match(text, m.start(group))
+        shown = written.group(0) if written else m.group(group)
+        raise ExprError(NUMBER, f"malformed number {shown!r}", m.start(group))
+    value = float(m.group(group))
+    if not math.isfinite(value):
+        shown = m.group(group)
+        shown = shown if len(shown) <= 20 else shown[:20] + "…"
+        raise ExprError(
+            NUMBER, f"number {shown} is out of range (not a finite value)", m.start(group)
+        )
+    return value
+
+
 def parse(text: str, pos: int = 0, bracketed: bool = False) -> tuple[Expr, int]:
     """Compile the expression at `pos`; returns it and the position after it.
 
@@ -411,7 +431,7 @@ def parse(text: str, pos: int = 0, bracketed: bool = False) -> tuple[Expr, int]:
             after += 1
         nxt = text[after : after + 3]
         if not nxt or (nxt[0] not in "+-*/" and nxt.upper() != "MOD"):
-            return Expr(float(m.group(1)), None, text[pos:end]), end
+            return Expr(_literal(text, m, 1), None, text[pos:end]), end
     p = _Parser(text, pos, bracketed)
     expr = p.expr()
     return expr._replace(text=text[pos : p.pos]), p.pos

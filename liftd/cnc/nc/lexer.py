@@ -16,6 +16,7 @@ that one bad word does not take the rest of its block with it (F, G90/G91 ... st
 from __future__ import annotations
 
 import enum
+import math
 import re
 from typing import NamedTuple
 
@@ -52,6 +53,7 @@ class LexError(Exception):
 
 NUMBER_RE = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")
 SEPARATORS = " \t\r\x00,\x03"
+NUMBER = 990002  # ErrorId.NUMBER: missing or malformed number
 UNSUPPORTED = 990004
 SUBROUTINE_CALL_NAME = re.compile(r"[^\s;(\[]+")
 _KEYWORD = re.compile(r"[A-Za-z_]{2,}(?![A-Za-z_0-9\[])")
@@ -82,12 +84,36 @@ FAST_WORD = re.compile(
 )
 
 
+def is_finite_number(number: str) -> bool:
+    """False for a number text beyond the float range (F1e999, 400 digits): it would be an
+    infinite value. Short texts without an exponent are finite without converting them."""
+    if len(number) < 300 and "e" not in number and "E" not in number:
+        return True
+    return math.isfinite(float(number))
+
+
+def _check_number(text: str, m: re.Match[str], col: int) -> str:
+    """The number matched by m, or LexError 990002 when it is malformed: running on into a
+    second decimal point (X1..2, X1.2.3: a CAM post-processor's typo must not be read as
+    X1.) or beyond the float range (F1e999)."""
+    number = m.group(0)
+    end = m.end()
+    if end < len(text) and text[end] == ".":
+        bad = re.match(r"[0-9.eE+-]*", text[m.start() :])
+        written = bad.group(0) if bad else number
+        raise LexError(col, f"malformed number {written!r}", NUMBER)
+    if not is_finite_number(number):
+        shown = number if len(number) <= 20 else number[:20] + "…"
+        raise LexError(col, f"number {shown} is out of range (not a finite value)", NUMBER)
+    return number
+
+
 def _tokenize_plain(text: str) -> list[Token] | None:
     """Fast path for lines of plain address words only; None means "use the full lexer"."""
     tokens = []
     pos = 0
     for m in FAST_WORD.finditer(text):
-        if m.start() != pos:
+        if m.start() != pos or not is_finite_number(m.group(2)):
             return None
         tokens.append(Token(TokenKind.WORD, m.group(1).upper(), m.group(2), m.start(1) + 1))
         pos = m.end()
@@ -293,7 +319,7 @@ def _token(text: str, i: int, tokens: list[Token]) -> int:
             j += 1
         m = NUMBER_RE.match(text, j)
         if m is not None and not (m.end() < n and text[m.end()] in "*/+-"):
-            tokens.append(Token(TokenKind.WORD, letter, m.group(0), col))
+            tokens.append(Token(TokenKind.WORD, letter, _check_number(text, m, col), col))
             return m.end()
         if m is not None or _starts_expression(text, j):
             expr, end = _expression(text, j, col)
@@ -312,6 +338,6 @@ def _token(text: str, i: int, tokens: list[Token]) -> int:
         return end + 1
     m = NUMBER_RE.match(text, i)
     if m is not None:
-        tokens.append(Token(TokenKind.NUMBER, "", m.group(0), col))
+        tokens.append(Token(TokenKind.NUMBER, "", _check_number(text, m, col), col))
         return m.end()
     raise LexError(col, f"unexpected character {ch!r}")

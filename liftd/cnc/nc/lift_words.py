@@ -15,7 +15,7 @@ import re
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from liftd.cnc.nc.lexer import NUMBER_RE
+from liftd.cnc.nc.lexer import NUMBER_RE, is_finite_number
 
 
 class LiftKeyword(enum.Enum):
@@ -114,12 +114,12 @@ def parse_lift_words(content: str, evaluate: Evaluate | None = None) -> LiftWord
         if name in ("POS", "POS_LIMIT"):
             if value is None:
                 raise LiftSyntaxError(f"{name}= needs a number")
-            if NUMBER_RE.fullmatch(value) is not None:
+            if NUMBER_RE.fullmatch(value) is not None and is_finite_number(value):
                 number = float(value)
             elif evaluate is not None:
                 number = evaluate(value)
             else:
-                raise LiftSyntaxError(f"{name}= needs a number")
+                raise LiftSyntaxError(f"{name}= needs a finite number")
             if name == "POS":
                 pos_mm = number
             else:

@@ -182,8 +182,8 @@ def sequence_args(content: str, col: int) -> tuple[str, int, int, int]:
         elif upper.startswith("REPEAT="):
             try:
                 repeat = int(float(upper[7:]))
-            except ValueError:
-                raise NcFault(ErrorId.NUMBER, col, "REPEAT= needs a number") from None
+            except (ValueError, OverflowError):  # REPEAT=x, REPEAT=1e999
+                raise NcFault(ErrorId.NUMBER, col, "REPEAT= needs a finite number") from None
             if repeat < 1:
                 raise NcFault(ErrorId.NUMBER, col, "REPEAT= must be at least 1")
         elif upper.startswith("N") and upper[1:].isdigit():

@@ -363,7 +363,9 @@ def collect_plain(line: str, axes: frozenset[str]) -> Words | None:
             return None
         try:
             value = float(number)
-        except ValueError:
+        except ValueError:  # X1..2, X1.2.3: the full lexer says where
+            return None
+        if value - value != 0.0:  # inf (F1e999): the full lexer reports it
             return None
         if letter.islower():
             letter = letter.upper()

@@ -208,6 +208,38 @@ def test_decoding_continues_after_an_error_to_report_everything() -> None:
     assert r.blocks == ()
 
 
+HEADER = "G90 G17 G94\nG00 X20 Y20 Z1\nG01 X100 F6000\n"
+
+
+@pytest.mark.parametrize(
+    ("line", "column"),
+    [
+        ("G01 X1..2 F6000", 5),  # a CAM post-processor's typo, not X1.0
+        ("G01 X1.2.3", 5),  # not X1.2
+        ("G01 X=1..2", 5),
+        ("G01 X110 Y1.2.3 (comment)", 10),  # the full lexer's path
+        ("G01 X110 F1e999", 10),  # an infinite feed
+        ("G01 X110 F1e999 (comment)", 10),
+        ("G01 X[1..2]", 5),
+        ("G01 X[2*1e999]", 5),
+        ("P1 = 1e999", 1),
+        ("N1e999 G01 X110", 1),  # was an OverflowError out of the decoder
+        ("G04 1..2", 5),
+        ("Z[LIFT_START POS=1e999 POS_LIMIT=40]", 1),
+    ],
+)
+def test_malformed_or_infinite_number_is_990002_at_its_word(line: str, column: int) -> None:
+    r = dec(HEADER + line + "\nG01 X200\nM30\n")
+    assert [(e.id, e.line, e.column) for e in r.errors] == [(ErrorId.NUMBER, 4, column)]
+    assert [b.line for b in r.blocks] == [2, 3]  # nothing runs from the bad block on
+
+
+def test_infinite_dwell_and_repeat_count_are_refused_not_run() -> None:
+    assert ids(dec("#TIME 1e999\n")) == [(ErrorId.DWELL_MISSING, 1)]
+    r = dec("N1 G01 X1 F6\nN2 X2\nL SEQUENCE [N1 N2 REPEAT=1e999]\n")  # was OverflowError
+    assert ids(r) == [(ErrorId.NUMBER, 3)]
+
+
 # -- every error id -------------------------------------------------------------------------------
 CASES = [
     ("Z[LIFT_START POS_LIMIT=9]\nZ[LIFT_START POS_LIMIT=9]\n", ErrorId.LIFT_ALREADY_ACTIVE, 2, {}),
