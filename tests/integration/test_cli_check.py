@@ -75,6 +75,34 @@ def test_golden_bad_programs(program: Path) -> None:
     assert f" error {m.group(1)}: " in first
 
 
+HEADER = "G90 G17 G94\nG00 X20 Y20 Z1\nG01 X100 F6000\n"
+
+
+@pytest.mark.parametrize(
+    ("body", "first", "listing"),
+    [
+        ("Z[LIFT_START POS=1]\nG01 X120\n", ":4:1: error 990008: ", ""),
+        (
+            "Z[LIFT_START POS=1 POS_LIMIT=40]\nX110 Z[LIFT POS=1 POS_LIMIT=40]\nG01 X120\n",
+            ":5:6: error 120604: ",
+            ": lift 1: from line 4, ",  # open where execution stops, closed by nothing else
+        ),
+    ],
+)
+def test_a_refused_lift_command_is_one_error_and_its_lift_end_none(
+    tmp_path: Path, body: str, first: str, listing: str
+) -> None:
+    program = tmp_path / "refused.nc"
+    program.write_text(HEADER + body + "Z[LIFT_END]\nM30\n")
+    r = liftd("check", "-c", str(REPO / "config" / "liftd.toml"), str(program))
+    assert r.returncode == 1
+    assert [line.startswith(f"{program}{first}") for line in r.stderr.splitlines()] == [True]
+    ranges = [line for line in r.stdout.splitlines() if ": lift " in line]
+    assert [line.startswith(f"{program}{listing}") for line in ranges] == (
+        [True] if listing else []
+    )
+
+
 def config_cases() -> list[Path]:
     return sorted((GOLDEN / "config" / "bad").glob("*/liftd.toml"))
 

@@ -36,23 +36,31 @@ def open_range(
     warnings: list[NcError],
     unit: float = units.M_PER_MM,
     offset: float = 0.0,
+    refused_line: int | None = None,
 ) -> LiftStart:
     """The range a LIFT_START / LIFT opens with the lift axis at z0 (m); NcFault if it is
     refused, warnings appended as found. `unit`: m per program length unit (G71 mm, G70
     inch, vendor §3 "[mm, inch]"); `offset`: the lift axis' zero offset, added to absolute
-    POS / POS_LIMIT like to any absolute coordinate (G91 values are relative to z0)."""
+    POS / POS_LIMIT like to any absolute coordinate (G91 values are relative to z0).
+    `refused_line`: a refused LIFT_START whose LIFT_END has not come yet (its range counts as
+    started, so a second start is refused like inside an open range)."""
     require_method(ctx, column)
-    if open_lift is not None:
+    if open_lift is not None or refused_line is not None:
+        started = (
+            f"started in line {open_lift.line}"
+            if open_lift is not None
+            else f"the refused LIFT_START in line {refused_line} counts as started"
+        )
         if words.keyword is LiftKeyword.SINGLE:
             raise NcFault(
                 ErrorId.LIFT_SECOND_START,
                 column,
-                f"LIFT while the lift started in line {open_lift.line} is active",
+                f"LIFT while a lift range is active ({started}), LIFT_END expected first",
             )
         raise NcFault(
             ErrorId.LIFT_ALREADY_ACTIVE,
             column,
-            f"LIFT already active (started in line {open_lift.line}), LIFT_END expected",
+            f"LIFT already active ({started}), LIFT_END expected",
         )
     if axis not in ctx.axis_names:  # any axis of the channel may lift (vendor §3, issue 18)
         raise NcFault(
@@ -129,9 +137,14 @@ def check_end(ctx: DecoderContext, axis: str, open_lift: LiftStart | None, colum
         raise NcFault(
             ErrorId.LIFT_NOT_ACTIVE, column, "LIFT already deactivated, LIFT_START expected"
         )
-    if axis != open_lift.axis:
+    check_end_axis(axis, open_lift.axis, f"line {open_lift.line}", column)
+
+
+def check_end_axis(axis: str, start_axis: str, started: str, column: int) -> None:
+    """NcFault 120605 unless the LIFT_END is on the axis of its LIFT_START."""
+    if axis != start_axis:
         raise NcFault(
             ErrorId.LIFT_AXIS_MISMATCH,
             column,
-            f"LIFT_END for {axis}, but LIFT_START (line {open_lift.line}) was for {open_lift.axis}",
+            f"LIFT_END for {axis}, but LIFT_START ({started}) was for {start_axis}",
         )

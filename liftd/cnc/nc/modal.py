@@ -65,6 +65,11 @@ class ModalDecoder(GFunctions):
         self.trc = Trc()
         self.tool_configured = False  # the active D has a radius in the tool table
         self.open_lift: LiftStart | None = None
+        # (axis, line) of a refused LIFT_START (POS_LIMIT missing, POS beyond the software
+        # limit, HSC slope ...): its range counts as started until its LIFT_END, which closes
+        # it silently, so one root cause gives one error (not a 21559 at the LIFT_END, nor a
+        # silent second LIFT_START)
+        self.refused_lift: tuple[str, int] | None = None
         self.ended = False  # M02/M30 seen
         self.return_after = False  # M17/M29 in this block
         self.tag = ""  # Block.file of the line being decoded
@@ -86,6 +91,8 @@ class ModalDecoder(GFunctions):
         values = w.values
         faults: list[NcFault] = []
         dwell = g92 = False
+        if w.refused_start is not None and self.open_lift is None and self.refused_lift is None:
+            self.refused_lift = (w.refused_start, lineno)  # its words could not be read
         if w.gcodes:
             dwell, g92 = self._gcodes(w, faults)
         feed_word = values.get("F")
@@ -134,13 +141,17 @@ class ModalDecoder(GFunctions):
             faults.append(fault)
         end: LiftEnd | None = None
         if lift is not None and lift.keyword is LiftKeyword.SINGLE:
-            if self.open_lift is not None:
+            # the single block's own range (also when refused after it opened, 990029); a
+            # refused LIFT inside an open range (120604) leaves that range open
+            if self.open_lift is not None and self.open_lift.single_block:
                 end = self._close_lift(LiftEndCause.SINGLE_BLOCK)
         elif lift is not None and lift.keyword is LiftKeyword.END:
             assert w.lift is not None
             end = attempt(faults, self._lift_end, w.lift[0], w.lift[2])
         if program_end and self.open_lift is not None and end is None:
             end = self._close_lift(LiftEndCause.PROGRAM_END)  # vendor §2.4
+        if program_end:
+            self.refused_lift = None
         self.ended = program_end
         return Block(
             lineno,
@@ -292,11 +303,18 @@ class ModalDecoder(GFunctions):
     def _lift_start(self, lineno: int, axis: str, words: LiftWords, column: int) -> LiftStart:
         warnings: list[NcError] = []
         zi = self.axis_index.get(axis, self.z)  # any axis of the channel may lift (issue 18)
-        self.open_lift = lift_rules.open_range(
-            self.ctx, words, axis=axis, z0=self.pos[zi], slope=self.slope,
-            open_lift=self.open_lift, lineno=lineno, column=column, warnings=warnings,
-            unit=self.unit, offset=self.offset[zi],
-        )  # fmt: skip
+        refused = self.refused_lift
+        try:
+            self.open_lift = lift_rules.open_range(
+                self.ctx, words, axis=axis, z0=self.pos[zi], slope=self.slope,
+                open_lift=self.open_lift, lineno=lineno, column=column, warnings=warnings,
+                unit=self.unit, offset=self.offset[zi],
+                refused_line=refused[1] if refused is not None else None,
+            )  # fmt: skip
+        except NcFault:
+            if words.keyword is LiftKeyword.START and self.open_lift is None and refused is None:
+                self.refused_lift = (axis, lineno)
+            raise
         for warning in warnings:
             self._warn(ErrorId(warning.id), warning.column, warning.message)
         if self.trc.side != 0 and zi in (0, 1):
@@ -308,7 +326,13 @@ class ModalDecoder(GFunctions):
             )
         return self.open_lift
 
-    def _lift_end(self, axis: str, column: int) -> LiftEnd:
+    def _lift_end(self, axis: str, column: int) -> LiftEnd | None:
+        refused = self.refused_lift
+        if self.open_lift is None and refused is not None:
+            # the LIFT_END of a refused LIFT_START: its error was reported at the start
+            lift_rules.check_end_axis(axis, refused[0], f"line {refused[1]}, refused", column)
+            self.refused_lift = None
+            return None
         lift_rules.check_end(self.ctx, axis, self.open_lift, column)
         return self._close_lift(LiftEndCause.PROGRAMMED)
 

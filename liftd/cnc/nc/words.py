@@ -27,8 +27,8 @@ class Words:
     (a subroutine line's Words are reused for every call)."""
 
     __slots__ = (
-        "bare", "call", "command", "fast_g", "faults", "gcodes", "lift", "m", "n", "simple",
-        "values",
+        "bare", "call", "command", "fast_g", "faults", "gcodes", "lift", "m", "n",
+        "refused_start", "simple", "values",
     )  # fmt: skip
 
     def __init__(self) -> None:
@@ -37,6 +37,9 @@ class Words:
         self.values: dict[str, tuple[float, int]] = {}  # letter -> (value, column)
         self.m: list[tuple[int, int]] = []
         self.lift: tuple[str, LiftWords, int] | None = None
+        # the axis of a LIFT_START whose words could not be read (its fault is in `faults`):
+        # the decoder counts its range as started, for its LIFT_END
+        self.refused_start: str | None = None
         self.bare: list[tuple[float, int]] = []
         self.command: Token | None = None
         self.call: Token | None = None  # LL / L / L SEQUENCE, always the block's last word
@@ -132,6 +135,7 @@ class Template:
         w.gcodes = base.gcodes
         w.m = base.m
         w.lift = base.lift
+        w.refused_start = base.refused_start
         w.bare = list(base.bare) if base.bare else []
         w.command = base.command
         w.call = base.call
@@ -323,6 +327,15 @@ def _bracket(tok: Token, w: Words, axes: frozenset[str], params: Params) -> None
             raise NcFault(ErrorId.UNKNOWN_AXIS, tok.column, f"{tok.letter} is not an axis")
         _store(w, tok.letter, tok.expr.value(params), tok.column)
         return
+    try:
+        _lift_command(tok, w, axes, params)
+    except NcFault:
+        if tok.text.split(None, 1)[0].upper() == "LIFT_START":
+            w.refused_start = tok.letter
+        raise
+
+
+def _lift_command(tok: Token, w: Words, axes: frozenset[str], params: Params) -> None:
     if tok.letter not in axes:
         raise NcFault(ErrorId.UNKNOWN_AXIS, tok.column, f"{tok.letter} is not an axis")
     if not is_lift_command(tok.text):

@@ -240,6 +240,45 @@ def test_infinite_dwell_and_repeat_count_are_refused_not_run() -> None:
     assert ids(r) == [(ErrorId.NUMBER, 3)]
 
 
+@pytest.mark.parametrize(
+    ("start", "eid", "kw"),
+    [
+        ("Z[LIFT_START POS=1]", ErrorId.LIFT_POS_LIMIT_MISSING, {}),
+        ("Z[LIFT_START POS=-1000 POS_LIMIT=40]", ErrorId.SW_LIMIT_NEG, {}),
+        ("Z[LIFT_START POS=1 POS_LIMIT=40]", ErrorId.LIFT_HSC_SLOPE, {"slope": SlopeType.HSC}),
+        ("Z[LIFT_START POS_LIMIT=abc]", ErrorId.LIFT_SYNTAX, {}),
+        ("Z[LIFT_START POS=1e999 POS_LIMIT=40]", ErrorId.NUMBER, {}),
+        ("Z5 Z[LIFT_START POS_LIMIT=40]", ErrorId.AXIS_TWICE, {}),
+    ],
+)
+def test_a_refused_lift_start_is_one_error_not_also_21559_at_its_lift_end(
+    start: str, eid: ErrorId, kw: dict[str, object]
+) -> None:
+    r = dec(HEADER + start + "\nG01 X120\nZ[LIFT_END]\nG01 X130\nM30\n", **kw)  # type: ignore[arg-type]
+    assert ids(r) == [(eid, 4)]
+    assert r.open_lift is None  # execution stopped before the range: nothing is open
+
+
+def test_the_range_of_a_refused_lift_start_counts_as_started() -> None:
+    bad = HEADER + "Z[LIFT_START POS=1]\nG01 X120\n"  # 990008 in line 4
+    r = dec(bad + "Z[LIFT_START POS=1 POS_LIMIT=40]\nZ[LIFT_END]\n")  # no LIFT_END between
+    assert ids(r) == [(ErrorId.LIFT_POS_LIMIT_MISSING, 4), (ErrorId.LIFT_ALREADY_ACTIVE, 6)]
+    assert "refused LIFT_START in line 4" in r.errors[1].message
+    r = dec(bad + "Y[LIFT_END]\n")
+    assert ids(r) == [(ErrorId.LIFT_POS_LIMIT_MISSING, 4), (ErrorId.LIFT_AXIS_MISMATCH, 6)]
+    r = dec(bad + "Z[LIFT_END]\nZ[LIFT_END]\n")  # the second one closes nothing
+    assert ids(r) == [(ErrorId.LIFT_POS_LIMIT_MISSING, 4), (ErrorId.LIFT_NOT_ACTIVE, 7)]
+
+
+def test_a_refused_single_block_lift_leaves_the_open_range_to_its_lift_end() -> None:
+    r = dec(
+        HEADER + "Z[LIFT_START POS=1 POS_LIMIT=40]\nX110 Z[LIFT POS=1 POS_LIMIT=40]\n"
+        "G01 X120\nZ[LIFT_END]\nM30\n"
+    )
+    assert ids(r) == [(ErrorId.LIFT_SECOND_START, 5)]  # before: also 21559 in line 7
+    assert r.open_lift is not None and r.open_lift.line == 4  # open where execution stops
+
+
 # -- every error id -------------------------------------------------------------------------------
 CASES = [
     ("Z[LIFT_START POS_LIMIT=9]\nZ[LIFT_START POS_LIMIT=9]\n", ErrorId.LIFT_ALREADY_ACTIVE, 2, {}),
