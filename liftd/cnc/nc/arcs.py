@@ -14,6 +14,8 @@ import math
 from liftd.cnc.nc.blocks import ErrorId, NcFault
 from liftd.cnc.path.geometry import arc_sweep, center_from_radius, corrected_center
 
+ROUNDING = 1e-9  # relative: a radius difference below it is floating-point rounding
+
 
 def build_arc(
     start: tuple[float, ...],
@@ -46,13 +48,19 @@ def build_arc(
         if r0 <= 0.0:
             raise NcFault(ErrorId.ARC_GEOMETRY, column, "circle centre equals the start point")
         diff = abs(r0 - r1)
-        if diff > max_radius_diff:
+        # Positions are mm × 1e-3 (+ zero offsets) in floating point, so an exact circle's two
+        # radii can differ by a few ulps (demo.nc line 15 with P-CHAN-00171 = 0: 1e-17 m). Such
+        # a difference is rounding, not geometry: it is absorbed by a tolerance of 1e-9 of the
+        # coordinates' size (1 nm at 1 m), far below the CNC's 0.1 µm resolution and far above
+        # the rounding of a few operations on doubles (~1e-16 relative).
+        scale = max(abs(p0[0]), abs(p0[1]), abs(p1[0]), abs(p1[1]), r0, r1)
+        if diff > max_radius_diff + ROUNDING * scale:
             raise NcFault(
                 ErrorId.RADIUS_DIFFERENCE,
                 column,
                 f"end point not on the circle: start radius {r0 * 1e3:.4f} mm, end radius "
-                f"{r1 * 1e3:.4f} mm, difference {diff * 1e3:.4f} mm > "
-                f"{max_radius_diff * 1e3:.4f} mm (P-CHAN-00171)",
+                f"{r1 * 1e3:.4f} mm, difference {diff * 1e3:.6f} mm > "
+                f"{max_radius_diff * 1e3:.6f} mm (P-CHAN-00171)",
             )
         center = corrected_center(p0, p1, center)
     else:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import pytest
@@ -411,6 +412,17 @@ def test_radius_difference_within_p_chan_00171_is_accepted() -> None:
     r0 = math.dist(m.start[:2], m.center)
     r1 = math.dist(m.end[:2], m.center)
     assert abs(r0 - r1) < 1e-12  # centre corrected onto the bisector
+
+
+def test_exact_arcs_pass_a_zero_radius_tolerance_and_10_nm_off_does_not() -> None:
+    ch = dataclasses.replace(make_channel(), max_radius_diff=0.0)  # P-CHAN-00171 = 0
+    demo = (REPO / "config" / "programs" / "demo.nc").read_text()
+    assert decode(demo, DecoderContext.from_channel(ch)).errors == ()  # rounding is no error
+    off = decode(
+        "G01 X110 Y100 F100\nG02 X100 Y110.00001 I-10 J0\n", DecoderContext.from_channel(ch)
+    )
+    assert [(e.id, e.line) for e in off.errors] == [(ErrorId.RADIUS_DIFFERENCE, 2)]
+    assert "difference 0.000010 mm > 0.000000 mm" in off.errors[0].message
 
 
 def test_shipped_demo_program_decodes() -> None:
