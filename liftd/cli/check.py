@@ -49,7 +49,7 @@ def check_program(settings: Settings, path: Path, channel: ChannelParams | None 
     if not errors and ch.lift_method is LiftMethod.ADVANCED and summaries:
         plan = _lift_plan(settings, ch, text)
     for summary in summaries:  # one line per lift range (issue 15)
-        print(f"{path}: {describe_lift(summary, ch.lift_method, plan)}")
+        print(f"{path}: {describe_lift(summary, ch.lift_method, plan, str(path))}")
     if not errors:
         print(f"{path}: ok ({blocks} blocks, {lifts} lift ranges)")
     approx = ", ".join(f"{kind} in {n} block{'s' * (n != 1)}" for kind, n in result.not_emulated)

@@ -103,6 +103,17 @@ def test_a_refused_lift_command_is_one_error_and_its_lift_end_none(
     )
 
 
+def test_a_range_from_a_subroutine_file_into_the_program_names_both_files(
+    tmp_path: Path,
+) -> None:
+    (tmp_path / "liftsub.nc").write_text("Z[LIFT_START POS=1 POS_LIMIT=40]\nG01 X300 F24000\nM17\n")
+    program = tmp_path / "main2.nc"
+    program.write_text(HEADER + "L liftsub.nc\nG01 X400\nZ[LIFT_END]\nM30\n")
+    r = liftd("check", "-c", str(REPO / "config" / "liftd.toml"), str(program))
+    assert r.returncode == 0, r.stderr
+    assert f"{program}: lift 1: lines {tmp_path / 'liftsub.nc'}:1 to {program}:6, " in r.stdout
+
+
 def config_cases() -> list[Path]:
     return sorted((GOLDEN / "config" / "bad").glob("*/liftd.toml"))
 

@@ -97,12 +97,19 @@ class LiftRangeTracker:
         self._open = None
 
 
-def _lines(r: LiftRangeSummary) -> str:
+def _lines(r: LiftRangeSummary, program: str) -> str:
+    """`lines 12-18`, `lines sub.nc:1-5`; a range that starts in one file and ends in another
+    names each end with its own file: `lines sub.nc:1 to job.nc:6` (`program`: the name of
+    the program's own file, whose lines carry no file)."""
     start = f"{r.start_file}:{r.start.line}" if r.start_file else str(r.start.line)
     if r.end_line is None:
         return f"from line {start}"
-    end = f"{r.end_file}:{r.end_line}" if r.end_file else str(r.end_line)
-    return f"line {start}" if end == start else f"lines {start}-{end}"
+    if r.end_file != r.start_file:
+        return (
+            f"lines {r.start_file or program}:{r.start.line} to "
+            f"{r.end_file or program}:{r.end_line}"
+        )
+    return f"line {start}" if r.end_line == r.start.line else f"lines {start}-{r.end_line}"
 
 
 METHOD_NAMES = {
@@ -112,14 +119,20 @@ METHOD_NAMES = {
 }
 
 
-def describe(r: LiftRangeSummary, method: LiftMethod, plan: LiftPlanHook | None = None) -> str:
+def describe(
+    r: LiftRangeSummary,
+    method: LiftMethod,
+    plan: LiftPlanHook | None = None,
+    program: str = "program",
+) -> str:
     """One line: `lift 3: lines 12-18, Advanced Lifting, Z 1.000 -> POS 1.000 mm, limit
-    30.000 mm, path 23.400 mm: lifts (planned peak 41.2 mm, nominal 0.120 s)`."""
+    30.000 mm, path 23.400 mm: lifts (planned peak 41.2 mm, nominal 0.120 s)`. `program`:
+    the program's own file, named where a range spans two files."""
     s = r.start
     kind = ", single block" if s.single_block else ", resumed after #FLUSH" if s.implicit else ""
     down = ", DOWN" if s.down else ""
     head = (
-        f"lift {r.index}: {_lines(r)}{kind}{down}, {METHOD_NAMES[method]}, "
+        f"lift {r.index}: {_lines(r, program)}{kind}{down}, {METHOD_NAMES[method]}, "
         f"{s.axis} {s.z_start * MM:.3f} -> POS {s.target * MM:.3f} mm"
     )
     limit = f"limit {s.pos_limit * MM:.3f} mm"

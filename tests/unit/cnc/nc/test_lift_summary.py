@@ -8,7 +8,7 @@ import pytest
 
 from liftd.cnc.nc import DecoderContext, decode
 from liftd.cnc.nc.lift_summary import LiftRangeSummary, LiftRangeTracker, describe
-from liftd.cnc.params import LiftMethod
+from liftd.cnc.params import LiftMethod, NcFile, NcSources
 from tests.support.channel import make_channel
 
 PROGRAM = """%L hop
@@ -84,3 +84,17 @@ def test_the_planner_hook_fills_peak_and_nominal_time() -> None:
     assert unplanned.endswith("lifts (peak and nominal time: beyond what check plans; "
                               "liftd simulate)")  # fmt: skip
     assert describe(hop, LiftMethod.LIFTING).endswith(", path 100.000 mm: lifts")
+
+
+def test_a_range_spanning_two_files_names_each_end_with_its_file() -> None:
+    liftsub = "Z[LIFT_START POS=1 POS_LIMIT=40]\nG01 X300 F24000\nM17\n"
+    hop = "Z[LIFT_START POS=1 POS_LIMIT=40]\nG01 X350\nZ[LIFT_END]\nM17\n"
+    main = "G01 X100 Y20 Z1 F6000\nL liftsub.nc\nG01 X400\nZ[LIFT_END]\nL hop.nc\nM30\n"
+    files = (NcFile("liftsub.nc", "/s/liftsub.nc", liftsub), NcFile("hop.nc", "/s/hop.nc", hop))
+    ch = dataclasses.replace(make_channel(), nc_sources=NcSources("main2.nc", files))
+    tracker = LiftRangeTracker(0.0)
+    for block in decode(main, DecoderContext.from_channel(ch)).blocks:
+        tracker.feed(block)
+    lines = [describe(r, LiftMethod.LIFTING, program="main2.nc") for r in tracker.finish()]
+    assert lines[0].startswith("lift 1: lines /s/liftsub.nc:1 to main2.nc:4, ")
+    assert lines[1].startswith("lift 2: lines /s/hop.nc:1-3, ")
