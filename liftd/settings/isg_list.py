@@ -122,8 +122,17 @@ def parse_list_text(text: str, file: str) -> ParsedList:
     return ParsedList(file, tuple(entries), tuple(problems))
 
 
+UTF8_BOM = b"\xef\xbb\xbf"
+
+
 def read_list(path: Path) -> ParsedList:
     """Read and split one list file. Raises OSError for unreadable files."""
     # ISG lists are plain ASCII; CP1252 is the CNC's code page for strings (isg-cnc.md §1.1).
-    text = path.read_bytes().decode("cp1252", errors="replace")
+    # A file an editor on Windows saved as UTF-8 starts with a byte order mark: it is not
+    # part of the first key (read as CP1252 it was "ï»¿# ..."), and the rest is UTF-8.
+    data = path.read_bytes()
+    if data.startswith(UTF8_BOM):
+        text = data[len(UTF8_BOM) :].decode("utf-8", errors="replace")
+    else:
+        text = data.decode("cp1252", errors="replace")
     return parse_list_text(text, str(path))

@@ -80,8 +80,9 @@ def _has_words(line: str) -> bool:
 def parse_source(name: str, text: str, called: bool = False) -> Source:
     """Split a file into its sections; structural problems are kept for the decoder to
     report where the file is first run. `called`: a global subroutine file (L name), whose
-    misplaced % lines are ID 21313 instead of the main program's 20193."""
-    lines = text.splitlines()
+    misplaced % lines are ID 21313 instead of the main program's 20193. A leading byte
+    order mark (programs saved as UTF-8 by Windows tools) is not part of the first line."""
+    lines = text.removeprefix("\ufeff").splitlines()
     headers = [i for i, line in enumerate(lines) if line.lstrip().startswith("%")]
     problems: list[SourceProblem] = []
     locals_: dict[str, Section] = {}

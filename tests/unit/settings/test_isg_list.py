@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 from hypothesis import given
 from hypothesis import strategies as st
 
@@ -29,6 +31,20 @@ def test_golden_syntax_sample_reads_every_rule() -> None:
     assert got["prog_start.slope.profile"] == 0
     # line numbers are kept for messages
     assert values["lift_min_dist"].entry.line == 5
+
+
+def test_a_list_saved_as_utf8_with_a_byte_order_mark_reads_like_without(tmp_path: Path) -> None:
+    plain = GOLDEN / "lists" / "syntax.lis"
+    bom = tmp_path / "syntax.lis"
+    bom.write_bytes(b"\xef\xbb\xbf" + plain.read_bytes())
+    parsed = read_list(bom)
+    assert parsed.problems == ()
+    expected = read_list(plain).entries
+    assert [(e.key, e.value, e.line) for e in parsed.entries] == [
+        (e.key, e.value, e.line) for e in expected
+    ]
+    _, problems = type_list(parsed, CHANNEL_KEYS)
+    assert problems == []
 
 
 def test_hash_without_blank_is_not_a_comment_but_an_unknown_key() -> None:

@@ -94,6 +94,11 @@ def test_global_subroutine_file_with_its_own_local_subroutine() -> None:
     assert r.blocks[-1].file == ""  # M30 in the program itself
 
 
+def test_a_byte_order_mark_before_a_program_or_subroutine_file_is_not_a_word() -> None:
+    r = ok("\ufeffG01 X10 Y0 F6000\nL part.nc\nM30\n", {"part.nc": "\ufeff%part\nX20\nM17\n"})
+    assert ends(r) == [(10, 0, 0), (20, 0, 0)]
+
+
 def test_l_sequence_repeats_a_block_range() -> None:
     r = ok("G01 X0 F1000\nN10 G91 X1\nN20 Y1\nN30 G90\nL SEQUENCE [N10 N20 REPEAT=3]\nM30\n")
     # N10..N20 once in the program, then three more runs (G91 stays modal from N10)
