@@ -83,4 +83,10 @@ def parse_command(token: Token) -> CommandResult:
     if text.startswith("#CS"):
         return CommandResult(CommandKind.CS, col, text=text)
     name = text.split("[", 1)[0].split(" ", 1)[0]
+    if name == "#FLUSH":  # emulated: the argument is wrong, not the command
+        raise NcFault(
+            ErrorId.SYNTAX,
+            col,
+            f"{text}: #FLUSH takes WAIT, CONTINUE or nothing, not {text[len(name) :].strip()}",
+        )
     raise NcFault(ErrorId.UNSUPPORTED, col, f"{name} is not emulated by liftd")

@@ -392,6 +392,12 @@ def test_every_error_id_is_tested() -> None:
     assert tested == set(ErrorId)
 
 
+def test_a_wrong_flush_argument_is_a_syntax_error_not_an_unemulated_command() -> None:
+    r = dec("#FLUSH FOO\n")
+    assert ids(r) == [(ErrorId.SYNTAX, 1)]
+    assert r.errors[0].message == "#FLUSH FOO: #FLUSH takes WAIT, CONTINUE or nothing, not FOO"
+
+
 def test_warnings_do_not_stop_execution() -> None:
     r = dec("G01 X10 F100\nX10\nG04 X1 Y2\nX20\n")
     warn = [(e.id, e.line) for e in r.errors]
