@@ -142,11 +142,11 @@ def describe(
         limit += " without effect (POS or the start beyond it, vendor §2.1.3 special case 1)"
     path = f"path {r.length * MM:.3f} mm"
     if r.end_line is None:
-        state = "open where the program stops: Z goes to the limit and stays (vendor §2.4)"
+        state = f"open where the program stops: {s.axis} goes to the limit and stays (vendor §2.4)"
     elif r.suppressed:
-        state = "suppressed (path shorter than lift_min_dist, P-CHAN-00244): Z goes to POS"
+        state = f"suppressed (path shorter than lift_min_dist, P-CHAN-00244): {s.axis} goes to POS"
     elif r.beyond_limit:
-        state = "Z goes to POS at the start"
+        state = f"{s.axis} goes to POS at the start"
     else:
         state = "lifts"
         if method is LiftMethod.ADVANCED:

@@ -98,3 +98,14 @@ def test_a_range_spanning_two_files_names_each_end_with_its_file() -> None:
     lines = [describe(r, LiftMethod.LIFTING, program="main2.nc") for r in tracker.finish()]
     assert lines[0].startswith("lift 1: lines /s/liftsub.nc:1 to main2.nc:4, ")
     assert lines[1].startswith("lift 2: lines /s/hop.nc:1-3, ")
+
+
+def test_the_state_names_the_ranges_own_lift_axis() -> None:
+    """A W lift in a second channel reads 'W goes to …' (it said Z for every axis)."""
+    ranges = summaries()
+    on_w = [dataclasses.replace(r, start=r.start._replace(axis="W")) for r in ranges]
+    lines = [describe(r, LiftMethod.ADVANCED) for r in on_w]
+    assert lines[1].endswith("P-CHAN-00244): W goes to POS")
+    assert lines[2].endswith(": W goes to POS at the start")
+    assert lines[4].endswith(": W goes to the limit and stays (vendor §2.4)")
+    assert not any(" Z " in line for line in lines)
