@@ -113,9 +113,11 @@ def cmd_plc(args: argparse.Namespace) -> int:
         host=host, tcp_port=tcp_port, net_id=args.net_id or ads.net_id, ams_port=args.port,
         channel=ch.channel_id, axis=args.axis or ch.lift_axis,
     )  # fmt: skip
+    cfg_plc = settings.config.plc  # with m_ack = "plc" the loop waits for this PLC's acknowledge
+    m_ack_delay = cfg_plc.m_ack_delay_ms * 1e-3 if cfg_plc.m_ack == "plc" else None
     try:
         plc.run(target, schedule, args.cycle_ms, args.duration, args.json, args.timeout_ms,
-                args.start)  # fmt: skip
+                args.start, m_ack_delay=m_ack_delay)  # fmt: skip
     except plc.PlcError as exc:  # unreachable, or a read/write failed: never stale data
         print(f"liftd plc: {exc}", file=sys.stderr)
         return EXIT_RUNTIME

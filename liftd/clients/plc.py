@@ -57,6 +57,7 @@ class Target:
             "override": f"{ch}.override",
             "feed_hold": f"{ch}.feed_hold",
             "error_id": f"{ch}.error_id",
+            "m_pending": f"{ch}.m_pending",
         }
 
 
@@ -79,7 +80,7 @@ def quiet_adslib() -> bool:
 
 
 # the values whose changes are printed; line/override are context
-WATCHED = ("lift_active", "lift_suppressed", "state", "feed_hold", "error_id")
+WATCHED = ("lift_active", "lift_suppressed", "state", "feed_hold", "error_id", "m_pending")
 
 
 class PlcError(Exception):
@@ -101,9 +102,18 @@ class Plc:
     """One PLC: a pyads connection, the symbols it polls and the schedule it writes."""
 
     def __init__(
-        self, target: Target, schedule: Schedule, timeout_ms: int, start: bool = False
+        self,
+        target: Target,
+        schedule: Schedule,
+        timeout_ms: int,
+        start: bool = False,
+        m_ack_delay: float | None = None,
     ) -> None:
         self.target = target
+        # acknowledge each pending M function this long after it appeared (`[plc] m_ack =
+        # "plc"`: the GEO loop waits for the PLC); None: the loop's own PLC does it
+        self.m_ack_delay = m_ack_delay
+        self.m_since: tuple[int, float] | None = None  # (M number, first seen), not yet acked
         self.schedule = schedule
         self.conn = pyads.Connection(target.net_id, target.ams_port, target.address)
         self.timeout_ms = timeout_ms
@@ -177,10 +187,13 @@ class Plc:
         """Write the scheduled override (0.1 %) and feed hold where they change at time t."""
         ch = f"PLC.ch{self.target.channel}"
         wanted: dict[str, Any] = {}
-        if self.schedule.override:
-            wanted[f"{ch}.override"] = round(self.schedule.override_at(t) * 1000)
-        if self.schedule.feed_hold:
-            wanted[f"{ch}.feed_hold"] = self.schedule.hold_at(t)
+        sched = self.schedule
+        # a level is the schedule's from its first step on: before, it stays as found (an
+        # operator's feed hold is not released, nor the override set to 100 %, at t = 0)
+        if sched.override and t >= min(step for step, _ in sched.override) - 1e-12:
+            wanted[f"{ch}.override"] = round(sched.override_at(t) * 1000)
+        if sched.feed_hold and t >= min(t0 for t0, _ in sched.feed_hold) - 1e-12:
+            wanted[f"{ch}.feed_hold"] = sched.hold_at(t)
         if self.start_pending:  # NC start: a rising edge on PLC.chN.start, once
             wanted[f"{ch}.start"] = True
             self.start_pending = False
@@ -198,6 +211,25 @@ class Plc:
             self.written[symbol] = value
             done.append((symbol, value))
         return done
+
+    def acknowledge(self, t: float, m_pending: int) -> list[tuple[str, Any]]:
+        """The PLC's part of a synchronised M function: TRUE on PLC.chN.m_ack once the M
+        function has been pending for the delay, once per M function."""
+        if self.m_ack_delay is None or m_pending < 0:
+            self.m_since = None
+            return []
+        if self.m_since is None or self.m_since[0] != m_pending:
+            self.m_since = (m_pending, t)
+        number, since = self.m_since
+        if since < 0.0 or t - since < self.m_ack_delay - 1e-9:
+            return []  # acknowledged already (since < 0), or not yet due
+        symbol = f"PLC.ch{self.target.channel}.m_ack"
+        try:
+            self.conn.write_by_name(symbol, True, pyads.PLCTYPE_BOOL)
+        except (pyads.ADSError, RuntimeError, OSError) as exc:
+            raise PlcError(_describe(exc, self.target, f"writing {symbol}")) from None
+        self.m_since = (number, -1.0)
+        return [(symbol, 1)]
 
 
 def _fmt(label: str, value: Any) -> str:
@@ -261,7 +293,9 @@ def poll(
                 printer.transition(t_rel, label, last[label], values[label], values)
                 transitions += last[label] is not None
                 last[label] = values[label]
-        for symbol, value in plc.write_schedule(t_rel):
+        for symbol, value in plc.write_schedule(t_rel) + plc.acknowledge(
+            t_rel, values["m_pending"]
+        ):
             printer.wrote(t_rel, symbol, value)
         k += 1
         wait = t0 + k * cycle_s - clock()
@@ -275,10 +309,10 @@ def poll(
 
 def run(target: Target, schedule: Schedule, cycle_ms: float, duration_s: float | None,
         as_json: bool, timeout_ms: int = 1000, start: bool = False,
-        out: TextIO = sys.stdout) -> None:  # fmt: skip
+        out: TextIO = sys.stdout, m_ack_delay: float | None = None) -> None:  # fmt: skip
     """Poll until the duration ends or Ctrl-C. Raises PlcError."""
     quiet_adslib()
-    plc = Plc(target, schedule, timeout_ms, start)
+    plc = Plc(target, schedule, timeout_ms, start, m_ack_delay)
     printer = Printer(out, as_json, target.axis)
     t0 = time.monotonic()
     try:

@@ -11,6 +11,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pyads
 import pytest
 
 from tests.support.daemon import Daemon, write_config
@@ -67,6 +68,17 @@ def test_plc_sees_every_lift_and_its_writes_reach_the_loop(tmp_path: Path) -> No
         assert held.returncode == 0, held.stderr
         after = plc(cfg, "--host", f"127.0.0.1:{port}", "--duration", "0.1", "--json")
         assert after.returncode == 0, after.stderr
+        # an operator's hold: a schedule leaves it alone until its own first step
+        conn = pyads.Connection(d.net_id, 551, d.address)
+        conn.open()
+        try:
+            conn.write_by_name("PLC.ch1.feed_hold", True, pyads.PLCTYPE_BOOL)
+            later = plc(cfg, "--host", f"127.0.0.1:{port}", "--feedhold", "5:1", "--override",
+                        "5:80", "--duration", "0.3", "--json")  # fmt: skip
+            assert later.returncode == 0, later.stderr
+            assert conn.read_by_name("PLC.ch1.feed_hold") is True
+        finally:
+            conn.close()
     finally:
         assert d.stop() == 0
     records = [json.loads(line) for line in r.stdout.splitlines()]
@@ -79,6 +91,9 @@ def test_plc_sees_every_lift_and_its_writes_reach_the_loop(tmp_path: Path) -> No
     assert [rec["to"] for rec in hold if rec.get("object") == "feed_hold"][:2] == [0, 1]
     assert [rec["to"] for rec in map(json.loads, after.stdout.splitlines())
             if rec.get("object") == "feed_hold"] == [0]  # fmt: skip
+    quiet = [json.loads(line) for line in later.stdout.splitlines()]
+    assert not [rec for rec in quiet if "write" in rec]  # nothing before its first step
+    assert [rec["to"] for rec in quiet if rec.get("object") == "feed_hold"] == [1]
     seen = [rec for rec in records if rec.get("object") == "Z.lift_active"]
     ups = [rec["t"] for rec in seen if rec["to"] == 1]
     assert [rec["to"] for rec in seen] == [0, 1, 0, 1, 0]
@@ -139,3 +154,29 @@ def test_liftd_plc_prints_no_adslib_noise(tmp_path: Path) -> None:
         assert d.stop() == 0
     assert normal.returncode == 0, normal.stderr
     assert normal.stderr == "" and not ADSLIB_LINE.search(normal.stdout)
+
+
+def test_with_m_ack_plc_liftd_plc_acknowledges_each_m_function(tmp_path: Path) -> None:
+    """`[plc] m_ack = "plc"`: the channel waits at M04/M08 until the PLC acknowledges;
+    `liftd plc` does it after `m_ack_delay_ms` and shows m_pending (before, it only watched,
+    and the channel waited for ever)."""
+    program = tmp_path / "m.nc"
+    program.write_text("N10 G01 X10 F6000\nN20 M4\nN30 G01 X20\nN40 M8\nN50 G01 X30\nN60 M30\n")
+    cfg = write_config(tmp_path, program_file=str(program), program={"autostart": False},
+                       plc={"m_ack": "plc", "m_ack_delay_ms": 50})  # fmt: skip
+    d = Daemon(cfg)
+    try:
+        port = d.ready()
+        r = plc(cfg, "--host", f"127.0.0.1:{port}", "--start", "--duration", "3", "--json")
+        assert r.returncode == 0, r.stderr
+    finally:
+        assert d.stop() == 0
+    records = [json.loads(line) for line in r.stdout.splitlines()]
+    acks = [rec for rec in records if rec.get("write") == "PLC.ch1.m_ack"]
+    pending = [rec for rec in records if rec.get("object") == "m_pending"]
+    assert [rec["to"] for rec in pending] == [-1, 4, -1, 8, -1]
+    assert len(acks) == 2
+    for ack, seen in zip(acks, pending[1::2], strict=True):  # each after the delay, once
+        assert 0.05 - 0.011 <= ack["t"] - seen["t"] <= 0.2, (ack, seen)
+    states = [rec["to"] for rec in records if rec.get("object") == "state"]
+    assert states[-1] == 3  # the program ran to its end
