@@ -48,6 +48,7 @@ from liftd.service.control import Verdict
 from liftd.service.geo_log import GeoEventLog
 from liftd.settings import ConfigError, Settings, load_settings
 from liftd.settings.load import program_problem
+from liftd.settings.model import LiftdConfig
 from liftd.settings.programs import program_channel, read_program
 
 if TYPE_CHECKING:
@@ -56,6 +57,19 @@ if TYPE_CHECKING:
 
 TRACE_CAPACITY_S = 10.0  # trace ring: this many seconds of cycles
 RESTART_KEYS = ("host", "port", "net_id", "extra_net_ids", "ams_ports")
+RESTART_SECTIONS = ("rt", "log", "metrics")  # applied when the processes start
+
+
+def needs_restart(running: LiftdConfig, new: LiftdConfig) -> list[str]:
+    """The keys of `new` that differ from what the daemon runs with and that only a restart
+    applies: the listen address and AMS identity, the real-time, log and metrics settings."""
+    keys = [f"ads.{k}" for k in RESTART_KEYS
+            if getattr(new.ads, k) != getattr(running.ads, k)]  # fmt: skip
+    for name in RESTART_SECTIONS:
+        old_s, new_s = getattr(running, name), getattr(new, name)
+        keys += [f"{name}.{k}" for k in type(new_s).model_fields
+                 if getattr(new_s, k) != getattr(old_s, k)]  # fmt: skip
+    return keys
 
 
 class StartError(Exception):
@@ -116,6 +130,7 @@ class Daemon:
         trace_path: str | None, duration_s: float | None = None,
     ) -> None:  # fmt: skip
         self.settings = settings
+        self.started = settings  # what the listener, the loop's RT settings and logs run with
         self.duration_s = duration_s
         self.config_arg = config_arg
         self.program_arg = program_arg
@@ -374,8 +389,8 @@ class Daemon:
         except StartError as exc:
             self.log.error("config.reload_rejected", detail=str(exc))
             return Verdict(False, str(exc))
-        restart_keys = [k for k in RESTART_KEYS
-                        if getattr(new.config.ads, k) != getattr(old.config.ads, k)]  # fmt: skip
+        # against what runs (the configuration the daemon started with), not the last reload
+        restart_keys = needs_restart(self.started.config, new.config)
         if restart_keys:
             self.log.warning("config.reload_partial", needs_restart=restart_keys)
         try:

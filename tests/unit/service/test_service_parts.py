@@ -15,8 +15,10 @@ from liftd.objects.catalog import AdsStats
 from liftd.runtime.cycle import BUCKETS, bucket
 from liftd.runtime.shared import LoopTotals
 from liftd.service import control, systemd
+from liftd.service.daemon import needs_restart
 from liftd.service.geo_log import GeoEventLog
 from liftd.service.metrics import BUCKETS_NS, Sample, buckets, registry
+from liftd.settings.model import LiftdConfig
 
 
 def hist(*ns: int) -> list[int]:
@@ -85,3 +87,16 @@ def test_geo_events_become_log_lines_at_their_level_and_quiet_ones_are_limited()
         ("lift.start", "info"), ("lift.override_limited", "info"),
     ]  # fmt: skip
     assert logs[3]["value"] == 0.3  # no float noise
+
+
+def test_a_reload_names_what_needs_a_restart_against_what_runs() -> None:
+    """The daemon compares a reloaded file with the configuration it started with: a port
+    changed by an earlier reload still needs the restart, and a port changed back does not
+    (it compared with the last accepted file: 'restart for port' came and went wrongly)."""
+    running = LiftdConfig.model_validate({"ads": {"port": 48898}})
+    moved = LiftdConfig.model_validate({"ads": {"port": 1}, "rt": {"sched_fifo_priority": 0},
+                                        "log": {"format": "json"}})  # fmt: skip
+    assert needs_restart(running, running) == []
+    assert needs_restart(running, moved) == ["ads.port", "rt.sched_fifo_priority", "log.format"]
+    assert needs_restart(running, moved.model_copy(update={"ads": running.ads, "rt": running.rt,
+                                                           "log": running.log})) == []  # fmt: skip
