@@ -49,6 +49,10 @@ class CncProvider:
         self.sink = sink
         self.symbol_version = 1
         self.down_state = AdsState.STOP  # reported while the GEO task is not running
+        # the levels the PLC wrote (override in 0.1 %, feed hold), read back as written, as
+        # from the CNC's HLI memory: the loop takes a write a cycle or two later, and a PLC
+        # that checks its write by reading it back must not see the old value meanwhile
+        self.levels: dict[tuple[int, PlcSignal], int] = {}
 
     # -- addressing --------------------------------------------------------------------------------
     def _locate(self, ig: int, io: int) -> tuple[CncObject, int]:
@@ -76,7 +80,12 @@ class CncProvider:
     def _value(self, obj: CncObject, length: int) -> bytes:
         if length < obj.type.size:
             raise AdsError(AdsErr.INVALIDSIZE, f"{obj.symbol} has {obj.type.size} bytes")
-        return obj.type.pack(obj.get(self._view()))
+        view = self._view()
+        if obj.signal is not None:
+            written = self.levels.get((obj.channel, obj.signal))
+            if written is not None:
+                return obj.type.pack(written)
+        return obj.type.pack(obj.get(view))
 
     # -- ObjectProvider ---------------------------------------------------------------------------
     def read(self, index_group: int, index_offset: int, length: int) -> bytes:
@@ -120,11 +129,13 @@ class CncProvider:
                     AdsErr.INVALIDDATA, f"override {raw} (0..{MAX_OVERRIDE_PERMILLE} × 0.1 %)"
                 )
             self.sink(PlcWrite(signal, units.isg_permille_to_fraction(int(raw)), channel))
+            self.levels[(channel, signal)] = int(raw)
             return
         if raw not in (0, 1):
             raise AdsError(AdsErr.INVALIDDATA, f"BOOL value {raw}")
         if signal is PlcSignal.FEED_HOLD:
             self.sink(PlcWrite(signal, float(raw), channel))
+            self.levels[(channel, signal)] = int(raw)
         elif raw:  # commands and the acknowledge act on TRUE; FALSE does nothing
             self.sink(PlcWrite(signal, 1.0, channel))
 

@@ -137,7 +137,24 @@ def test_plc_inputs(w: World) -> None:
     assert w.code(w.p.write, sym.index_group, sym.index_offset, b"\x01") == 0x705
     ro = w.p.find_symbol("GEO.ch1.override")
     assert w.code(w.p.write, ro.index_group, ro.index_offset, struct.pack("<H", 5)) == 0x704
-    assert w.p.read(sym.index_group, sym.index_offset, 2) == struct.pack("<H", 1000)  # requested
+    # the PLC reads its levels back as it wrote them (HLI memory), at once, while the loop has
+    # not taken them yet (the view still has 100 %, no hold); a refused write changes nothing
+    assert w.p.read(sym.index_group, sym.index_offset, 2) == struct.pack("<H", 1500)
+    hold = w.p.find_symbol("PLC.ch1.feed_hold")
+    assert w.p.read(hold.index_group, hold.index_offset, 1) == b"\x01"
+    taken = w.p.find_symbol("GEO.ch1.override_requested")
+    assert w.p.read(taken.index_group, taken.index_offset, 2) == struct.pack("<H", 1000)
+    put("PLC.ch1.override", struct.pack("<H", 700))
+    assert w.p.read(sym.index_group, sym.index_offset, 2) == struct.pack("<H", 700)
+
+
+def test_a_plcs_level_reads_the_loops_value_until_written(w: World) -> None:
+    """Before any write (a fresh daemon), the level is what the loop has (the view's)."""
+    sym = w.p.find_symbol("PLC.ch1.override")
+    w.view = GeoView(snapshot()._replace(override_requested=0.5), LoopStats(cycles=5))
+    assert w.p.read(sym.index_group, sym.index_offset, 2) == struct.pack("<H", 500)
+    w.view = None  # and a stopped GEO task answers 0x707 as for any object
+    assert w.code(w.p.read, sym.index_group, sym.index_offset, 2) == AdsErr.NOTREADY
 
 
 def test_geo_cycle_is_the_loops_count_which_a_reload_does_not_reset(w: World) -> None:
