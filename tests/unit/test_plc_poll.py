@@ -35,11 +35,15 @@ class FakePlc:
         if 0.029 < t < 0.031:
             self.clock.now += 0.025  # a slow answer: this PLC cycle overruns
         return {"lift_active": 0.045 <= t < 0.075, "lift_suppressed": False, "state": 4,
-                "feed_hold": False, "error_id": 0, "line": 10, "override": 1000}  # fmt: skip
+                "feed_hold": False, "error_id": 0, "line": 10, "override": 1000,
+                "m_pending": -1}  # fmt: skip
 
     def write_schedule(self, t: float) -> list[tuple[str, Any]]:
         self.log.append("write")
         return [("PLC.ch1.override", 500)] if t == 0 else []
+
+    def acknowledge(self, t: float, m_pending: int) -> list[tuple[str, Any]]:
+        return []
 
 
 def test_poll_prints_each_transition_once_and_counts_overruns() -> None:
@@ -52,7 +56,7 @@ def test_poll_prints_each_transition_once_and_counts_overruns() -> None:
     assert [to for _, to in lift] == [0, 1, 0]
     assert lift[1][0] == 0.055 and lift[2][0] == 0.08  # late read at once, then on the grid
     assert fake.log[:2] == ["read", "write"]  # inputs before outputs
-    assert records[5] == {"t": 0.0, "write": "PLC.ch1.override", "value": 500}
+    assert records[6] == {"t": 0.0, "write": "PLC.ch1.override", "value": 500}
     assert counters["late_cycles"] == 1
     assert counters["transitions"] == 2  # the first sample is not a transition
     assert counters["cycles"] == 18  # 20 slots of 10 ms, two lost to the overrun
