@@ -38,6 +38,7 @@ class BoundaryActions:
     ack_time: float
     waiting: list[Action]  # actions left at the boundary where the path rests
     wait_since: float  # time from which the current wait counts
+    rest_since: float  # time the path came to rest at the boundary where it rests
     z_rest: tuple[int, float] | None  # (axis, Z) after a lift that ended here
     events: list[Event]
     lift_ranges: tuple[LiftRange, ...]  # the program's (`GeoProgram.ranges`)
@@ -55,7 +56,7 @@ class BoundaryActions:
         actions = self.prog.path.boundaries[c.boundary].actions
         if c.at_rest:
             self.waiting = list(actions)
-            self.wait_since = c.t
+            self.wait_since = self.rest_since = c.t
             return
         for action in actions:  # passing without a stop: nothing here waits
             self._do(action, c.t, c)
@@ -154,12 +155,17 @@ class BoundaryActions:
             lift.step(t_at, s_end, crossing.v if crossing else 0.0, 0.0, 0.0, self.ov_eff)
         elif lift.t < t_at:  # Z to the time the path got here
             lift.step(t_at, s_end, 0.0, 0.0, t_at - lift.t, self.ov_eff)
+        rec = lift.record
+        # where the path rests, the program's own waits before LIFT_END (a dwell, an M
+        # function, a STOP) end at `reached`: they are not the lift's delay, the wait for Z is
+        reached = t_at
         if crossing is None and not lift.z_done:
             lift.step(now, s_end, 0.0, 0.0, 0.0, self.ov_eff)  # the path waits here for Z
             if not self._z_landed():  # (a call: mypy keeps the narrowing of lift.z_done)
                 return False
             t_at = self.wait_since = max(t_at, lift.landed)
-        rec = lift.record
+        if crossing is None and rec is not None:
+            rec.waits += max(0.0, reached - max(self.rest_since, rec.t_start))
         error = abs(lift.z - lift.current.start.target)
         # Z at POS but its descent ends a rounding later than the path's crossing (≤ 1 µs; wide
         # seed 1965: 2e-17 m, 0.5 µs), or a few µs later at a crawl (wide --stops seed 983: the

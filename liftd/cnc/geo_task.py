@@ -85,7 +85,7 @@ class GeoTask(LiftAhead):
         self.waiting = []
         self.z_rest = None
         self.z_hold: tuple[int, float] | None = None  # (axis, Z) a RESET in a range left
-        self.wait_since = 0.0
+        self.wait_since = self.rest_since = 0.0
         self.ack_time = 0.0
         self.runs = 0
         self.path: PathProgram  # self.prog.path

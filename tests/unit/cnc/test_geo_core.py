@@ -241,6 +241,37 @@ def test_path_delay_of_a_range_that_starts_at_a_waiting_point_is_not_the_wait(wa
 
 
 @pytest.mark.parametrize("method", [LiftMethod.ADVANCED, LiftMethod.LIFTING])
+@pytest.mark.parametrize("wait", ["G04 X1.5", "M08"])
+@pytest.mark.parametrize("path", ["G01 X300 F24000\n", ""])
+def test_path_delay_of_a_range_that_ends_at_a_waiting_point_is_not_the_wait(
+    wait: str, path: str, method: LiftMethod
+) -> None:
+    """A dwell or an acknowledged M function where the path rests before LIFT_END (also in a
+    range without path motion) is the program's time, not the lift's: it was reported as path
+    delay (1.5 s for a G04 X1.5; exploratory session)."""
+    ch = make_channel(method)
+    text = (f"G01 X10 Y10 Z1 F6000\nZ[LIFT_START POS=1 POS_LIMIT=30]\n{path}{wait}\n"
+            "Z[LIFT_END]\nM30\n")  # fmt: skip
+    task, snaps = run_task(ch, text)
+    assert snaps[-1].state is ChannelState.READY and not events(snaps, "lift.late")
+    (rec,) = task.lift.records
+    assert rec.path_delay == pytest.approx(0.0, abs=1e-9), (rec.t_end - rec.t_start, rec.waits)
+
+
+def test_path_delay_after_a_dwell_is_the_wait_for_z_that_remains() -> None:
+    """A range without path motion: Z climbs 60 mm (about 0.18 s); a dwell of 0.05 s before
+    LIFT_END leaves the rest of Z's climb as the path's delay."""
+    ch = make_channel()
+    text = "G01 X10 Y10 Z1 F6000\nZ[LIFT_START POS=61 POS_LIMIT=70]\nG04 X0.05\nZ[LIFT_END]\nM30\n"
+    task, snaps = run_task(ch, text)
+    (rec,) = task.lift.records
+    z_time = task.lift.z_time(0.001, 0.061)
+    assert z_time > 0.1
+    assert rec.path_delay == pytest.approx(rec.t_end - rec.t_start - 0.05, abs=1e-9)
+    assert rec.t_end - rec.t_start == pytest.approx(z_time, abs=2e-3)
+
+
+@pytest.mark.parametrize("method", [LiftMethod.ADVANCED, LiftMethod.LIFTING])
 def test_any_axis_of_the_channel_lifts_with_its_own_dynamics(method: LiftMethod) -> None:
     """Vendor §3: the lift command names its axis. Here Y lifts while X cuts, then Z: each axis
     lands at its POS within its own limits, the flags and counters are that axis's, and the
