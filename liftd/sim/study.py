@@ -27,7 +27,7 @@ from pathlib import Path
 
 from liftd.cnc.params import ChannelParams
 from liftd.cnc.plc import Schedule
-from liftd.sim.compare import METHODS, Comparison, compare
+from liftd.sim.compare import METHODS, Comparison, LiftPair, compare
 from liftd.sim.summary import JsonObject
 
 Prepare = Callable[[Path, str], ChannelParams]  # program path and text → its channel
@@ -97,13 +97,14 @@ class ProgramRow:
     lifting_z_overload_cycles: int = 0  # above the P-AXIS-00441 level (00442 included)
     lifting_z_error_cycles: int = 0  # above the P-AXIS-00442 level
     lifting_z_a_max_ratio: float = 0.0  # the largest of its lifts
+    unfinished_after: float = 0.0  # unfinished: the simulated seconds it ran (`why` says so)
 
     @classmethod
     def failed(cls, program: str, status: Status, message: str) -> ProgramRow:
         return cls(program, status, (RowError("", 0, 0, message),))
 
     @classmethod
-    def of(cls, program: str, cmp: Comparison) -> ProgramRow:
+    def of(cls, program: str, cmp: Comparison, max_time: float = 0.0) -> ProgramRow:
         s = cmp.summary
         whole = [p for p in s.lifts if p.clearance_ratio is not None]
         adv = [p.advanced for p in whole if p.advanced is not None]
@@ -123,7 +124,7 @@ class ProgramRow:
             lifts=len(s.lifts),
             compared=len(whole),
             suppressed=sum(p.ref.suppressed for p in s.lifts),
-            open=sum(x.open for m in METHODS for x in s.run(m).lifts),
+            open=sum(_open(p) for p in s.lifts),
             clearance_advanced_mm=_mean(x.mean_clearance_mm for x in adv),
             clearance_lifting_mm=_mean(x.mean_clearance_mm for x in lift),
             clearance_ratio_mean=s.totals.mean_clearance_ratio,
@@ -137,14 +138,18 @@ class ProgramRow:
             lifting_z_error_cycles=s.lifting.z_overload.error_cycles,
             lifting_z_a_max_ratio=s.totals.z_a_max_ratio.lifting,
             errors=errors,
+            unfinished_after=max_time if status is Status.UNFINISHED else 0.0,
         )
 
     @property
     def why(self) -> str:
         """The first MAX_WHY errors as one line each, joined by "; "."""
         more = len(self.errors) - MAX_WHY
-        text = "; ".join(e.text() for e in self.errors[:MAX_WHY])
-        return text + (f"; … {more} more" if more > 0 else "")
+        texts = [e.text() for e in self.errors[:MAX_WHY]]
+        if self.unfinished_after:
+            texts.insert(0, f"did not finish within {self.unfinished_after:g} s simulated "
+                            "(--max-time)")  # fmt: skip
+        return "; ".join(texts) + (f"; … {more} more" if more > 0 else "")
 
     def value(self, column: str) -> object:
         """The value of a report column (`errors` counts them, `why` spells them out)."""
@@ -206,7 +211,7 @@ class ProgramResult:
     max_rss_kib: int = 0
 
     @classmethod
-    def of(cls, program: str, cmp: Comparison) -> ProgramResult:
+    def of(cls, program: str, cmp: Comparison, max_time: float = 0.0) -> ProgramResult:
         pairs = [p for p in cmp.summary.lifts if p.clearance_ratio is not None]
         stride = -(-len(pairs) // MAX_POINTS_PER_PROGRAM) or 1
         points = tuple(
@@ -215,7 +220,12 @@ class ProgramResult:
             if p.advanced is not None and p.lifting is not None
         )
         ratios = tuple(p.clearance_ratio for p in pairs if p.clearance_ratio is not None)
-        return cls(ProgramRow.of(program, cmp), points, ratios, max_rss_kib())
+        return cls(ProgramRow.of(program, cmp, max_time), points, ratios, max_rss_kib())
+
+
+def _open(pair: LiftPair) -> bool:
+    """A range the program stopped inside, in either run (counted once, not per run)."""
+    return any(x is not None and x.open for x in (pair.advanced, pair.lifting))
 
 
 def run_one(cfg: StudyConfig, program: str) -> ProgramResult:
@@ -230,7 +240,7 @@ def run_one(cfg: StudyConfig, program: str) -> ProgramResult:
     try:
         ch = cfg.prepare(path, text)
         cmp = compare(ch, text, Schedule(), cfg.m_ack_delay, None, cfg.max_time, path.name)
-        return ProgramResult.of(program, cmp)
+        return ProgramResult.of(program, cmp, cfg.max_time)
     except Exception as exc:  # a bug in liftd, reported with the program that shows it
         reason = f"liftd failed: {type(exc).__name__}: {exc}"
         return ProgramResult(ProgramRow.failed(program, Status.FAILED, reason))

@@ -74,6 +74,18 @@ def test_unreadable_programs_and_failures_of_liftd_are_rows(tmp_path: Path) -> N
     assert row.status is Status.FAILED and "ZeroDivisionError: a bug" in row.why
 
 
+def test_an_unfinished_program_says_why_and_counts_its_open_range_once(tmp_path: Path) -> None:
+    """`why` of an unfinished row says the limit (it was empty), and the range both runs were
+    inside when it stopped is one open range (it was counted once per run: open 2, lifts 1)."""
+    program = tmp_path / "long.nc"
+    program.write_text("G01 X10 Y10 Z1 F6000\nZ[LIFT_START POS=1 POS_LIMIT=30]\n"
+                       "G01 X1000 F600\nZ[LIFT_END]\nM30\n")  # fmt: skip
+    row = study.run_one(StudyConfig(prepare, 0.02, 1.5), str(program)).row
+    assert row.status is Status.UNFINISHED
+    assert row.why == "did not finish within 1.5 s simulated (--max-time)"
+    assert row.to_json()["errors"] == [] and (row.lifts, row.open) == (1, 1)
+
+
 def test_results_come_in_program_order_with_a_bounded_window(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
