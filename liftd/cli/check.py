@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 from liftd.cli.common import (
+    EXIT_CONFIG,
     EXIT_OK,
     EXIT_PROGRAM,
     channel_arg,
@@ -19,6 +20,7 @@ from liftd.cnc.nc.lift_summary import LiftPlanHook, LiftRangeSummary, LiftRangeT
 from liftd.cnc.nc.lift_summary import describe as describe_lift
 from liftd.cnc.params import ChannelParams, LiftMethod
 from liftd.settings import Settings
+from liftd.settings.load import program_problem
 from liftd.settings.programs import program_channel
 
 
@@ -78,6 +80,10 @@ def _lift_plan(settings: Settings, ch: ChannelParams, text: str) -> LiftPlanHook
 
 def cmd_check(args: argparse.Namespace) -> int:
     settings = load_config(args)
+    problem = None if args.programs else program_problem(settings)
+    if problem is not None:  # as `liftd run` says it: the liftd.toml line that names it
+        print(problem, file=sys.stderr)
+        return EXIT_CONFIG
     for c in settings.machine:
         ch = c.params
         axes = " ".join(ax.name for ax in ch.axes)
