@@ -109,7 +109,7 @@ def parse_config_text(text: str, file: str) -> LiftdConfig:
             loc = tuple(err["loc"])
             key = ".".join(str(p) for p in loc if p != "[key]")
             value = str(loc[-2]) if loc[-1:] == ("[key]",) else _value_at(data, loc)
-            message = err["msg"]
+            message = err["msg"].removeprefix("Value error, ")  # liftd's own validators' text
             if err["type"] == "extra_forbidden":
                 message = "unknown key"
             problems.append(

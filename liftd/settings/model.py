@@ -10,7 +10,15 @@ import ipaddress
 import re
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, StrictBool, StringConstraints, field_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    StrictBool,
+    StringConstraints,
+    ValidationInfo,
+    field_validator,
+)
 
 NET_ID = re.compile(r"^(\d{1,3})\.(\d{1,3})\.(\d{1,3})\.(\d{1,3})\.(\d{1,3})\.(\d{1,3})$")
 
@@ -24,6 +32,17 @@ def check_net_id(value: str) -> str:
 
 class _Section(BaseModel):
     model_config = ConfigDict(frozen=True, extra="forbid")
+
+    @field_validator("*", mode="before")
+    @classmethod
+    def _a_number_is_written_as_one(cls, value: object, info: ValidationInfo) -> object:
+        """A number key takes a TOML number: pydantic would read "1000" or true as one (a
+        quoted or boolean value is a typo to point at, not to guess)."""
+        field = cls.model_fields.get(info.field_name or "")
+        if field is not None and field.annotation in (int, float) and isinstance(value, str | bool):
+            kind = "a string" if isinstance(value, str) else "a boolean"
+            raise ValueError(f"must be a number, not {kind}")
+        return value
 
 
 class CncSection(_Section):
