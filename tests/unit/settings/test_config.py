@@ -46,7 +46,7 @@ def test_contract_keys_are_accepted_and_everything_else_defaults() -> None:
         ),
         ('[cnc]\nchannel = 1\nlift_axs = "Z"\n', 3, "cnc.lift_axs", "Z", "unknown key"),
         ('[ads]\nnet_id = "1.2.3"\n', 2, "ads.net_id", "1.2.3", "six numbers"),
-        ('[ads]\nport = "x"\n', 2, "ads.port", "x", "valid integer"),
+        ('[ads]\nport = "x"\n', 2, "ads.port", "x", "must be a number, not a string"),
         ("[adss]\nport = 1\n", 1, "adss", None, "unknown key"),
         ('[ads]\nallow_ips = ["10.0.0.0/33"]\n', 2, "ads.allow_ips", None, "10.0.0.0/33"),
         ('[ads]\nudp_discovery = "yes"\n', 2, "ads.udp_discovery", "yes", "valid boolean"),
