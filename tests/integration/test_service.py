@@ -20,7 +20,7 @@ from pathlib import Path
 import pyads
 import pytest
 
-from tests.support.daemon import Daemon, Notify, free_port, write_config
+from tests.support.daemon import Daemon, Notify, free_port, runtime_env, write_config
 from tests.support.paths import REPO
 from tests.support.wait import wait_for
 
@@ -109,9 +109,7 @@ def test_an_unreadable_program_is_a_configuration_error_naming_file_line_key_val
 def test_without_a_program_the_daemon_idles_and_liftd_reload_brings_one(tmp_path: Path) -> None:
     """What a PLC integrator expects: the objects are served at once (READY), a program comes
     with the configuration, `systemctl reload` (liftd reload) applies it and says so."""
-    runtime = tmp_path / "run"
-    runtime.mkdir()
-    env = {"RUNTIME_DIRECTORY": str(runtime)}
+    env = runtime_env(tmp_path)
     cfg = write_config(tmp_path, program={"autostart": True, "repeat": True})
     demo = str(REPO / "config" / "programs" / "demo.nc")
     cfg.write_text(cfg.read_text().replace(f'file = "{demo}"\n', ""))
@@ -159,9 +157,7 @@ def test_without_a_program_the_daemon_idles_and_liftd_reload_brings_one(tmp_path
 def test_a_reload_keeps_the_plcs_feed_hold_and_override(tmp_path: Path) -> None:
     """The PLC wrote its levels once, over ADS: a new configuration (here one that brings a
     program, which autostarts) must not release the feed hold or put the path back to 100 %."""
-    runtime = tmp_path / "run"
-    runtime.mkdir()
-    env = {"RUNTIME_DIRECTORY": str(runtime)}
+    env = runtime_env(tmp_path)
     cfg = write_config(tmp_path, program={"autostart": True})
     demo = str(REPO / "config" / "programs" / "demo.nc")
     cfg.write_text(cfg.read_text().replace(f'file = "{demo}"\n', ""))
@@ -199,9 +195,7 @@ def test_a_reset_ends_a_repeating_job_and_a_reload_does_not(tmp_path: Path) -> N
     """`repeat` starts the program again at its end; a RESET is not its end (the channel stays
     READY until the PLC starts it), and a reload at a program boundary of a job the PLC
     started (autostart off) lets the job go on with the new configuration."""
-    runtime = tmp_path / "run"
-    runtime.mkdir()
-    env = {"RUNTIME_DIRECTORY": str(runtime)}
+    env = runtime_env(tmp_path)
     short = tmp_path / "short.nc"
     short.write_text("N10 G01 X20 F6000\nN20 G01 X0\nN30 M30\n")  # 0.4 s and the ramps
     cfg = write_config(tmp_path, program={"autostart": False, "repeat": True})
@@ -209,35 +203,36 @@ def test_a_reset_ends_a_repeating_job_and_a_reload_does_not(tmp_path: Path) -> N
         str(REPO / "config" / "programs" / "demo.nc"), str(short)))  # fmt: skip
     d = Daemon(cfg, env=env)
 
-    def starts() -> int:
-        return sum(rec.get("event") == "geo.program_start" for rec in list(d.logs))
-
     try:
         d.ready()
         plc = pyads.Connection(d.net_id, 551, d.address)
         plc.open()
         try:
             time.sleep(0.3)
-            assert starts() == 0 and plc.read_by_name("GEO.ch1.state") == 3  # waits for START
+            assert (
+                d.count("geo.program_start") == 0 and plc.read_by_name("GEO.ch1.state") == 3
+            )  # waits for START
             plc.write_by_name("PLC.ch1.start", True, pyads.PLCTYPE_BOOL)
-            assert wait_for(lambda: starts() >= 2, 10)  # it repeats
+            assert wait_for(lambda: d.count("geo.program_start") >= 2, 10)  # it repeats
             r = liftd("reload", env=env)
             assert r.returncode == 0 and "applied" in r.stdout, r.stderr
             assert d.event("geo.reloaded", 10) is not None
-            after = starts()
-            assert wait_for(lambda: starts() >= after + 2, 10)  # and goes on repeating
+            after = d.count("geo.program_start")
+            assert wait_for(
+                lambda: d.count("geo.program_start") >= after + 2, 10
+            )  # and goes on repeating
             assert wait_for(lambda: plc.read_by_name("GEO.ch1.path_velocity") > 0.0, 10)
             plc.write_by_name("PLC.ch1.reset", True, pyads.PLCTYPE_BOOL)
             assert d.event("geo.reset", 10) is not None
             assert wait_for(lambda: plc.read_by_name("GEO.ch1.state") == 3)
-            reset_at = starts()
+            reset_at = d.count("geo.program_start")
             held_until = time.monotonic() + 0.5
             while time.monotonic() < held_until:  # READY, until the PLC starts it again
                 assert plc.read_by_name("GEO.ch1.state") == 3
                 time.sleep(0.02)
-            assert starts() == reset_at
+            assert d.count("geo.program_start") == reset_at
             plc.write_by_name("PLC.ch1.start", True, pyads.PLCTYPE_BOOL)
-            assert wait_for(lambda: starts() >= reset_at + 2, 10)
+            assert wait_for(lambda: d.count("geo.program_start") >= reset_at + 2, 10)
         finally:
             plc.close()
     finally:
@@ -247,16 +242,11 @@ def test_a_reset_ends_a_repeating_job_and_a_reload_does_not(tmp_path: Path) -> N
 def test_a_reload_a_reset_applies_does_not_start_the_program_by_itself(tmp_path: Path) -> None:
     """`autostart` starts a program a reload brings, but not at a RESET: the PLC aborted the
     job and expects READY until its own START, whatever configuration came meanwhile."""
-    runtime = tmp_path / "run"
-    runtime.mkdir()
-    env = {"RUNTIME_DIRECTORY": str(runtime)}
+    env = runtime_env(tmp_path)
     short = tmp_path / "short.nc"
     short.write_text("N10 G01 X20 F6000\nN20 G01 X0\nN30 M30\n")
     cfg = write_config(tmp_path, program={"autostart": True, "repeat": True})
     d = Daemon(cfg, env=env)
-
-    def starts() -> int:
-        return sum(rec.get("event") == "geo.program_start" for rec in list(d.logs))
 
     try:
         d.ready()
@@ -272,14 +262,16 @@ def test_a_reload_a_reset_applies_does_not_start_the_program_by_itself(tmp_path:
             plc.write_by_name("PLC.ch1.reset", True, pyads.PLCTYPE_BOOL)
             reloaded = d.event("geo.reloaded", 10)
             assert reloaded is not None and reloaded["text"] == str(short), reloaded
-            reset_at = starts()
+            reset_at = d.count("geo.program_start")
             held_until = time.monotonic() + 0.5
             while time.monotonic() < held_until:  # READY, until the PLC starts it
                 assert plc.read_by_name("GEO.ch1.state") == 3
                 time.sleep(0.02)
-            assert starts() == reset_at
+            assert d.count("geo.program_start") == reset_at
             plc.write_by_name("PLC.ch1.start", True, pyads.PLCTYPE_BOOL)
-            assert wait_for(lambda: starts() >= reset_at + 2, 10)  # the new one, repeating
+            assert wait_for(
+                lambda: d.count("geo.program_start") >= reset_at + 2, 10
+            )  # the new one, repeating
         finally:
             plc.close()
     finally:
@@ -292,9 +284,7 @@ def test_a_reload_waits_for_the_plcs_reset_of_an_nc_error_and_starts_nothing(
     """An NC error is cleared by the PLC's RESET only: a reload waits for it (before, it
     cleared the error and, with autostart, moved the axes at once). And a channel READY after
     a RESET stays there through any later reload until the PLC's START."""
-    runtime = tmp_path / "run"
-    runtime.mkdir()
-    env = {"RUNTIME_DIRECTORY": str(runtime)}
+    env = runtime_env(tmp_path)
     bad = tmp_path / "bad.nc"  # an error at run time, after a move
     bad.write_text("N10 G01 X20 F6000\nN20 P1=0\nN30 P2=1/P1\nN40 G01 X0\nN50 M30\n")
     short = tmp_path / "short.nc"
@@ -303,9 +293,7 @@ def test_a_reload_waits_for_the_plcs_reset_of_an_nc_error_and_starts_nothing(
     demo = str(REPO / "config" / "programs" / "demo.nc")
     cfg.write_text(cfg.read_text().replace(demo, str(bad)))
     d = Daemon(cfg, env=env)
-
-    def count(event: str) -> int:
-        return sum(rec.get("event") == event for rec in list(d.logs))
+    count = d.count
 
     def stays(state: int, seconds: float = 0.5) -> None:
         until = time.monotonic() + seconds
@@ -347,10 +335,8 @@ def test_a_reload_waits_for_the_plcs_reset_of_an_nc_error_and_starts_nothing(
 def test_reload_fails_for_a_rejected_configuration_and_succeeds_when_applied(
     tmp_path: Path,
 ) -> None:
-    runtime = tmp_path / "run"
-    runtime.mkdir()
     notify = Notify(tmp_path)
-    env = {"RUNTIME_DIRECTORY": str(runtime), "NOTIFY_SOCKET": notify.path}
+    env = {**runtime_env(tmp_path), "NOTIFY_SOCKET": notify.path}
     cfg = write_config(tmp_path, program={"repeat": True})
     d = Daemon(cfg, env=env)
     try:

@@ -77,6 +77,13 @@ class Notify:
         self.sock.close()
 
 
+def runtime_env(tmp: Path) -> dict[str, str]:
+    """A RUNTIME_DIRECTORY of its own (the reload control socket), as systemd gives one."""
+    runtime = tmp / "run"
+    runtime.mkdir(exist_ok=True)
+    return {"RUNTIME_DIRECTORY": str(runtime)}
+
+
 class Daemon:
     def __init__(
         self, config: Path, *args: str, env: dict[str, str] | None = None,
@@ -115,6 +122,10 @@ class Daemon:
                 break
             time.sleep(0.02)
         return None
+
+    def count(self, name: str) -> int:
+        """How many log records of event `name` so far."""
+        return sum(rec.get("event") == name for rec in list(self.logs))
 
     def ready(self) -> int:
         rec = self.event("daemon.ready")
