@@ -202,7 +202,6 @@ def test_a_reset_ends_a_repeating_job_and_a_reload_does_not(tmp_path: Path) -> N
     cfg.write_text(cfg.read_text().replace(
         str(REPO / "config" / "programs" / "demo.nc"), str(short)))  # fmt: skip
     d = Daemon(cfg, env=env)
-
     try:
         d.ready()
         plc = pyads.Connection(d.net_id, 551, d.address)
@@ -247,7 +246,6 @@ def test_a_reload_a_reset_applies_does_not_start_the_program_by_itself(tmp_path:
     short.write_text("N10 G01 X20 F6000\nN20 G01 X0\nN30 M30\n")
     cfg = write_config(tmp_path, program={"autostart": True, "repeat": True})
     d = Daemon(cfg, env=env)
-
     try:
         d.ready()
         plc = pyads.Connection(d.net_id, 551, d.address)
