@@ -62,6 +62,8 @@ class RowError:
     message: str
 
     def text(self) -> str:
+        if not self.error_id and not self.line:  # not the program's: unreadable, liftd failed
+            return self.message
         where = f"{self.method} run, " if self.method else ""
         ident = f"error {self.error_id}" if self.error_id else "failed"
         return f"{where}line {self.line}: {ident}: {self.message}"

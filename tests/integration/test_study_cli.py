@@ -196,6 +196,6 @@ def test_configuration_and_argument_errors_exit_2(tmp_path: Path) -> None:
 def test_an_unreadable_program_is_a_row_and_exit_1(tmp_path: Path) -> None:
     missing = tmp_path / "missing.nc"
     r = liftd("study", str(missing), "-c", CONFIG, "--jobs", "1", "--out", str(tmp_path / "o"))
-    assert r.returncode == 1 and "missing.nc: unreadable: " in r.stderr
+    assert r.returncode == 1 and "missing.nc: unreadable: cannot read program: " in r.stderr
     rows = list(csv.DictReader((tmp_path / "o" / "report.csv").open(newline="")))
     assert [(row["status"], row["lifts"]) for row in rows] == [("unreadable", "0")]
