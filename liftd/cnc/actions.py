@@ -44,6 +44,9 @@ class BoundaryActions:
     lift_ranges: tuple[LiftRange, ...]  # the program's (`GeoProgram.ranges`)
     range_of: dict[int, int]  # id of a LIFT_START's spec -> its range (`GeoProgram.range_of`)
     prime_next: int  # the range whose start `LiftAhead._prime_lift` prepares
+    reset_requested: bool  # a PLC RESET is under way (the path brakes, Z rises to POS_LIMIT)
+    z_hold: tuple[int, float] | None  # (axis, Z) a RESET left, until the next START
+    axis_of: dict[str, int]  # axis name -> index in the channel
 
     def _end_of_program(self, t: float, line: int) -> None:
         """The program ends (M30 reached, or an error stops it): `GeoTask`'s."""
@@ -71,7 +74,9 @@ class BoundaryActions:
         if k is not None and k >= len(self.prog.path.segments):
             self._end_of_program(self.wait_since, self.prog.path.boundaries[k].line)
             return False
-        return self.state is ACTIVE
+        # a RESET under way keeps the path where it came to rest (a resume inside a range
+        # set the lift rising for the rest of it again, instead of holding at POS_LIMIT)
+        return self.state is ACTIVE and not self.reset_requested
 
     def _do(self, action: Action, t_at: float, crossing: Crossing | None, now: float = 0.0) -> bool:
         """Execute one action at time t_at; False while it still waits (only where the path
@@ -108,6 +113,10 @@ class BoundaryActions:
         return True
 
     def _lift_start(self, rng: LiftRange, t_at: float, crossing: Crossing | None) -> None:
+        if self.reset_requested:  # the path brakes for a RESET: no range starts any more
+            if self.lift.current is None:  # the axis stays where it is, not the path's POS
+                self.z_hold = (self.axis_of[rng.start.axis], rng.start.z_start)
+            return
         if self.lift.current is not None:  # the last lift is still finishing (late): go on from Z
             z, vz, az = self.lift.z, self.lift.vz, self.lift.az
             self._close_lift(t_at, rng.start.line)
@@ -149,6 +158,11 @@ class BoundaryActions:
         lift = self.lift
         m = lift.motion
         if lift.current is None or m is None:
+            return True
+        if self.reset_requested:
+            # the path braking for a RESET passes LIFT_END: the range ends with the RESET,
+            # Z held up at POS_LIMIT (`lift.aborted`), never closed here with Z far from POS
+            # and handed back to the path's Z (Z jumped up to 35 mm in one cycle: bench_reset)
             return True
         s_end = self.prog.path.boundaries[lift.current.k_end].s
         if not m.uses_time:  # Z to where the path got

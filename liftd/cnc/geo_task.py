@@ -188,7 +188,15 @@ class GeoTask(LiftAhead):
         if (
             self.reset_requested
             and (at_rest or self.state is not ACTIVE)
-            and (lift.current is None or (lift.vz == 0.0 and lift.az == 0.0))
+            and (
+                lift.current is None
+                or (
+                    not lift.error_pending  # Z still follows the path to rest, then rises
+                    and lift.vz == 0.0
+                    and lift.az == 0.0
+                    and lift.needed_time() == 0.0  # at POS_LIMIT, not at the start of its rise
+                )
+            )
         ):
             # every axis at rest, the lift axis too: a lift it was in ends where Z is
             # (at POS_LIMIT: `_command`)

@@ -96,6 +96,9 @@ class LiftController:
         self.active = False
         self.suppressed = False
         self.ending = False  # LIFT_END passed while Z still moved: close when Z is there
+        # an error or RESET in a coupled range while the path still moved: Z follows the path's
+        # braking, then rises time-based from rest (`step`)
+        self.error_pending = False
         self.counts = (0,) * len(axes)  # lifts started per axis since the program started
         self.findings: list[GuardFinding] = []  # consumed by the GEO task each cycle
         # built here, not at a range's start in a GEO cycle; per axis that lifts (the program
@@ -181,11 +184,16 @@ class LiftController:
         if m is None or rng is None:
             return
         if not m.uses_time:
-            # from Z's state where it is valid: its last output time, unless at rest
-            t0 = max(m.t, t) if m.vz == 0.0 and m.az == 0.0 else m.t
+            if m.vz != 0.0 or m.az != 0.0:
+                # Z follows the braking path to rest first: a time-based plan from Z's coupled
+                # state (its acceleration up to a_max·(1 + P442/1000), beyond Z's own limit)
+                # first had to bring that acceleration back within the jerk limit, and took
+                # Z 24 mm down, toward the part, before it rose (bench_reset, path-based)
+                self.error_pending = True
+                return
             m = self.motion = TimeBasedLift(self.generator(rng.start.axis),
-                                            self.guard(rng.start.axis), rng, t0, m.z, m.vz,
-                                            m.az)  # fmt: skip
+                                            self.guard(rng.start.axis), rng, max(m.t, t), m.z,
+                                            0.0, 0.0)  # fmt: skip
         m.error_in_range(t)
 
     def finish(self, t: float) -> LiftRecord | None:
@@ -208,6 +216,7 @@ class LiftController:
         self.active = False
         self.suppressed = False
         self.ending = False
+        self.error_pending = False
 
     # -- cycle ------------------------------------------------------------------------------------
     def step(self, t_new: float, s: float, v: float, a: float, t_rem: float,
@@ -220,6 +229,12 @@ class LiftController:
         t_old, z_old = m.t, m.z
         m.step(t_new, s, v, a, t_rem, override, refine)
         self.findings.extend(m.take_findings())
+        if self.error_pending and m.vz == 0.0 and m.az == 0.0:  # the path has stopped Z
+            self.error_pending = False
+            self.error_in_range(t_new)
+            if self.motion is None:
+                return
+            m = self.motion
         rec = self.record
         if rec is not None:
             z = m.z

@@ -123,6 +123,20 @@ class LiftMotion:
         raise NotImplementedError
 
 
+def stop_margin(vz: float, az: float, a: float, j: float) -> float:
+    """An upper bound of the distance Z moves on before it stands, from velocity vz and
+    acceleration az, braking at a_max within the jerk limit: an acceleration that still
+    drives it on is first ramped to 0 (and a deceleration already under way only helps)."""
+    u = abs(vz)
+    push = az if vz > 0.0 else -az if vz < 0.0 else abs(az)  # along the motion
+    d1 = 0.0
+    if push > 0.0 and j != INF:
+        t1 = push / j
+        d1 = u * t1 + 0.5 * push * t1 * t1
+        u += 0.5 * push * push / j
+    return d1 + u * u / (2.0 * a) + (u * a / j if j != INF else 0.0)
+
+
 class TimeBasedLift(LiftMotion):
     """Advanced Lifting's generator for one range (DESIGN.md §4, lift-algorithm.md §3)."""
 
@@ -136,9 +150,7 @@ class TimeBasedLift(LiftMotion):
         beyond = rng.beyond_limit or ((z < spec.pos_limit) if spec.down else (z > spec.pos_limit))
         direct = rng.suppressed or beyond
         gen.start(t, z, vz, az, spec.target, spec.pos_limit, spec.down, direct, rise)
-        axis = guard.axis
-        a, j = axis.a_max, axis.j_max
-        margin = vz * vz / (2.0 * a) + (abs(vz) * a / j if j != INF else 0.0)
+        margin = stop_margin(vz, az, guard.axis.a_max, guard.axis.j_max)
         guard.arm(z, spec.target, spec.pos_limit, spec.down, direct, margin)
         self.ov_at_descent: float | None = None
         self.cut_request = -1.0  # the request the last verdict cut (-1: none stands)
@@ -213,7 +225,13 @@ class TimeBasedLift(LiftMotion):
         gen.start(gen.t, gen.z, gen.vz, gen.az, spec.target, spec.pos_limit, spec.down, False)
 
     def error_in_range(self, t: float) -> None:
-        self.gen.rise_and_hold(t)
+        gen, spec = self.gen, self.rng.start
+        gen.rise_and_hold(t)
+        # the bounds of a lift from where Z is to where it holds: a suppressed (direct)
+        # range's were only its start and POS, and clamped Z there at full speed (bench_reset)
+        margin = stop_margin(gen.vz, gen.az, self.guard.axis.a_max, self.guard.axis.j_max)
+        hold = gen.sign * gen.target  # where it holds, in axis coordinates (DOWN: mirrored)
+        self.guard.arm(gen.z, hold, spec.pos_limit, spec.down, False, margin)
 
     def take_findings(self) -> list[GuardFinding]:
         out, self.findings = self.findings, []

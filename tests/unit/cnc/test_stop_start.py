@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from bench.bench_reset import nc_error_in_a_range, reset_in_a_range
 from bench.stress_cases import describe, violations, wide_scenario
 from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.params import LiftMethod
@@ -147,3 +148,38 @@ def test_a_stop_whose_braking_path_comes_to_rest_on_lift_end_lands_on_time() -> 
     assert violations(sc, snaps, task.lift.records) == [], describe(sc)
     (rec,) = task.lift.records
     assert not rec.late and rec.arrival_error <= 1e-6
+
+
+@pytest.mark.parametrize(
+    ("seed", "method"),
+    [
+        (7, LiftMethod.ADVANCED),  # the braking path passed LIFT_END: Z jumped 35 mm at READY
+        (0, LiftMethod.ADVANCED),  # … and started the next range (suppressed), clamped Z
+        (15, LiftMethod.ADVANCED),  # RESET as the path reached LIFT_START: Z went to the path's
+        (53, LiftMethod.ADVANCED),  # a suppressed DOWN range: the guard clamped the rise
+        (3, LiftMethod.ADVANCED),  # the path resumed inside the range: READY never came
+        (30, LiftMethod.LIFTING),  # a coupled Z planned from beyond its a_max: 24 mm down first
+    ],
+)
+def test_a_reset_at_a_random_moment_of_a_wide_scenario_leaves_z_within_its_limits(
+    seed: int, method: LiftMethod
+) -> None:
+    """bench_reset's cases that failed before (Z within its own v, a, j from the RESET on;
+    path-based: as its method bounds it while it follows the braking path)."""
+    got = reset_in_a_range(seed, method)
+    assert got is not None
+    _, t_ready, last, ratio = got
+    assert t_ready is not None and last.state is ChannelState.READY
+    assert not last.lift_active and last.lift_phase == 0
+    assert ratio <= 1.0 + 1e-6
+
+
+@pytest.mark.parametrize(("seed", "method"), [(591, LiftMethod.ADVANCED),
+                                              (15, LiftMethod.ADVANCED),
+                                              (844, LiftMethod.LIFTING)])  # fmt: skip
+def test_an_nc_error_at_a_random_block_of_a_range_holds_z_at_its_limit_smoothly(
+    seed: int, method: LiftMethod
+) -> None:
+    """bench_reset --nc-error's failures: 591, Z bound for a limit below POS was clamped by the
+    suppressed range's guard; 15, Z lost a cycle's motion at the error (240× its limit)."""
+    assert nc_error_in_a_range(seed, method) == {}
