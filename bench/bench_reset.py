@@ -6,7 +6,7 @@ JSON line: runs, failures, the longest wait from RESET to READY.
 With --nc-error an NC error takes the RESET's place: an unknown word in a random block of a
 random range (vendor §2.4: Z rises to POS_LIMIT and stays). ERROR must come, and `simulate`'s
 driver end with Z at rest at the range's limit, within its v, a, j from the error on (before
-0d1e6f3 Z lost the motion between the path's stop and its own last cycle in one cycle).
+e53490e Z lost the motion between the path's stop and its own last cycle in one cycle).
 
 Run: .venv/bin/python bench/bench_reset.py [--nc-error] [RUNS [FIRST_SEED [advanced|lifting]]]
 """

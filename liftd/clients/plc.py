@@ -17,6 +17,7 @@ import dataclasses
 import datetime as dt
 import json
 import math
+import signal
 import sys
 import time
 from collections.abc import Callable
@@ -307,12 +308,20 @@ def poll(
     return {"cycles": cycles, "transitions": transitions, "late_cycles": late}
 
 
+def _interrupt(signum: int, frame: object) -> None:
+    raise KeyboardInterrupt
+
+
 def run(target: Target, schedule: Schedule, cycle_ms: float, duration_s: float | None,
         as_json: bool, timeout_ms: int = 1000, start: bool = False,
         out: TextIO = sys.stdout, m_ack_delay: float | None = None) -> None:  # fmt: skip
-    """Poll until the duration ends or Ctrl-C. Raises PlcError."""
+    """Poll until the duration ends, Ctrl-C, SIGTERM or SIGHUP. Raises PlcError."""
     quiet_adslib()
     plc = Plc(target, schedule, timeout_ms, start, m_ack_delay)
+    # a supervisor's or `timeout`'s SIGTERM (and a closed terminal's SIGHUP) ends it as Ctrl-C
+    # does: the levels it set are written back (before, the hold outlived it)
+    for signum in (signal.SIGTERM, signal.SIGHUP):
+        signal.signal(signum, _interrupt)
     printer = Printer(out, as_json, target.axis)
     t0 = time.monotonic()
     try:

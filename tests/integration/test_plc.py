@@ -6,6 +6,7 @@ from __future__ import annotations
 import csv
 import json
 import re
+import signal
 import socket
 import subprocess
 import sys
@@ -15,6 +16,7 @@ import pyads
 import pytest
 
 from tests.support.daemon import Daemon, write_config
+from tests.support.wait import wait_for
 
 pytestmark = pytest.mark.integration
 
@@ -77,6 +79,18 @@ def test_plc_sees_every_lift_and_its_writes_reach_the_loop(tmp_path: Path) -> No
                         "5:80", "--duration", "0.3", "--json")  # fmt: skip
             assert later.returncode == 0, later.stderr
             assert conn.read_by_name("PLC.ch1.feed_hold") is True
+            conn.write_by_name("PLC.ch1.feed_hold", False, pyads.PLCTYPE_BOOL)
+            # stopped by a supervisor's SIGTERM inside its hold: released as on Ctrl-C
+            proc = subprocess.Popen([sys.executable, "-m", "liftd", "plc", "-c", str(cfg), "--host",
+                                     f"127.0.0.1:{port}", "--feedhold", "0:100", "--json"],
+                                    stdout=subprocess.DEVNULL)  # fmt: skip
+            try:
+                assert wait_for(lambda: conn.read_by_name("PLC.ch1.feed_hold") is True, 10)
+                proc.send_signal(signal.SIGTERM)
+                assert proc.wait(10) == 0
+            finally:
+                proc.kill()
+            assert conn.read_by_name("PLC.ch1.feed_hold") is False
         finally:
             conn.close()
     finally:
