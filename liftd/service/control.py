@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import errno
 import json
 import os
 import socket
@@ -56,6 +57,8 @@ async def serve(path: Path, reload: Callable[[], Awaitable[Verdict]]) -> asyncio
         finally:
             writer.close()
 
+    if _answers(path):  # another daemon's (the same RUNTIME_DIRECTORY): never take it over
+        raise OSError(errno.EADDRINUSE, "another liftd serves it (RUNTIME_DIRECTORY shared)")
     with contextlib.suppress(FileNotFoundError):
         path.unlink()  # left by a killed predecessor
     old = os.umask(0o117)
@@ -63,6 +66,26 @@ async def serve(path: Path, reload: Callable[[], Awaitable[Verdict]]) -> asyncio
         return await asyncio.start_unix_server(handle, str(path))
     finally:
         os.umask(old)
+
+
+def _answers(path: Path) -> bool:
+    """Something listens on the socket at `path` (a stale file refuses the connection)."""
+    with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM | socket.SOCK_CLOEXEC) as sock:
+        sock.settimeout(1.0)
+        try:
+            sock.connect(str(path))
+        except OSError:
+            return False
+        return True
+
+
+def owns(path: Path, inode: int) -> bool:
+    """The socket file at `path` is still the one this daemon bound (inode), so that a
+    daemon stopping removes its own socket only."""
+    try:
+        return path.stat().st_ino == inode
+    except OSError:
+        return False
 
 
 def request_reload(path: Path, timeout_s: float) -> Verdict:

@@ -158,6 +158,7 @@ class Daemon:
         self._servers: list[asyncio.Server] = []
         self.udp: UdpDiscovery | None = None
         self._control_path: Path | None = None
+        self._control_inode = 0  # the socket file it bound (removed at stop only if still it)
 
     # -- what the ADS provider sees -------------------------------------------------------------
     def _view(self) -> GeoView | None:
@@ -352,6 +353,7 @@ class Daemon:
             return
         try:
             self._servers.append(await control.serve(path, self.reload))
+            self._control_inode = path.stat().st_ino
         except OSError as exc:
             raise StartError(f"{path}: cannot open the control socket: {exc.strerror}") from None
         self._control_path = path
@@ -424,7 +426,8 @@ class Daemon:
         await self.geo.stop()
         if self._trace is not None:
             self._trace.stop()
-        if self._control_path is not None:
+        if self._control_path is not None and control.owns(self._control_path,
+                                                           self._control_inode):  # fmt: skip
             with contextlib.suppress(OSError):
                 self._control_path.unlink()
         self.log.info("daemon.stopped", **self.geo.summary().as_log(),

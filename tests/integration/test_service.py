@@ -330,6 +330,28 @@ def test_a_reload_waits_for_the_plcs_reset_of_an_nc_error_and_starts_nothing(
         assert d.stop() == 0
 
 
+def test_a_second_daemon_in_the_same_runtime_directory_leaves_the_first_ones_socket(
+    tmp_path: Path,
+) -> None:
+    """It took the control socket over (reloads went to it) and removed it at its stop, so the
+    first daemon could no longer be reloaded. Now it does not start (exit 3, saying why)."""
+    env = runtime_env(tmp_path)
+    (tmp_path / "a").mkdir()
+    first = Daemon(write_config(tmp_path / "a"), env=env)
+    try:
+        first.ready()
+        (tmp_path / "b").mkdir()
+        second = Daemon(write_config(tmp_path / "b"), env=env)
+        assert second.proc.wait(30) == 3
+        failed = second.event("daemon.start_failed", 5)
+        assert failed is not None and "another liftd serves it" in str(failed), failed
+        r = liftd("reload", env=env)
+        assert r.returncode == 0 and "applied" in r.stdout, r.stderr  # the first one answers
+    finally:
+        assert first.stop() == 0
+    assert not (tmp_path / "run" / "control.sock").exists()  # removed by its owner
+
+
 def test_reload_fails_for_a_rejected_configuration_and_succeeds_when_applied(
     tmp_path: Path,
 ) -> None:
