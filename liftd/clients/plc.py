@@ -81,7 +81,8 @@ def quiet_adslib() -> bool:
 
 
 # the values whose changes are printed; line/override are context
-WATCHED = ("lift_active", "lift_suppressed", "state", "feed_hold", "error_id", "m_pending")
+WATCHED = ("lift_active", "lift_suppressed", "state", "feed_hold", "error_id")
+WATCHED_M_ACK = (*WATCHED, "m_pending")  # when this PLC acknowledges (`m_ack = "plc"`)
 
 
 class PlcError(Exception):
@@ -115,6 +116,7 @@ class Plc:
         # "plc"`: the GEO loop waits for the PLC); None: the loop's own PLC does it
         self.m_ack_delay = m_ack_delay
         self.m_since: tuple[int, float] | None = None  # (M number, first seen), not yet acked
+        self.watched = WATCHED if m_ack_delay is None else WATCHED_M_ACK  # what it prints
         self.schedule = schedule
         self.conn = pyads.Connection(target.net_id, target.ams_port, target.address)
         self.timeout_ms = timeout_ms
@@ -282,14 +284,15 @@ def poll(
 ) -> dict[str, Any]:
     """The PLC cycle: write due schedule values, sum-read, print changes. Returns counters."""
     t0 = clock()
-    last: dict[str, Any] = dict.fromkeys(WATCHED)
+    watched = plc.watched
+    last: dict[str, Any] = dict.fromkeys(watched)
     cycles = transitions = late = 0
     k = 0
     while duration_s is None or clock() - t0 < duration_s:
         t_rel = clock() - t0
         values = plc.read()  # a PLC cycle: inputs first, then the outputs it computes
         cycles += 1
-        for label in WATCHED:
+        for label in watched:
             if values[label] != last[label]:
                 printer.transition(t_rel, label, last[label], values[label], values)
                 transitions += last[label] is not None

@@ -7,7 +7,7 @@ import io
 import json
 from typing import Any
 
-from liftd.clients.plc import Printer, poll
+from liftd.clients.plc import WATCHED, Printer, poll
 
 
 class FakeClock:
@@ -23,6 +23,8 @@ class FakeClock:
 
 class FakePlc:
     """lift_active is 1 from t=0.045 s to t=0.075 s; the read at t≈0.03 s takes 25 ms."""
+
+    watched = WATCHED
 
     def __init__(self, clock: FakeClock) -> None:
         self.clock = clock
@@ -56,7 +58,7 @@ def test_poll_prints_each_transition_once_and_counts_overruns() -> None:
     assert [to for _, to in lift] == [0, 1, 0]
     assert lift[1][0] == 0.055 and lift[2][0] == 0.08  # late read at once, then on the grid
     assert fake.log[:2] == ["read", "write"]  # inputs before outputs
-    assert records[6] == {"t": 0.0, "write": "PLC.ch1.override", "value": 500}
+    assert records[5] == {"t": 0.0, "write": "PLC.ch1.override", "value": 500}
     assert counters["late_cycles"] == 1
     assert counters["transitions"] == 2  # the first sample is not a transition
     assert counters["cycles"] == 18  # 20 slots of 10 ms, two lost to the overrun
