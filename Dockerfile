@@ -4,7 +4,7 @@
 #     --ulimit rtprio=80 --ulimit memlock=-1 --cap-drop=ALL --security-opt no-new-privileges \
 #     --read-only --tmpfs /tmp -v "$PWD/myconfig:/etc/liftd:ro" liftd
 # The host kernel decides real-time latency; the flags above only let the GEO loop ask for
-# SCHED_FIFO and mlockall as the non-root user (reference/rt-python.md §7).
+# SCHED_FIFO and mlockall as the non-root user (see README "Running it as a service").
 #
 # Reproducible: every Python package (and the build backend) is pinned in
 # docker/constraints.txt; pip is the base image's own, not upgraded. Pin the base image by
