@@ -37,6 +37,7 @@ from liftd.cnc.nc.words import Words
 # unconfigured M function is an error.
 INTERNAL_M = frozenset({0, 1, 2, 3, 4, 17, 19, 29, 30})
 INF = float("inf")
+REFUSED_FEED = 0.1  # m/s: stands in after a refused F (those blocks never run)
 _T = TypeVar("_T")
 
 
@@ -55,6 +56,10 @@ class ModalDecoder(GFunctions):
         self.incremental = False
         self.center_absolute = False  # G161 absolute, G162 (default) relative centre
         self.feed: float | None = None  # m/s
+        # an F word was refused while no feed was in effect: the blocks after it that need one
+        # are that error's consequence, not errors of their own (the program stops at the
+        # first error, so they never run)
+        self.feed_refused = False
         self.radius: float | None = None  # m, modal R
         self.unit = units.M_PER_MM  # G71 (initial); G70: inch
         self.slope = ctx.slope
@@ -99,6 +104,7 @@ class ModalDecoder(GFunctions):
         if feed_word is not None:
             if feed_word[0] <= 0.0:
                 faults.append(NcFault(ErrorId.FEED_ZERO, feed_word[1], "feed rate F must be > 0"))
+                self.feed_refused = self.feed is None
             else:
                 self.feed = feed_word[0] * self.unit / 60.0  # mm/min (G71) or inch/min (G70)
         if "R" in values:
@@ -257,13 +263,16 @@ class ModalDecoder(GFunctions):
             )
         feed = INF
         if kind is not MotionKind.RAPID:
-            if self.feed is None:
+            if self.feed is None and self.feed_refused:
+                feed = REFUSED_FEED  # reported once, at the F word
+            elif self.feed is None:
                 raise NcFault(
                     ErrorId.FEED_ZERO,
                     column,
                     "no feed rate: program F before the first G01/G02/G03",
                 )
-            feed = self.feed
+            else:
+                feed = self.feed
         end_t = tuple(end)
         if is_arc:
             i = values.get("I")

@@ -487,3 +487,13 @@ def test_structured_fuzz_never_raises(text: str) -> None:
 def test_any_text_never_raises(text: str) -> None:
     r = dec(text)
     assert all(e.line >= 1 for e in r.errors if e.severity is Severity.ERROR)
+
+
+def test_a_refused_feed_is_one_error_not_one_per_following_block() -> None:
+    """F0 before any feed: each later G01 reported 'no feed rate' too, and hid a real error
+    (a LIFT_END without LIFT_START) behind the cascade. A feed already in effect stays."""
+    r = dec("N1 G01 X10 Y10 F0\nN2 G01 X20\nN3 G01 X30 Z[LIFT_END]\nN4 G01 X40\nM30\n")
+    assert ids(r) == [(20008, 1), (21559, 3)]
+    r = dec("N1 G01 X10 F600\nN2 G01 X20 F0\nN3 G01 X30\nM30\n")
+    assert ids(r) == [(20008, 2)]
+    assert dec("N1 G01 X10\nN2 G01 X20\nM30\n").errors[0].id == 20008  # none at all: each
