@@ -114,7 +114,9 @@ class BoundaryActions:
 
     def _lift_start(self, rng: LiftRange, t_at: float, crossing: Crossing | None) -> None:
         if self.reset_requested:  # the path brakes for a RESET: no range starts any more
-            if self.lift.current is None:  # the axis stays where it is, not the path's POS
+            if self.lift.current is None and self.z_hold is None:
+                # the axis stays where it is (the first range skipped: the next one's start
+                # assumes this one ran), not where the path's POS would put it
                 self.z_hold = (self.axis_of[rng.start.axis], rng.start.z_start)
             return
         if self.lift.current is not None:  # the last lift is still finishing (late): go on from Z

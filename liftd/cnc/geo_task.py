@@ -50,6 +50,7 @@ START: Final = Command.START
 STOP: Final = Command.STOP
 RESET: Final = Command.RESET
 NO_PHASE: Final = LiftPhase.NONE
+HOLD_LIMIT: Final = LiftPhase.HOLD_LIMIT
 
 
 class GeoTask(LiftAhead):
@@ -194,7 +195,8 @@ class GeoTask(LiftAhead):
                     not lift.error_pending  # Z still follows the path to rest, then rises
                     and lift.vz == 0.0
                     and lift.az == 0.0
-                    and lift.needed_time() == 0.0  # at POS_LIMIT, not at the start of its rise
+                    # at POS_LIMIT, not at the start of its rise from rest (path-based)
+                    and (lift.phase is not HOLD_LIMIT or lift.needed_time() == 0.0)
                 )
             )
         ):

@@ -158,6 +158,7 @@ def test_a_stop_whose_braking_path_comes_to_rest_on_lift_end_lands_on_time() -> 
         (15, LiftMethod.ADVANCED),  # RESET as the path reached LIFT_START: Z went to the path's
         (53, LiftMethod.ADVANCED),  # a suppressed DOWN range: the guard clamped the rise
         (3, LiftMethod.ADVANCED),  # the path resumed inside the range: READY never came
+        (913, LiftMethod.ADVANCED),  # two starts skipped at one boundary: Z to the second's
         (30, LiftMethod.LIFTING),  # a coupled Z planned from beyond its a_max: 24 mm down first
     ],
 )
