@@ -124,17 +124,21 @@ class LiftMotion:
 
 
 def stop_margin(vz: float, az: float, a: float, j: float) -> float:
-    """An upper bound of the distance Z moves on before it stands, from velocity vz and
-    acceleration az, braking at a_max within the jerk limit: an acceleration that still
-    drives it on is first ramped to 0 (and a deceleration already under way only helps)."""
-    u = abs(vz)
+    """An upper bound of the distance Z moves on, either way, before it stands, from velocity
+    vz and acceleration az, braking at a_max within the jerk limit: an acceleration that still
+    drives it on is first ramped to 0; one against the motion (a deceleration under way)
+    reverses it before the jerk limit takes it back, so that excursion counts too."""
+
+    def run_on(u: float, push: float) -> float:
+        d1 = 0.0
+        if push > 0.0 and j != INF:
+            t1 = push / j
+            d1 = u * t1 + 0.5 * push * t1 * t1
+            u += 0.5 * push * push / j
+        return d1 + u * u / (2.0 * a) + (u * a / j if j != INF else 0.0)
+
     push = az if vz > 0.0 else -az if vz < 0.0 else abs(az)  # along the motion
-    d1 = 0.0
-    if push > 0.0 and j != INF:
-        t1 = push / j
-        d1 = u * t1 + 0.5 * push * t1 * t1
-        u += 0.5 * push * push / j
-    return d1 + u * u / (2.0 * a) + (u * a / j if j != INF else 0.0)
+    return max(run_on(abs(vz), push), run_on(0.0, abs(az)))
 
 
 class TimeBasedLift(LiftMotion):

@@ -159,6 +159,8 @@ def test_a_stop_whose_braking_path_comes_to_rest_on_lift_end_lands_on_time() -> 
         (53, LiftMethod.ADVANCED),  # a suppressed DOWN range: the guard clamped the rise
         (3, LiftMethod.ADVANCED),  # the path resumed inside the range: READY never came
         (913, LiftMethod.ADVANCED),  # two starts skipped at one boundary: Z to the second's
+        (712, LiftMethod.ADVANCED),  # reversing at the RESET: the guard's margin missed it
+        (307, LiftMethod.ADVANCED),  # … and after the clamp the RESET never completed
         (30, LiftMethod.LIFTING),  # a coupled Z planned from beyond its a_max: 24 mm down first
     ],
 )
