@@ -128,17 +128,19 @@ def stop_margin(vz: float, az: float, a: float, j: float) -> float:
     vz and acceleration az, braking at a_max within the jerk limit: an acceleration that still
     drives it on is first ramped to 0; one against the motion (a deceleration under way)
     reverses it before the jerk limit takes it back, so that excursion counts too."""
-
-    def run_on(u: float, push: float) -> float:
-        d1 = 0.0
-        if push > 0.0 and j != INF:
-            t1 = push / j
-            d1 = u * t1 + 0.5 * push * t1 * t1
-            u += 0.5 * push * push / j
-        return d1 + u * u / (2.0 * a) + (u * a / j if j != INF else 0.0)
-
     push = az if vz > 0.0 else -az if vz < 0.0 else abs(az)  # along the motion
-    return max(run_on(abs(vz), push), run_on(0.0, abs(az)))
+    return max(_run_on(abs(vz), push, a, j), _run_on(0.0, abs(az), a, j))
+
+
+def _run_on(u: float, push: float, a: float, j: float) -> float:
+    """The distance from speed u with `push` acceleration along it: ramp that to 0 at jerk j,
+    then brake at a within j."""
+    d1 = 0.0
+    if push > 0.0 and j != INF:
+        t1 = push / j
+        d1 = u * t1 + 0.5 * push * t1 * t1
+        u += 0.5 * push * push / j
+    return d1 + u * u / (2.0 * a) + (u * a / j if j != INF else 0.0)
 
 
 class TimeBasedLift(LiftMotion):
