@@ -17,6 +17,7 @@ COMPILED: tuple[str, ...] = (
     "liftd.cnc.lift_ahead",
     "liftd.cnc.machine",
     "liftd.cnc.plc",
+    "liftd.cnc.plc_commands",
     "liftd.cnc.release",
     "liftd.cnc.ruckig1",
     "liftd.cnc.runs",

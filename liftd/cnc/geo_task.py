@@ -21,16 +21,15 @@ from typing import Final
 from liftd.cnc.geo_program import PreparedPrograms
 from liftd.cnc.lift.monitor import AccelMonitor
 from liftd.cnc.lift.profile import LiftProfiles, ProfileError
-from liftd.cnc.lift_ahead import LiftAhead
 from liftd.cnc.nc.blocks import ErrorId
 from liftd.cnc.params import ChannelParams
 from liftd.cnc.path.interpolator import Interpolator
-from liftd.cnc.path.program import ActionKind, PathProgram
+from liftd.cnc.path.program import PathProgram
 from liftd.cnc.plc import MAX_OVERRIDE
+from liftd.cnc.plc_commands import PlcCommands
 from liftd.cnc.runs import Runs
 from liftd.cnc.snapshot import (
     ChannelState,
-    Command,
     GeoInputs,
     GeoSnapshot,
     LiftPhase,
@@ -46,14 +45,10 @@ READY: Final = ChannelState.READY
 ACTIVE: Final = ChannelState.ACTIVE
 HOLD: Final = ChannelState.HOLD
 ERROR: Final = ChannelState.ERROR
-START: Final = Command.START
-STOP: Final = Command.STOP
-RESET: Final = Command.RESET
 NO_PHASE: Final = LiftPhase.NONE
-HOLD_LIMIT: Final = LiftPhase.HOLD_LIMIT
 
 
-class GeoTask(LiftAhead):
+class GeoTask(PlcCommands):
     """One CNC channel's GEO task running one NC program."""
 
     def __init__(
@@ -140,83 +135,6 @@ class GeoTask(LiftAhead):
         self.range_of = run.prog.range_of
         self._reset_priming(run.prog.ranges)
 
-    def _start(self, t: float) -> None:
-        if self.state is READY:
-            if self.runs:
-                self._load(self._positions())  # a new run from where the last one ended
-                self.z_hold = None  # the new run starts there
-            self.runs += 1
-            self._started = True
-            self.state = ACTIVE
-            self.interp.start(t)
-            self.waiting = list(self.prog.path.boundaries[0].actions)
-            self.wait_since = t
-            self._emit("geo.program_start", t, self.prog.first_line)
-        elif self.state is HOLD:
-            if self.waiting and self.waiting[0].kind is ActionKind.M00:
-                self.waiting.pop(0)
-            # a path held at a boundary leaves it no earlier than now: its waits may have
-            # ended while it was held (Z arrived, an M function was acknowledged), and left
-            # at their time it jumped ahead by the time it was held (a dwell under way
-            # starts again)
-            self.wait_since = max(self.wait_since, t)
-            self.state = ACTIVE
-            self._emit("geo.resume", t, self.line)
-        self.stop_requested = False
-
-    def _command(self, cmd: Command, t: float) -> None:
-        if cmd is START and self.state is not ERROR and not self.reset_requested:
-            self._start(t)  # (a RESET under way ends the program first)
-        elif cmd is STOP and self.state is ACTIVE:
-            self.stop_requested = True
-        elif cmd is RESET:
-            if self.lift.current is not None and self.state is not ERROR:
-                # the program ends inside a lift range: Z rises to POS_LIMIT and stays, the
-                # vendor's reaction to an error in a range (§2.4), never down onto the path
-                # it leaves between LIFT_START and LIFT_END
-                self.lift.error_in_range(t)
-            self.reset_requested = True
-            self.stop_requested = self.state is ACTIVE
-
-    def _settle(self, t: float) -> None:
-        """STOP and RESET complete once the path is at rest."""
-        at_rest = self.interp.v == 0.0 and self.interp.a == 0.0
-        if self.stop_requested and at_rest and self.state is ACTIVE and not self.reset_requested:
-            self.stop_requested = False
-            self.state = HOLD
-            self._emit("geo.stopped", t, self.line)
-        lift = self.lift
-        if (
-            self.reset_requested
-            and (at_rest or self.state is not ACTIVE)
-            and (
-                lift.current is None
-                or (
-                    not lift.error_pending  # Z still follows the path to rest, then rises
-                    and lift.vz == 0.0
-                    and lift.az == 0.0
-                    # at POS_LIMIT, not at the start of its rise from rest (path-based)
-                    and (lift.phase is not HOLD_LIMIT or lift.needed_time() == 0.0)
-                )
-            )
-        ):
-            # every axis at rest, the lift axis too: a lift it was in ends where Z is
-            # (at POS_LIMIT: `_command`)
-            self.reset_requested = self.stop_requested = False
-            self.state = READY
-            self.error_id = self.error_line = 0
-            self.m_pending = -1
-            self.waiting = []
-            line = self.line
-            if lift.current is not None:
-                # Z stays there (not the path's Z inside the range) until the next START
-                # loads the program from the current positions
-                self.z_hold = (lift.axis_index, lift.z)
-                lift.abort()
-                self._emit("lift.aborted", t, line, self.z_hold[1])
-            lift.active = lift.suppressed = False
-            self._emit("geo.reset", t, line)
-
     def _end_of_program(self, t: float, line: int) -> None:
         err = self.prog.error
         if err is not None:
@@ -231,16 +149,6 @@ class GeoTask(LiftAhead):
         self.waiting = []
 
     # -- helpers ----------------------------------------------------------------------------------
-    @property
-    def line(self) -> int:
-        if self.waiting:
-            return self.waiting[0].line
-        k = self.interp.stopped_at
-        if k is not None:
-            return self.path.boundaries[k].line or self.prog.first_line
-        segs = self.path.segments
-        return segs[min(self.interp.segment, len(segs) - 1)].line if segs else 0
-
     def _positions(self) -> tuple[float, ...]:
         """Command positions: the path's, Z from the lift while a lift runs. Where the path rests
         on a boundary, it is where the path arrived (the end of the block before), not the start
@@ -359,15 +267,6 @@ class GeoTask(LiftAhead):
                 self._emit("lift.z_acc_error", t, self.line, mon.ratio)
             elif entered == mon.WARNING:
                 self._emit("lift.z_acc_warning", t, self.line, mon.ratio)
-
-    def _acknowledge(self, number: int, t: float) -> None:
-        self.m_pending = -1
-        self.m_acked.add(number)
-        self.ack_time = t
-        self._emit("geo.m_ack", t, self.line, float(number))
-        # the dict, not GeoProgram.conditional_for: a Python frame in an M acknowledge's cycle
-        for k in self.prog.conditional.get(number, ()):
-            self.interp.acknowledge_conditional(k)
 
     def _run_path(self, t: float) -> None:
         for _ in range(100000):  # bounded: every pass ends a wait or passes a boundary
