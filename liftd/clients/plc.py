@@ -205,13 +205,17 @@ class Plc:
             if self.written.get(symbol) == value:
                 continue
             plc_type = pyads.PLCTYPE_UINT if symbol.endswith("override") else pyads.PLCTYPE_BOOL
-            if symbol.endswith(".start"):
-                self.written.pop(symbol, None)  # a command, not a level: never deduplicated
+            # recorded before the write: a SIGTERM that lands as the write returns still
+            # finds it in `written`, so restore() writes the level back (a start is a command,
+            # never deduplicated, and not restored)
+            self.written[symbol] = value
             try:
                 self.conn.write_by_name(symbol, value, plc_type)
             except (pyads.ADSError, RuntimeError, OSError) as exc:
                 raise PlcError(_describe(exc, self.target, f"writing {symbol}")) from None
-            self.written[symbol] = value
+            finally:
+                if symbol.endswith(".start"):
+                    self.written.pop(symbol, None)
             done.append((symbol, value))
         return done
 
@@ -341,6 +345,8 @@ def run(target: Target, schedule: Schedule, cycle_ms: float, duration_s: float |
         counters = None
     finally:
         restored: list[tuple[str, Any]] = []
+        for signum in (signal.SIGTERM, signal.SIGHUP):  # a second signal cannot cut the restore
+            signal.signal(signum, signal.SIG_IGN)
         try:
             restored = plc.restore()
         except PlcError as exc:  # the daemon went away: nothing left to hold

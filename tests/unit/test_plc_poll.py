@@ -7,7 +7,10 @@ import io
 import json
 from typing import Any
 
-from liftd.clients.plc import WATCHED, Printer, poll
+import pytest
+
+from liftd.clients.plc import WATCHED, Plc, Printer, Target, poll
+from liftd.cnc.plc import Schedule
 
 
 class FakeClock:
@@ -62,3 +65,32 @@ def test_poll_prints_each_transition_once_and_counts_overruns() -> None:
     assert counters["late_cycles"] == 1
     assert counters["transitions"] == 2  # the first sample is not a transition
     assert counters["cycles"] == 18  # 20 slots of 10 ms, two lost to the overrun
+
+
+class InterruptedConnection:
+    """A pyads connection whose write of the feed hold lands in the daemon, and then a
+    supervisor's SIGTERM (KeyboardInterrupt from the handler) arrives as the call returns."""
+
+    def __init__(self) -> None:
+        self.daemon: dict[str, Any] = {"PLC.ch1.feed_hold": False}
+        self.writes: list[str] = []
+
+    def write_by_name(self, symbol: str, value: Any, plc_type: Any) -> None:
+        first = symbol not in self.writes
+        self.daemon[symbol] = value
+        self.writes.append(symbol)
+        if first:
+            raise KeyboardInterrupt
+
+
+def test_a_signal_as_the_hold_write_returns_still_releases_the_hold_at_exit() -> None:
+    target = Target("127.0.0.1", 1, "127.0.0.1.1.1", 551, 1, "Z")
+    plc = Plc(target, Schedule(feed_hold=((0.0, 100.0),)), 1000)
+    conn = InterruptedConnection()
+    plc.conn = conn  # type: ignore[assignment]
+    plc.found = {"PLC.ch1.feed_hold": False}
+    with pytest.raises(KeyboardInterrupt):
+        plc.write_schedule(0.0)
+    assert conn.daemon["PLC.ch1.feed_hold"] is True  # the machine is held
+    assert plc.restore() == [("PLC.ch1.feed_hold", 0)]
+    assert conn.daemon["PLC.ch1.feed_hold"] is False  # released, as it was found
