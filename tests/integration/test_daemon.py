@@ -298,6 +298,7 @@ def test_start_failures_have_clear_messages_and_exit_codes(tmp_path: Path) -> No
         second = Daemon(write_config(tmp_path / "second", ads={"port": port}))
         assert second.wait() == 3
         assert any("cannot listen" in line for line in second.raw)
+        assert second.event("daemon.stopped", 1) is not None  # its GEO process was stopped
     finally:
         first.stop()
 
@@ -337,6 +338,8 @@ def test_a_stalled_geo_loop_stops_the_daemon_non_zero(tmp_path: Path) -> None:
         assert time.monotonic() - t0 < 2.0
         rec = d.event("geo.stalled", 1)
         assert rec is not None and rec["seconds"] >= 0.3
+        stopped = d.event("daemon.stopped", 1)  # the run's figures, as on a clean stop
+        assert stopped is not None and stopped["cycles"] > 0
     finally:
         d.stop()
 
