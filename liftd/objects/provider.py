@@ -143,7 +143,11 @@ class CncProvider:
         self, index_group: int, index_offset: int, read_length: int, data: bytes
     ) -> bytes:
         """Only the object-address attribute (+0x600): in = channel u32 + axis u32 (axis 0 for a
-        channel object), out = IG u32 + IO u32 of that element."""
+        channel object), out = IG u32 + IO u32 of that element, in the addressing of the group
+        asked: logical (axis = logical axis number) or index based (axis = position in the
+        channel). TF5200 "Administration, IndexGroup/Offset address" (infosys
+        1031/hmiviaads/15685565323: 0x23900 with (1, 0) → 0x23301; 1033/
+        tf5200_ads_access_to_cnc/312768779: 0x123900 with (1, 0) → 0x123301)."""
         obj, attribute = self._locate(index_group, index_offset)
         if attribute != ADDRESS:
             raise AdsError(AdsErr.SRVNOTSUPP, "ReadWrite serves only the object address")
@@ -153,8 +157,11 @@ class CncProvider:
         index = self.catalog.index_of(channel)
         if index is None:
             raise AdsError(AdsErr.INVALIDDATA, f"channel {channel}")
-        ig = self.catalog.ig_logicals[index]
-        io = obj.index_offset or 0
+        data_ig = (index_group & ~ATTRIBUTE_FIELD) | DATA
+        if data_ig in self.catalog.ig_logicals:
+            ig, io = self.catalog.ig_logicals[index], obj.index_offset or 0
+        else:
+            ig, io = self.catalog.ig_indexes[index], obj.index_offset_index or 0
         if io >= 0x10000:  # an axis object: the same element of the asked axis
             io = axis * 0x10000 + (io & 0xFFFF)
             if (io not in self.catalog.by_group[ig]) or axis == 0:

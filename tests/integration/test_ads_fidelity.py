@@ -1,0 +1,50 @@
+"""Where liftd follows what TwinCAT 3 (and the ISG CNC behind it) does in corners clients reach,
+over the real server on a free loopback port. Each test names the source of the behaviour it
+holds liftd to."""
+
+from __future__ import annotations
+
+import struct
+from collections.abc import Iterator
+
+import pytest
+
+from liftd.ads import wire
+from liftd.ads.client import RawClient
+from liftd.ads.wire import net_id_bytes
+from tests.support.ads_harness import Harness
+from tests.support.channel import make_channel, make_second_channel
+
+pytestmark = pytest.mark.integration
+
+
+@pytest.fixture
+def h2() -> Iterator[Harness]:
+    """The two-head machine: channel 1 X Y Z (logical 1 2 3), channel 2 U V W (4 5 6)."""
+    with Harness([make_channel(), make_second_channel()]) as harness:  # type: ignore[arg-type]
+        yield harness
+
+
+def client(h: Harness) -> RawClient:
+    return RawClient(h.port, net_id_bytes(h.net_id))
+
+
+def address_of(c: RawClient, ig: int, io: int, channel: int, axis: int) -> tuple[int, bytes]:
+    """ReadWrite on the object-address attribute: in (channel, axis), out (IG, IO)."""
+    payload = struct.pack("<IIIIII", ig, io, 8, 8, channel, axis)
+    return wire.decode_read_response(c.request(9, payload).payload)
+
+
+def test_object_address_answers_in_the_addressing_it_was_asked_in(h2: Harness) -> None:
+    """TF5200 "Administration, IndexGroup/Offset address" (infosys 1031/hmiviaads/15685565323,
+    1033/tf5200_ads_access_to_cnc/312768779): ReadWrite on the index-based HLD group 0x23900
+    with (channel 1, axis 0) returns 0x23301, on the logical 0x123900 it returns 0x123301.
+    Read and ReadWrite of +0x600 on one group name the same addressing."""
+    c = client(h2)
+    w_flag = struct.pack("<II", 0x121302, 0x00060095)  # W: logical axis 6, 3rd of channel 2
+    assert address_of(c, 0x121901, 0x00030095, 2, 6) == (0, w_flag)
+    indexed = struct.pack("<II", 0x021302, 0x00030095)  # the same flag, index based
+    assert c.read(0x021902, 0x00030095, 8) == (0, indexed)
+    assert address_of(c, 0x021901, 0x00030095, 2, 3) == (0, indexed)  # axis: 3rd in channel
+    assert address_of(c, 0x021901, 0x00000015, 2, 0) == (0, struct.pack("<II", 0x021302, 0x15))
+    c.close()
