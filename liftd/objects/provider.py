@@ -40,6 +40,7 @@ Source = Callable[[], GeoView | None]  # None: the GEO task is not running
 Sink = Callable[[PlcWrite], None]  # raises AdsError(BUSY) when the input queue is full
 # the override a PLC may write, in the ISG unit (0.1 %): the core's MAX_OVERRIDE (200 %)
 MAX_OVERRIDE_PERMILLE = units.fraction_to_isg_permille(MAX_OVERRIDE)
+NO_INSTANCE = struct.pack("<II", 0, 0)  # the object address of a channel or axis not there
 
 
 class CncProvider:
@@ -155,8 +156,8 @@ class CncProvider:
             raise AdsError(AdsErr.INVALIDSIZE, "object address: in 8 bytes, out 8 bytes")
         channel, axis = struct.unpack("<II", data)
         index = self.catalog.index_of(channel)
-        if index is None:
-            raise AdsError(AdsErr.INVALIDDATA, f"channel {channel}")
+        if index is None:  # (0, 0): "No instance of the class exists" (same page, 312768779)
+            return NO_INSTANCE
         data_ig = (index_group & ~ATTRIBUTE_FIELD) | DATA
         if data_ig in self.catalog.ig_logicals:
             ig, io = self.catalog.ig_logicals[index], obj.index_offset or 0
@@ -165,7 +166,7 @@ class CncProvider:
         if io >= 0x10000:  # an axis object: the same element of the asked axis
             io = axis * 0x10000 + (io & 0xFFFF)
             if (io not in self.catalog.by_group[ig]) or axis == 0:
-                raise AdsError(AdsErr.INVALIDDATA, f"axis {axis}")
+                return NO_INSTANCE
         return struct.pack("<II", ig, io)
 
     def find_symbol(self, name: str) -> Symbol:

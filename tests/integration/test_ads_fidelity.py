@@ -48,3 +48,16 @@ def test_object_address_answers_in_the_addressing_it_was_asked_in(h2: Harness) -
     assert address_of(c, 0x021901, 0x00030095, 2, 3) == (0, indexed)  # axis: 3rd in channel
     assert address_of(c, 0x021901, 0x00000015, 2, 0) == (0, struct.pack("<II", 0x021302, 0x15))
     c.close()
+
+
+def test_object_address_of_an_instance_the_machine_lacks_is_zero_zero(h2: Harness) -> None:
+    """TF5200 "Administration, IndexGroup/Offset address" (infosys 1033/
+    tf5200_ads_access_to_cnc/312768779): "No instance of the class exists if (0, 0) is returned
+    as the address" -- a client probes channels and axes this way and stops at (0, 0)."""
+    c = client(h2)
+    none = (0, struct.pack("<II", 0, 0))
+    assert address_of(c, 0x121901, 0x00030095, 3, 1) == none  # no channel 3
+    assert address_of(c, 0x121901, 0x00030095, 2, 3) == none  # logical axis 3 is channel 1's
+    assert address_of(c, 0x021901, 0x00030095, 1, 4) == none  # channel 1 has 3 axes
+    assert address_of(c, 0x121901, 0x00030095, 1, 0) == none  # axis 0: no axis
+    c.close()
