@@ -11,7 +11,12 @@ Rules (reference/ads.md §1.5–§1.6, Beckhoff "ADS Add Device Notification"):
   the handle from the response and drops a notification that comes earlier (seen with pyads);
 * a sample may wait up to its max delay, so samples of several cycles and handles share frames
   (one stamp per poll, several samples per stamp); with max delay 0 it goes out at once;
-* every sample is exactly the subscribed length (AdsLib drops a frame otherwise, ADS#235);
+* the subscribed length is a maximum, as a Read's is: a sample carries the object's bytes, at
+  most that many (TwinCAT.Ads: "Maximum amount of data in bytes to receive with this ADS
+  Notification", infosys 1033/tc3_ads.net/21041338891; TwinCAT's logger sends samples shorter
+  than the length subscribed, Beckhoff/ADS#235 and #277; ads-client subscribes with length
+  0xFFFFFFFF to an address of unknown size). AdsLib drops a sample whose size is not the one it
+  subscribed (ADS#235), so pyads gets samples when it asks the object's size, as with TwinCAT;
 * a notification goes to the client address that subscribed, from the server address it
   subscribed to (AdsLib routes on that pair and drops the rest).
 """
@@ -81,17 +86,24 @@ class NotificationTable:
         return len(self.subs)
 
     def add(
-        self, req: AddNotificationRequest, client: AmsAddr, server: AmsAddr, now_ns: int
+        self,
+        req: AddNotificationRequest,
+        client: AmsAddr,
+        server: AmsAddr,
+        now_ns: int,
+        size: int | None = None,
     ) -> int:
         """Subscribe; returns the handle. Raises 0x713 (mode), 0x717 (length), 0x716 (cap).
-        The caller checks first that the object exists and is readable."""
+        The caller checks first that the object exists and is readable and passes its `size`
+        when it has it: the cap on the length is a cap on what a sample carries."""
         if req.mode in CYCLIC_MODES:
             on_change = False
         elif req.mode in ON_CHANGE_MODES:
             on_change = True
         else:
             raise AdsError(AdsErr.TRANSMODENOTSUPP, f"transmission mode {req.mode}")
-        if not 0 < req.length <= self.max_length:
+        carried = req.length if size is None else min(req.length, size)
+        if req.length == 0 or carried > self.max_length:
             raise AdsError(AdsErr.INVALIDWATCHSIZE, f"notification length {req.length}")
         if len(self.subs) >= self.max_handles:
             raise AdsError(AdsErr.NOMOREHDLS, f"{self.max_handles} notifications per connection")
@@ -144,8 +156,8 @@ class NotificationTable:
                 data = read(sub.index_group, sub.index_offset, sub.length)
             except AdsError:
                 continue
-            if len(data) != sub.length:
-                data = data[: sub.length].ljust(sub.length, b"\0")
+            if len(data) > sub.length:
+                data = data[: sub.length]
             if sub.on_change and data == sub.last:
                 continue
             sub.last = data

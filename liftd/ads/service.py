@@ -172,14 +172,15 @@ class AdsService:
     ) -> int:
         if req.index_group in SUM_GROUPS:
             raise AdsError(AdsErr.SRVNOTSUPP, "notification on a sum command")
+        size = None  # what a sample will carry, when the object says (notifications.py)
         try:  # the object must exist; a device not ready yet is fine
-            self.read(s, req.index_group, req.index_offset, req.length)
+            size = len(self.read(s, req.index_group, req.index_offset, req.length))
         except AdsError as exc:
             if exc.code != AdsErr.NOTREADY:
                 raise
         client = AmsAddr(h.source_net_id, h.source_port)
         server = AmsAddr(h.target_net_id, h.target_port)
-        return s.notifications.add(req, client, server, now)
+        return s.notifications.add(req, client, server, now, size)
 
     def _cmd_del_notification(self, s: Session, h: AmsHeader, p: bytes, w: bool, now: int) -> bytes:
         s.notifications.delete(wire.decode_del_notification(p))

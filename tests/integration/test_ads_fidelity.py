@@ -4,6 +4,7 @@ holds liftd to."""
 
 from __future__ import annotations
 
+import contextlib
 import struct
 from collections.abc import Iterator
 
@@ -61,3 +62,46 @@ def test_object_address_of_an_instance_the_machine_lacks_is_zero_zero(h2: Harnes
     assert address_of(c, 0x021901, 0x00030095, 1, 4) == none  # channel 1 has 3 axes
     assert address_of(c, 0x121901, 0x00030095, 1, 0) == none  # axis 0: no axis
     c.close()
+
+
+def subscribe(c: RawClient, ig: int, io: int, length: int, mode: int = 4) -> tuple[int, int]:
+    """AddDeviceNotification, 1 ms cycle, no max delay: (result, notification handle)."""
+    spec = struct.pack("<IIIIII16s", ig, io, length, mode, 0, 10_000, bytes(16))
+    return wire.decode_add_notification_response(c.request(6, spec).payload)
+
+
+def first_samples(c: RawClient, want: set[int]) -> dict[int, bytes]:
+    """The first sample of each notification handle in `want`, as the server sends them."""
+    got: dict[int, bytes] = {}
+    while not want <= got.keys():
+        frame = c.recv_frame()
+        assert frame.header.command == 8
+        for stamp in wire.decode_notification(frame.payload):
+            for sample in stamp.samples:
+                got.setdefault(sample.handle, sample.data)
+    return got
+
+
+def test_a_notification_longer_than_its_object_carries_the_objects_bytes() -> None:
+    """The length of AddDeviceNotification is a maximum, as it is for a Read: Beckhoff's
+    TwinCAT.Ads documents it as the "Maximum amount of data in bytes to receive with this ADS
+    Notification" (infosys 1033/tc3_ads.net/21041338891); TwinCAT's own logger sends samples
+    shorter than the length subscribed (Beckhoff/ADS#235: 101 of 1024; #277); ads-client 2.x
+    subscribes to a raw address of unknown size with length 0xFFFFFFFF (src/ads-client.ts
+    addSubscription), as it reads by name with 0xFFFFFFFF ("Seems to work OK (we don't know
+    the size)", readRawByPath). liftd padded such samples with zeros to the length asked."""
+    with Harness(make_channel()) as h, contextlib.closing(client(h)) as c:
+        h.set(lift_active=True)
+        assert c.read(0x121301, 0x30095, 4) == (0, b"\x01")  # a Read: the BOOL's one byte
+        result, by_address = subscribe(c, 0x121301, 0x30095, 4)
+        assert result == 0
+        name = b"GEO.ch1.Z.lift_active\0"
+        reply = c.request(9, struct.pack("<IIII", 0xF003, 0, 4, len(name)) + name)
+        code, raw = wire.decode_read_response(reply.payload)
+        assert code == 0
+        result, by_handle = subscribe(c, 0xF005, int.from_bytes(raw, "little"), 4)
+        assert result == 0
+        result, unknown_size = subscribe(c, 0x121301, 0x30095, 0xFFFFFFFF)
+        assert result == 0
+        samples = first_samples(c, {by_address, by_handle, unknown_size})
+        assert samples == {by_address: b"\x01", by_handle: b"\x01", unknown_size: b"\x01"}

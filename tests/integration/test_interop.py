@@ -126,6 +126,8 @@ def test_node_ads_client_raw_mode(session: Session) -> None:
     assert r["handle"] == {"size": 1, "dataType": "BOOL"}  # the extended 0xF003 reply
     assert r["handle_multi"] == [1, 1, 0x710]
     assert r["sum_read"][2] == 0x703 and r["raw_by_path"] == 1000 and r["subscribe_raw"]
+    # no size given: ads-client asks 0xFFFFFFFF and gets the BOOL's one byte per sample
+    assert r["subscribe_unknown_size"][0] == 1
 
 
 def test_pyads_session_and_udp_discovery(session: Session, monkeypatch: pytest.MonkeyPatch) -> None:

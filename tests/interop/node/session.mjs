@@ -91,6 +91,16 @@ async function rawMode() {
   await waitFor(() => seen.length > 0, 3000);
   await sub.unsubscribe();
   out.subscribe_raw = seen.length > 0;
+  // an address of unknown size: ads-client subscribes with length 0xFFFFFFFF
+  const sizes = [];
+  const any = await client.subscribe({
+    target: { indexGroup: 0x121301, indexOffset: 0x30095 },
+    callback: (data) => sizes.push(data.value.length),
+    cycleTime: 10,
+  });
+  await waitFor(() => sizes.length > 0, 3000);
+  await any.unsubscribe();
+  out.subscribe_unknown_size = sizes;
 }
 
 async function bench() {

@@ -1,5 +1,5 @@
 """Notification scheduling on a virtual clock: modes, cycle clamping, max delay batching,
-exact sample sizes, addresses, caps."""
+samples of the object's size (at most the length subscribed), addresses, caps."""
 
 from __future__ import annotations
 
@@ -65,7 +65,8 @@ def test_max_delay_batches_stamps_into_one_frame() -> None:
     stamps = sent[0][1]
     assert [s.filetime for s in stamps] == [wire.filetime(ms * MS) for ms in range(6)]
     assert all([x.handle for x in s.samples] == [h1, h2] for s in stamps)
-    assert all(len(s.samples[1].data) == 2 for s in stamps)  # padded to the subscribed 2 bytes
+    # 2 bytes subscribed to a 1-byte object: its byte, not padded (the length is a maximum)
+    assert all(s.samples[1].data == b"\x00" for s in stamps)
 
 
 def test_failed_reads_are_skipped_and_handles_are_unique() -> None:
@@ -87,6 +88,10 @@ def test_failed_reads_are_skipped_and_handles_are_unique() -> None:
     with pytest.raises(AdsError) as err:
         table.add(req(n=2000), CLIENT, SERVER, -FIRST)
     assert err.value.code == 0x717
+    with pytest.raises(AdsError) as err:  # the cap is on what a sample carries
+        table.add(req(n=0xFFFFFFFF), CLIENT, SERVER, -FIRST, size=2000)
+    assert err.value.code == 0x717
+    table.add(req(n=0xFFFFFFFF), CLIENT, SERVER, -FIRST, size=1)  # ads-client's "any size"
 
 
 def test_next_wakeup_follows_the_earliest_subscription() -> None:
