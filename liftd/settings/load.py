@@ -79,6 +79,23 @@ def load_settings(explicit: str | None = None, program: str | None = None) -> Se
         program_path = base / config.program.file
     startup = base / config.cnc.startup_list
     nc = config.nc
+    # the lists liftd.toml names itself: one that cannot be read is its line, key and value
+    # (read_channel_lists, which knows only the path, would name the list alone)
+    located: list[Problem] = []
+    where = _Where(str(path), text, located)
+    named = (
+        (("cnc", "startup_list"), config.cnc.startup_list, "start-up list"),
+        (("nc", "tool_list"), nc.tool_list, "tool list"),
+        (("nc", "zero_offset_list"), nc.zero_offset_list, "zero-offset list"),
+    )
+    for loc, value, what in named:
+        if not value:
+            continue
+        reason = _unreadable(base / value)
+        if reason is not None:
+            where.error(loc, value, f"cannot read the {what} {base / value}: {reason}")
+    if located:
+        raise ConfigError(located)
     ids, problems = startup_channels(startup, config.cnc.channel)
     lists, more = read_channel_lists(
         startup,
@@ -143,6 +160,15 @@ def load_settings(explicit: str | None = None, program: str | None = None) -> Se
         channels=tuple(machine),
         primary=[c.params.channel_id for c in machine].index(channel.channel_id),
     )
+
+
+def _unreadable(file: Path) -> str | None:
+    """Why `file` cannot be read, or None when it can."""
+    try:
+        with file.open("rb"):
+            return None
+    except OSError as exc:
+        return exc.strerror or type(exc).__name__
 
 
 class _Where:
