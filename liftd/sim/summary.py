@@ -130,7 +130,9 @@ class LiftSummary:
 @dataclass(frozen=True, slots=True)
 class AxisLimits:
     """max |v|, |a|, |j| / limit of one axis over the run (finite differences of the sampled
-    positions); `prefix` is "z" for the lift axis, else the axis name in lower case."""
+    positions); `prefix` is "z" for the lift axis, else the axis name in lower case, and
+    "path_z" for an axis named Z that is not the lift axis (W lifts, Z is a path axis): its
+    keys would overwrite the lift axis's."""
 
     prefix: str
     v_max_ratio: float
@@ -152,9 +154,10 @@ class Limits:
         axes = []
         for i in order:
             ax = ch.axes[i]
+            name = ax.name.lower()
             axes.append(
                 AxisLimits(
-                    "z" if i == z else ax.name.lower(),
+                    "z" if i == z else ("path_z" if name == "z" else name),
                     float(max_v[i] / ax.v_max),
                     float(max_a[i] / ax.a_max),
                     float(max_j[i] / ax.j_max) if ax.j_max != math.inf else 0.0,

@@ -3,6 +3,7 @@ the comparison pairs lifts by start line and occurrence."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 from liftd.cnc.params import LiftMethod
@@ -108,3 +109,21 @@ def test_a_run_without_a_figure_keeps_no_series_and_the_same_summary() -> None:
         return {k: v for k, v in s.items() if k != "step_cpu_us"}  # a clock, not the run
 
     assert same(bare.summary.to_json()) == same(plotted.summary.to_json())
+
+
+def test_a_lift_axis_other_than_z_keeps_its_limits_beside_a_path_axis_z() -> None:
+    """A channel X Y Z W where W lifts: `z_*` is the lift axis (W), as the contract says, and
+    the path axis Z gets keys of its own; before, Z's ratios overwrote W's under `z_*`."""
+    ch = make_channel()
+    w = dataclasses.replace(ch.axes[2], name="W", log_axis_nr=4, v_max=2.0)
+    ch = dataclasses.replace(ch, axes=(*ch.axes, w), lift_axis="W")
+    program = START + (
+        "G00 W1\nW[LIFT_START POS=1 POS_LIMIT=40]\nG01 X100 F24000\nW[LIFT_END]\nG01 Z5 F600\nM30\n"
+    )
+    res = simulate(ch, program, Schedule(), 0.02)
+    limits = res.summary.to_json()["limits"]
+    assert isinstance(limits, dict)
+    assert len(limits) == 3 * len(ch.axes)  # one key per axis and derivative, none lost
+    assert limits["z_a_max_ratio"] > 0.99  # W at its acceleration limit while it lifts
+    assert limits["z_v_max_ratio"] < 0.5  # W's v_max, not Z's
+    assert 0.0 < limits["path_z_a_max_ratio"] < 0.5  # Z's slow feed move
