@@ -309,26 +309,35 @@ def _shared_axes(
 
 
 def program_problem(settings: Settings, explicit: str | None = None) -> Problem | None:
-    """The program `liftd run` would start cannot be read: an error naming the file, and the
-    line, key and value of liftd.toml that name it (None when there is no program or it reads).
+    """A program `liftd run` would start cannot be read: an error naming the file, and the
+    line, key and value of liftd.toml that name it (`[program] file`, or a `[[channel]]`
+    table's `program`); None when every channel's program reads or it has none.
     `liftd check` reports the same as a program error instead."""
-    program = settings.program
-    if program is None:
-        return None
-    try:
-        with program.open("rb"):
-            return None
-    except OSError as exc:
-        reason = exc.strerror or str(exc)
-    if explicit is not None:
-        return Problem(Severity.ERROR, explicit, None, None, None, f"cannot read program: {reason}")
     try:
         text = settings.path.read_text(encoding="utf-8")
     except OSError:
         text = ""
-    return Problem(Severity.ERROR, str(settings.path), toml_line(text, ("program", "file")),
-                   "program.file", settings.config.program.file,
-                   f"cannot read the program {program}: {reason}")  # fmt: skip
+    named: list[tuple[Path, tuple[str | int, ...], str]] = []
+    if settings.program is not None:
+        named.append((settings.program, ("program", "file"), settings.config.program.file or ""))
+    base = settings.path.parent
+    for n, table in enumerate(settings.config.channel):
+        if table.program:
+            named.append((base / table.program, ("channel", n, "program"), table.program))
+    for program, loc, value in named:
+        try:
+            with program.open("rb"):
+                continue
+        except OSError as exc:
+            reason = exc.strerror or str(exc)
+        if explicit is not None and loc[0] == "program":
+            return Problem(
+                Severity.ERROR, explicit, None, None, None, f"cannot read program: {reason}"
+            )
+        key = ".".join(str(part) for part in loc)
+        return Problem(Severity.ERROR, str(settings.path), toml_line(text, loc), key, value,
+                       f"cannot read the program {program}: {reason}")  # fmt: skip
+    return None
 
 
 def _zero_offsets(

@@ -108,6 +108,30 @@ def test_an_unreadable_program_is_a_configuration_error_naming_file_line_key_val
     assert missing.returncode == 2 and "gone.nc: error: cannot read program" in missing.stderr
 
 
+def test_an_unreadable_program_of_a_further_channel_is_a_configuration_error_too(
+    tmp_path: Path,
+) -> None:
+    """A `[[channel]]` table's program as `[program] file`: exit 2 naming liftd.toml's line,
+    key and value, before anything starts (it was exit 3, a runtime failure, naming the
+    program's path alone)."""
+    cfg = write_config(tmp_path)
+    cfg.write_text(
+        cfg.read_text().replace(
+            str(REPO / "config" / "cnc" / "hochlauf.lis"),
+            str(REPO / "config" / "cnc-2ch" / "hochlauf.lis"),
+        )
+        + '[[channel]]\nid = 2\nprogram = "programs/none.nc"\n'
+    )
+    line = len(cfg.read_text().splitlines())
+    r = liftd("run", "-c", str(cfg))
+    assert r.returncode == 2, r.stderr
+    assert (
+        f"{cfg}:{line}: channel.0.program = 'programs/none.nc' error: cannot read the program"
+        in r.stderr
+    )
+    assert "Traceback" not in r.stderr
+
+
 def test_without_a_program_the_daemon_idles_and_liftd_reload_brings_one(tmp_path: Path) -> None:
     """What a PLC integrator expects: the objects are served at once (READY), a program comes
     with the configuration, `systemctl reload` (liftd reload) applies it and says so."""
