@@ -26,6 +26,12 @@ from liftd.cnc.nc.lexer import strip_comments
 MAX_LOCAL_SUBROUTINES = 50  # P-STUP-00053 default
 _LOCAL = re.compile(r"\s*%\s*L[ \t]+(\S+)", re.IGNORECASE)
 _N_WORD = re.compile(r"\s*N(\d+)", re.IGNORECASE)
+# Lines end at LF, CR LF or CR only: what an editor, `grep -n` and Python's universal newlines
+# (the CLI's read_text) count. str.splitlines also breaks at VT, FF, FS/GS/RS, NEL, U+2028/9,
+# which shifted every later line number and cut a comment holding one in two (the second half
+# an NC error); inside a line those characters are no NC separators (TF5200 programming manual,
+# program structure: CR, LF, ETX, TAB, NUL, blank ...), so the lexer reports them at their column.
+_LINE_END = re.compile(r"\r\n|\r|\n")
 
 
 @dataclass(frozen=True, slots=True)
@@ -77,12 +83,21 @@ def _has_words(line: str) -> bool:
     return bool(text) and not text.upper().startswith("#COMMENT")
 
 
+def split_lines(text: str) -> list[str]:
+    """The lines of a program text as an editor numbers them (`_LINE_END`); a last line
+    break ends the last line (no empty line after it), as with str.splitlines."""
+    lines = _LINE_END.split(text)
+    if lines and not lines[-1]:
+        lines.pop()
+    return lines
+
+
 def parse_source(name: str, text: str, called: bool = False) -> Source:
     """Split a file into its sections; structural problems are kept for the decoder to
     report where the file is first run. `called`: a global subroutine file (L name), whose
     misplaced % lines are ID 21313 instead of the main program's 20193. A leading byte
     order mark (programs saved as UTF-8 by Windows tools) is not part of the first line."""
-    lines = text.removeprefix("\ufeff").splitlines()
+    lines = split_lines(text.removeprefix("\ufeff"))
     headers = [i for i, line in enumerate(lines) if line.lstrip().startswith("%")]
     problems: list[SourceProblem] = []
     locals_: dict[str, Section] = {}
