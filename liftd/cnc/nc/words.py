@@ -368,7 +368,11 @@ def collect_plain(line: str, axes: frozenset[str]) -> Words | None:
     values = w.values
     col = 0
     simple = True
-    for word in line.split():
+    # blanks and tabs only: str.split() also splits at FF, NBSP, U+3000 ..., which the lexer
+    # rejects (no NC separators), so such a line decoded differently with a comment appended
+    for word in line.replace("\t", " ").split(" "):
+        if not word:
+            continue
         col = line.find(word, col) + 1
         letter = word[0]
         number = word[1:]
