@@ -15,6 +15,15 @@ from liftd.cnc.nc.blocks import ErrorId, NcFault
 from liftd.cnc.path.geometry import arc_sweep, center_from_radius, corrected_center
 
 ROUNDING = 1e-9  # relative: a radius difference below it is floating-point rounding
+# Positions are SGN32 in 0.1 µm on the CNC: "the end point of the circular arc may not exceed
+# the maximum traverse range +- 2,14*10^5 mm of the axes" (TF5200 "Radius programming (R,
+# G163)", https://infosys.beckhoff.com/content/1033/tccncprogramming/15556764811.html). A centre
+# beyond it is ID 20054, "Corrected centre point out of data format" (its example: G02 X1
+# R1000000, https://infosys.beckhoff.com/content/1031/tf5200_diagnosis/250663051.html). Here
+# also for a centre programmed by I/J (no kernel id found for that case; 20054 is the closest):
+# such a centre made the radius check's rounding tolerance (relative to the radius) absorb any
+# difference, and a huge R gave a NaN centre that crashed the software-limit check.
+MAX_COORDINATE = (2**31 - 1) * 1e-7  # m: 214748.3647 mm
 
 
 def build_arc(
@@ -43,6 +52,7 @@ def build_arc(
         i = i_j[0] or 0.0
         j = i_j[1] or 0.0
         center = (i, j) if center_absolute else (p0[0] + i, p0[1] + j)
+        _check_centre(center, column)
         r0 = math.hypot(p0[0] - center[0], p0[1] - center[1])
         r1 = math.hypot(p1[0] - center[0], p1[1] - center[1])
         if r0 <= 0.0:
@@ -72,6 +82,13 @@ def build_arc(
                 column,
                 "full circle cannot be programmed with R; use I/J",
             )
+        if abs(radius) > 2.0 * MAX_COORDINATE:  # r * r would overflow; the centre is beyond
+            raise NcFault(
+                ErrorId.CENTRE_OUT_OF_RANGE,
+                column,
+                f"R {radius * 1e3:.6g} mm puts the circle centre beyond the position data format "
+                f"(±{MAX_COORDINATE * 1e3:.4f} mm)",
+            )
         found = center_from_radius(p0, p1, radius, ccw)
         if found is None:
             raise NcFault(
@@ -80,4 +97,16 @@ def build_arc(
                 f"radius {abs(radius) * 1e3:.4f} mm is smaller than half the chord",
             )
         center = found
+        _check_centre(center, column)
     return center, arc_sweep(p0, p1, center, ccw)
+
+
+def _check_centre(center: tuple[float, float], column: int) -> None:
+    for value in center:
+        if not abs(value) <= MAX_COORDINATE:  # also NaN
+            raise NcFault(
+                ErrorId.CENTRE_OUT_OF_RANGE,
+                column,
+                f"circle centre {value * 1e3:.6g} mm beyond the position data format "
+                f"(±{MAX_COORDINATE * 1e3:.4f} mm)",
+            )

@@ -30,6 +30,10 @@ class ErrorId(enum.IntEnum):
     DWELL_VALUE_AND_AXIS = 20013  # G04 with a direct value and an axis
     DWELL_WITH_AXES = 20685  # warning: other axes programmed in the G04 block
     RADIUS_DIFFERENCE = 21758  # radius difference start/end exceeds P-CHAN-00171
+    # circles (tf5200_diagnosis/253243787 "Circle centre point and radius are not permitted at
+    # the same time"; 250663051 "Corrected centre point out of data format")
+    CENTRE_AND_RADIUS = 21024  # I/J and R in one circle block
+    CENTRE_OUT_OF_RANGE = 20054  # the circle's centre beyond the position data format
     # Software-limit messages of path preparation (the ids MCV_SuppressSoftLimSw lists,
     # https://infosys.beckhoff.com/content/1033/tccncmcplatform_fb/15306250379.html;
     # which of the two is positive/negative is our assumption).

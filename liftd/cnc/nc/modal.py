@@ -277,6 +277,16 @@ class ModalDecoder(GFunctions):
         if is_arc:
             i = values.get("I")
             j = values.get("J")
+            r_word = values.get("R")
+            if r_word is not None and (i is not None or j is not None):
+                # ID 21024: "Circle centre point and radius are not permitted at the same time"
+                # (its example: G02 X200 I50 J50 R50)
+                # https://infosys.beckhoff.com/content/1033/tf5200_diagnosis/253243787.html
+                raise NcFault(
+                    ErrorId.CENTRE_AND_RADIUS,
+                    r_word[1],
+                    "circle with both a centre (I/J) and a radius (R): program one of them",
+                )
             ij = (i[0] * unit if i else None, j[0] * unit if j else None)
             if self.center_absolute:  # G161: the centre is a position, offsets apply
                 ij = (
