@@ -65,6 +65,7 @@ class ErrorId(enum.IntEnum):
     PERCENT_IN_MAIN = 20193  # a % line inside the main program part (%L after it, 2nd main)
     PERCENT_IN_SUBROUTINE = 21313  # the same inside a global subroutine file
     M_NUMBER_TOO_LARGE = 20160  # M above the numbers P-CHAN-00041 can define (>= 1000)
+    N_TWICE = 20105  # two block numbers N in one block (tf5200_diagnosis/250776203)
     # liftd's own ids
     SYNTAX = 990001  # unknown character or word
     NUMBER = 990002  # missing or malformed number

@@ -100,6 +100,16 @@ class ModalDecoder(GFunctions):
             self.refused_lift = (w.refused_start, lineno)  # its words could not be read
         if w.gcodes:
             dwell, g92 = self._gcodes(w, faults)
+        if w.bare and (not dwell or len(w.bare) > 1):
+            # A value without an address letter is the time of G04 only (`G04 2.5`, TF5200
+            # programming manual, dwell time: https://infosys.beckhoff.com/content/1033/
+            # tf5200_programming_manual/206132747.html); elsewhere (`G01 X10 5`: a lost axis
+            # letter) it was dropped silently. No kernel id found for it: liftd's syntax error.
+            col = w.bare[1 if dwell else 0][1]
+            faults.append(
+                NcFault(ErrorId.SYNTAX, col, "a value without an address letter (only G04 "
+                        "takes one: its time)")  # fmt: skip
+            )
         feed_word = values.get("F")
         if feed_word is not None:
             if feed_word[0] <= 0.0:

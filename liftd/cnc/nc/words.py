@@ -283,6 +283,10 @@ def _collect_one(
     elif letter == "N":
         if kind is not TokenKind.WORD:
             raise NcFault(ErrorId.UNSUPPORTED, tok.column, "N with an expression is not emulated")
+        if w.n is not None:
+            # ID 20105 "Double-programmed block number N" (its example: N20 X10 N30)
+            # https://infosys.beckhoff.com/content/1033/tf5200_diagnosis/250776203.html
+            raise NcFault(ErrorId.N_TWICE, tok.column, "a second block number N in one block")
         w.n = int(float(tok.text))
     elif letter in "GM":
         if kind is not TokenKind.WORD:
@@ -401,6 +405,8 @@ def collect_plain(line: str, axes: frozenset[str]) -> Words | None:
             (w.gcodes if letter == "G" else w.m).append((int(value), col))
             simple = False
         elif letter == "N":
+            if w.n is not None:  # ID 20105: the full path reports it
+                return None
             w.n = int(value)
         elif letter not in TECHNOLOGY_LETTERS:
             return None
