@@ -115,6 +115,8 @@ def _tokenize_plain(text: str) -> list[Token] | None:
     for m in FAST_WORD.finditer(text):
         if m.start() != pos or not is_finite_number(m.group(2)):
             return None
+        if m.group(1) in "LlPp":  # L4711 is a call, G04 P1 a parameter: not address words
+            return None
         tokens.append(Token(TokenKind.WORD, m.group(1).upper(), m.group(2), m.start(1) + 1))
         pos = m.end()
     return tokens if not text[pos:].strip(SEPARATORS) else None
