@@ -94,7 +94,8 @@ def _report_run(program: Path, result: SimResult, max_time: float, tag: str = ""
             file=sys.stderr,
         )
     for item in result.summary.errors:
-        print(f"{program}:{item.line}: error {item.error_id}: {item.message}{tag}", file=sys.stderr)
+        where = item.file or program  # an error in a subroutine file: that file, as check says
+        print(f"{where}:{item.line}: error {item.error_id}: {item.message}{tag}", file=sys.stderr)
 
 
 def _simulate(

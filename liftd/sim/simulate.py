@@ -225,8 +225,16 @@ class ChannelRun:
             self.writer.flush()
         snap = self.last
         finished = snap is not None and snap.state in ENDED
-        summary = build_summary(self.ch, task, self.monitor, self.cycles, snap,
-                                tuple(self.errors), self.timer.summary())  # fmt: skip
+        # the NC error's file: its line may be a subroutine file's (the event carries the line)
+        err = task.prog.error
+        errors = tuple(
+            dataclasses.replace(e, file=err.file)
+            if err is not None and err.file and (e.error_id, e.line) == (err.id, err.line)
+            else e
+            for e in self.errors
+        )
+        summary = build_summary(self.ch, task, self.monitor, self.cycles, snap, errors,
+                                self.timer.summary())  # fmt: skip
         return SimResult(summary, self.series, finished)
 
 

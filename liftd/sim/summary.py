@@ -227,13 +227,18 @@ class ErrorEntry:
     error_id: int
     line: int
     message: str
+    # the subroutine file `line` is in ("": the program), as `liftd check` names it
+    file: str = ""
 
     @property
     def stops_program(self) -> bool:
         return self.error_id != LIFT_LATE_ID
 
     def to_json(self) -> JsonObject:
-        return {"id": self.error_id, "line": self.line, "message": self.message}
+        out: JsonObject = {"id": self.error_id, "line": self.line, "message": self.message}
+        if self.file:
+            out["file"] = self.file
+        return out
 
 
 @dataclass(frozen=True, slots=True)
