@@ -106,10 +106,8 @@ class ModalDecoder(GFunctions):
             # tf5200_programming_manual/206132747.html); elsewhere (`G01 X10 5`: a lost axis
             # letter) it was dropped silently. No kernel id found for it: liftd's syntax error.
             col = w.bare[1 if dwell else 0][1]
-            faults.append(
-                NcFault(ErrorId.SYNTAX, col, "a value without an address letter (only G04 "
-                        "takes one: its time)")  # fmt: skip
-            )
+            message = "a value without an address letter (only G04 takes one: its time)"
+            faults.append(NcFault(ErrorId.SYNTAX, col, message))
         feed_word = values.get("F")
         if feed_word is not None:
             if feed_word[0] <= 0.0:
