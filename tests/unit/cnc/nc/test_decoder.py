@@ -387,6 +387,10 @@ def test_every_error_id_is_tested() -> None:
             ErrorId.LIFT_LIMIT_CLAMPED,
             # tests/unit/cnc/test_geo_core.py: a lift made late on purpose is reported
             ErrorId.LIFT_LATE,
+            # test_generated_programs: one test each
+            ErrorId.CENTRE_AND_RADIUS,  # test_a_circle_with_centre_and_radius_is_21024
+            ErrorId.CENTRE_OUT_OF_RANGE,  # test_a_circle_centre_beyond_the_data_format_...
+            ErrorId.N_TWICE,  # test_two_block_numbers_are_20105
         }
     )
     assert tested == set(ErrorId)
