@@ -264,3 +264,49 @@ def test_a_reader_that_closes_stdout_ends_the_command_quietly() -> None:
     finally:
         os.close(write_end)
     assert r.returncode == 141 and "Traceback" not in r.stderr, r.stderr
+
+
+def _first_error_place(stderr: str) -> str:
+    """`file:line` of the first error line of check or simulate (check adds :column)."""
+    first = next(line for line in stderr.splitlines() if " error " in line)
+    where = first.split(" error ")[0].rstrip(":")
+    parts = where.split(":")
+    return ":".join(parts[:2])
+
+
+@pytest.mark.parametrize(
+    ("files", "expected"),
+    [
+        # an error in a global subroutine file: simulate named the main program with the
+        # subroutine's line (job.nc:3, a good line) where check said part.nc:3
+        (
+            {
+                "part.nc": "G01 X60 Y60 F600\nG01 X70\nX80 Q5\nM17\n",
+                "job.nc": "G90 G17\nG00 X20 Y20 Z1\nG01 X30 F6000\nL part.nc\nM30\n",
+            },
+            "part.nc:3",
+        ),
+        # a form feed in a comment ended the line for the decoder: every later line was off
+        ({"job.nc": "G00 X20 Y20 Z1 (a\x0cb)\nG01 X30 F6000\n\nG01 X40 Q1\nM30\n"}, "job.nc:4"),
+    ],
+)
+def test_check_and_simulate_name_the_same_line(
+    tmp_path: Path, files: dict[str, str], expected: str
+) -> None:
+    for name, text in files.items():
+        (tmp_path / name).write_text(text)
+    job = str(tmp_path / "job.nc")
+    config = str(REPO / "config" / "liftd.toml")
+    checked = subprocess.run(
+        [sys.executable, "-m", "liftd", "check", "-c", config, job],
+        capture_output=True, text=True, timeout=120, check=False,
+    )  # fmt: skip
+    simulated = simulate(job, "--json")
+    assert checked.returncode == simulated.returncode == 1
+    place = _first_error_place(checked.stderr)
+    assert place == f"{tmp_path}/{expected}", checked.stderr
+    assert _first_error_place(simulated.stderr) == place, simulated.stderr
+    error = json.loads(simulated.stdout)["errors"][0]
+    name, line = expected.split(":")
+    assert str(error["line"]) == line
+    assert error.get("file", job) == f"{tmp_path}/{name}"
