@@ -136,12 +136,19 @@ def _simulate_machine(
     with the --override/--feedhold schedule, the others their [[channel]] programs with
     none; one trace per channel (OUT.csv, OUT.ch<N>.csv) and summary."""
     from liftd.cnc.plc import Schedule  # noqa: PLC0415
+    from liftd.settings import ConfigError  # noqa: PLC0415
+    from liftd.settings.load import program_problem  # noqa: PLC0415
     from liftd.settings.programs import machine_programs  # noqa: PLC0415
     from liftd.sim import plot  # noqa: PLC0415
     from liftd.sim.simulate import channel_for, simulate_machine  # noqa: PLC0415
     from liftd.sim.summary import ChannelSummary, describe, machine_json  # noqa: PLC0415
 
     primary = settings.primary_index
+    # a [[channel]] program that cannot be read is liftd.toml's error (line, key, value), as
+    # in run and check; PROGRAM itself was read already
+    problem = program_problem(settings, args.program)
+    if problem is not None:
+        raise ConfigError([problem])
     try:
         programs = machine_programs(settings)
     except OSError as exc:

@@ -169,6 +169,11 @@ def test_exit_codes_of_bad_channels(tmp_path: Path) -> None:
         r = liftd(args[0], "-c", str(cfg), *args[1:])
         assert r.returncode == 2 and "channel.0.id = '5'" in r.stderr, (args, r.stderr)
     edit(cfg, "id = 5 ", "id = 2 ")
+    edit(cfg, "head2.nc", "none.nc")  # a [[channel]] program that cannot be read
+    for args in (("check",), ("simulate", head1), ("run", "--duration", "1")):
+        r = liftd(args[0], "-c", str(cfg), *args[1:])
+        assert r.returncode == 2 and "channel.0.program = " in r.stderr, (args, r.stderr)
+    edit(cfg, "none.nc", "head2.nc")
     edit(machine / "programs" / "two-head" / "head2.nc", "N50 V120", "N50 Y120")  # Y is head 1's
     r = liftd("check", "-c", str(cfg))
     assert r.returncode == 1 and "head2.nc:10:5: error 990018: Y is not an axis" in r.stderr
