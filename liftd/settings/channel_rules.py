@@ -84,8 +84,12 @@ def look_ahead_of(
         rd.error(ipo_ref, "more than one FCT_LOOK_AHEAD_* size selected")
         return DEFAULT_LOOK_AHEAD
     if custom:
-        value = chan.get("configuration.interpolator.number_blocks_lah") or stup.get(
-            f"configuration.channel[{idx}].interpolator.number_blocks_lah"
+        # P-CHAN-00653, else P-STUP-00071 under its key, else under its older key `.parameter`
+        # (tf5200_startup_list/1238935151133070859: reference/isg-cnc.md §3.2 [S42])
+        value = (
+            chan.get("configuration.interpolator.number_blocks_lah")
+            or stup.get(f"configuration.channel[{idx}].interpolator.number_blocks_lah")
+            or stup.get(f"configuration.channel[{idx}].interpolator.parameter")
         )
         if value is None:
             if not any(p.key and p.key.endswith(".number_blocks_lah") for p in rd.problems):

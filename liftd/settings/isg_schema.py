@@ -127,7 +127,8 @@ STARTUP_KEYS = (
     # list page give it (https://infosys.beckhoff.com/content/1033/tccncstartuplist/
     # 15280831883.html); later builds allow more (500, 10000 with STEP slopes), not liftd
     _spec("configuration.channel[i].interpolator.number_blocks_lah", Kind.INT, (0, 200)),
-    _spec("configuration.channel[i].interpolator.parameter", Kind.INT, (0, 10000)),
+    # P-STUP-00071's older key (reference/isg-cnc.md §3.2 [S42]): the same size, the same range
+    _spec("configuration.channel[i].interpolator.parameter", Kind.INT, (0, 200)),
 )
 
 CHANNEL_KEYS = (

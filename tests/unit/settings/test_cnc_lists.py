@@ -106,6 +106,19 @@ def test_custom_look_ahead(machine: Machine) -> None:
     assert load_settings(str(cfg)).channel.look_ahead_blocks == 55
 
 
+def test_custom_look_ahead_under_the_older_startup_key(machine: Machine) -> None:
+    # P-STUP-00071 in a list written for an older build: `interpolator.parameter`
+    cfg = machine(
+        {
+            "cnc/hochlauf.lis": {
+                "configuration.channel[0].interpolator.function": "FCT_LOOK_AHEAD_CUSTOM | FCT_LIFT_UP_TIME",
+                "configuration.channel[0].interpolator.parameter": "45",
+            },
+        }
+    )
+    assert load_settings(str(cfg)).channel.look_ahead_blocks == 45
+
+
 def test_custom_look_ahead_without_size_is_an_error(machine: Machine) -> None:
     cfg = machine(
         {
