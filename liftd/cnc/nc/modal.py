@@ -133,14 +133,20 @@ class ModalDecoder(GFunctions):
         elif dwell:
             seconds = attempt(faults, self._dwell, lineno, w)
             if seconds is not None:
-                block = Block(lineno, w.n, dwell=seconds, file=self._file_tag())
+                # its M functions, lift command and program end as in any block (they were
+                # dropped unchecked: `G04 X1 M30` never ended the program, M1234 was no error)
+                block = self._motion_block(lineno, w, faults, dwell=seconds)
         else:
             block = self._motion_block(lineno, w, faults)
         if faults:
             raise faults[0]
         return block
 
-    def _motion_block(self, lineno: int, w: Words, faults: list[NcFault]) -> Block:
+    def _motion_block(
+        self, lineno: int, w: Words, faults: list[NcFault], dwell: float | None = None
+    ) -> Block:
+        """A block's motion (none in a G04 block: its axis word is the time), M functions,
+        lift command and program end."""
         m = attempt(faults, self._m_functions, w) if w.m else None
         m_funcs, program_end = m if m is not None else ((), False)
         lift = w.lift[1] if w.lift is not None else None
@@ -150,7 +156,7 @@ class ModalDecoder(GFunctions):
             start = attempt(faults, self._lift_start, lineno, w.lift[0], lift, w.lift[2])
         motion: Motion | None = None
         try:
-            motion = self._motion(lineno, w)
+            motion = self._motion(lineno, w) if dwell is None else None
         except NcFault as fault:
             faults.append(fault)
         end: LiftEnd | None = None
@@ -171,6 +177,7 @@ class ModalDecoder(GFunctions):
             lineno,
             w.n,
             motion=motion,
+            dwell=dwell,
             m_functions=m_funcs,
             lift_start=start,
             lift_end=end,

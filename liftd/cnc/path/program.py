@@ -186,9 +186,9 @@ class _Builder:
         self.m_before(block)
         if block.motion is not None:
             self.motion(block)
-        self.m_after(block)
-        if block.dwell is not None:
+        if block.dwell is not None:  # a G04 block's M functions "after" come after its time
             self.act(Action(ActionKind.DWELL, block.line, seconds=block.dwell))
+        self.m_after(block)
         if block.flush is not None and block.flush is not FlushKind.CONTINUE:
             self.act(Action(ActionKind.FLUSH, block.line))
         if block.lift_end is not None:

@@ -110,6 +110,20 @@ def test_dwell_forms_m_functions_flush_slope_and_end() -> None:
     assert b[12].program_end and len(b) == 13
 
 
+def test_a_dwell_block_keeps_its_m_functions_lift_command_and_program_end() -> None:
+    # they were dropped unchecked: `G04 X1 M30` ran on past the end, M1234 was no error
+    r = ok(
+        "G01 X1 F600\nZ[LIFT_START POS=1 POS_LIMIT=20]\nG01 X10\nG04 X0.5 M05 Z[LIFT_END]\n"
+        "G04 1 M30\nX20\n"
+    )
+    b = r.blocks
+    assert (b[3].dwell, b[3].m_functions, b[3].motion) == (0.5, (5,), None)
+    assert b[3].lift_end is not None and b[1].lift_start is not None
+    assert b[4].dwell == 1.0 and b[4].program_end and len(b) == 5
+    assert ids(dec("G04 0.01 M1234\n")) == [(ErrorId.M_NUMBER_TOO_LARGE, 1)]
+    assert ids(dec("G04 X2 M77\n")) == [(ErrorId.M_NOT_CONFIGURED, 1)]
+
+
 # -- lift syntax --------------------------------------------------------------------------------
 def test_cross_block_lift_with_defaults() -> None:
     r = ok("G01 X10 Z2 F600\nZ[LIFT_START POS_LIMIT=30]\nX20\nX30 Y5\nZ[LIFT_END]\nX40\n")
