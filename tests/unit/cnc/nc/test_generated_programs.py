@@ -113,7 +113,8 @@ def programs(draw: st.DrawFn) -> Program:
                 x += 2 * i
             elif kind == "r":
                 dx = draw(num(1, 20))
-                r = dx / 2 + draw(num(0, 10))
+                # rounded up to the 3 decimals written: R1.137 for a chord of 2.275 is too short
+                r = math.ceil((dx / 2 + draw(num(0, 10))) * 1000) / 1000
                 sign = draw(st.sampled_from(["", "-"]))
                 out.append(("G02", f"X{fmt(x + dx)}", f"Y{fmt(y)}", f"R{sign}{fmt(r)}", f))
                 x += dx
@@ -189,7 +190,7 @@ def test_a_generated_valid_program_decodes_the_same_however_it_is_written(
 # -- mutations: one line broken, the error at that line -----------------------------------------
 BREAKS = [
     # (what replaces the block, id): each one is an error wherever it is written
-    (lambda ws: (*ws, "5"), ErrorId.SYNTAX),  # a lost address letter: G01 X10 5
+    (lambda ws: (*ws, "5"), ErrorId.SYNTAX),  # a lost address letter: G01 X10 5 (see below)
     (lambda ws: (*ws, "Q1"), ErrorId.UNKNOWN_AXIS),
     (lambda ws: (*ws, "X1..2"), ErrorId.NUMBER),
     (lambda ws: (*ws, "F1e999"), ErrorId.NUMBER),
@@ -201,7 +202,7 @@ BREAKS = [
     (lambda ws: (*ws, "\x0c"), ErrorId.SYNTAX),  # a form feed is no NC separator
     (lambda ws: (*ws, "\xa0", "X1"), ErrorId.SYNTAX),  # nor a no-break space
     (lambda ws: (*ws, "M1234"), ErrorId.M_NUMBER_TOO_LARGE),
-    (lambda ws: ("Z[LIFT_END]",), None),  # 21559, or fine where it closes an open range
+    (lambda ws: ("Z[LIFT_END]",), None),  # 21559 here, or at the range's own end later
 ]
 
 
@@ -210,7 +211,10 @@ BREAKS = [
 def test_a_broken_line_is_reported_at_that_line(
     prog: Program, style: Style, data: st.DataObject
 ) -> None:
-    k = data.draw(st.integers(1, len(prog.blocks) - 2), label="block")
+    # a word block: a #-directive with a word appended is another error (990001; the vendor
+    # documents 20450 for it, not emulated)
+    words = [j for j in range(1, len(prog.blocks) - 1) if not prog.blocks[j][0].startswith("#")]
+    k = data.draw(st.sampled_from(words), label="block")
     change, eid = data.draw(st.sampled_from(BREAKS), label="break")
     broken = Program((*prog.blocks[:k], change(prog.blocks[k]), *prog.blocks[k + 1 :]))
     text = broken.text(style)
@@ -219,8 +223,10 @@ def test_a_broken_line_is_reported_at_that_line(
     marker = Program(tuple(("MARK",) if j == k else b for j, b in enumerate(broken.blocks)))
     line = marker.text(style).split("\n").index(style.line(k, ("MARK",))) + 1
     first = r.first_error
-    if eid is None:
-        assert first is None or first.line == line, (text, r.errors)
+    if broken.blocks[k][-1] == "5" and "G04" in broken.blocks[k] and "X" in "".join(prog.blocks[k]):
+        eid = ErrorId.DWELL_VALUE_AND_AXIS  # G04 X0.2 5: a time given twice, 20013
+    if eid is None:  # a range closed early: the range's own LIFT_END is 21559, later
+        assert first is None or first.line >= line, (text, r.errors)
         return
     assert first is not None, text
     assert (first.id, first.line) == (eid, line), (text, r.errors)
