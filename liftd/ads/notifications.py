@@ -95,15 +95,16 @@ class NotificationTable:
     ) -> int:
         """Subscribe; returns the handle. Raises 0x713 (mode), 0x717 (length), 0x716 (cap).
         The caller checks first that the object exists and is readable and passes its `size`
-        when it has it: the cap on the length is a cap on what a sample carries."""
+        when it has it: the cap on the length is a cap on what a sample carries. Without it
+        (the device not ready at the subscription) the length is taken, cut to the cap: no
+        sample ever carries more."""
         if req.mode in CYCLIC_MODES:
             on_change = False
         elif req.mode in ON_CHANGE_MODES:
             on_change = True
         else:
             raise AdsError(AdsErr.TRANSMODENOTSUPP, f"transmission mode {req.mode}")
-        carried = req.length if size is None else min(req.length, size)
-        if req.length == 0 or carried > self.max_length:
+        if req.length == 0 or (size is not None and min(req.length, size) > self.max_length):
             raise AdsError(AdsErr.INVALIDWATCHSIZE, f"notification length {req.length}")
         if len(self.subs) >= self.max_handles:
             raise AdsError(AdsErr.NOMOREHDLS, f"{self.max_handles} notifications per connection")
@@ -116,7 +117,7 @@ class NotificationTable:
             handle,
             req.index_group,
             req.index_offset,
-            req.length,
+            min(req.length, self.max_length),  # a maximum (module docstring)
             on_change,
             cycle_ns,
             req.max_delay_100ns * 100,

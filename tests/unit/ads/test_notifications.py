@@ -85,9 +85,6 @@ def test_failed_reads_are_skipped_and_handles_are_unique() -> None:
     with pytest.raises(AdsError) as err:
         table.delete(999)
     assert err.value.code == 0x714
-    with pytest.raises(AdsError) as err:
-        table.add(req(n=2000), CLIENT, SERVER, -FIRST)
-    assert err.value.code == 0x717
     with pytest.raises(AdsError) as err:  # the cap is on what a sample carries
         table.add(req(n=0xFFFFFFFF), CLIENT, SERVER, -FIRST, size=2000)
     assert err.value.code == 0x717
@@ -103,3 +100,14 @@ def test_next_wakeup_follows_the_earliest_subscription() -> None:
     assert table.next_wakeup() == 33 * MS
     table.poll(80 * MS, 0, Value())  # late: missed cycles are skipped, not replayed
     assert table.next_wakeup() == 90 * MS
+
+
+def test_a_subscription_while_not_ready_takes_any_length_and_samples_keep_to_the_cap() -> None:
+    """ads-client's "any size" (0xFFFFFFFF) while the GEO task does not serve yet: the size is
+    unknown, so the length is taken; no sample ever carries more than the cap (1024 here)."""
+    table = NotificationTable(10, MS, 1024, 65536)
+    table.add(req(n=0xFFFFFFFF), CLIENT, SERVER, -FIRST)  # size unknown: was 0x717
+    value = Value()
+    value.data = b"\x01" * 3000  # an object longer than the cap (an upload that grew)
+    sent = run(table, value, 0, {})
+    assert [len(s.samples[0].data) for _, stamps in sent for s in stamps] == [1024]
