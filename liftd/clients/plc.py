@@ -20,7 +20,7 @@ import math
 import signal
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from typing import Any, TextIO
 
 import pyads
@@ -319,6 +319,21 @@ def _interrupt(signum: int, frame: object) -> None:
     raise KeyboardInterrupt
 
 
+ENDING_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+
+
+@contextlib.contextmanager
+def signals_ignored() -> Iterator[None]:
+    """Ctrl-C, SIGTERM and SIGHUP ignored inside (an operator's second Ctrl-C cannot cut the
+    restore of the levels short), their handlers as before after it."""
+    previous = {signum: signal.signal(signum, signal.SIG_IGN) for signum in ENDING_SIGNALS}
+    try:
+        yield
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+
+
 def run(target: Target, schedule: Schedule, cycle_ms: float, duration_s: float | None,
         as_json: bool, timeout_ms: int = 1000, start: bool = False,
         out: TextIO = sys.stdout, m_ack_delay: float | None = None) -> None:  # fmt: skip
@@ -327,8 +342,8 @@ def run(target: Target, schedule: Schedule, cycle_ms: float, duration_s: float |
     plc = Plc(target, schedule, timeout_ms, start, m_ack_delay)
     # a supervisor's or `timeout`'s SIGTERM (and a closed terminal's SIGHUP) ends it as Ctrl-C
     # does: the levels it set are written back (before, the hold outlived it)
-    for signum in (signal.SIGTERM, signal.SIGHUP):
-        signal.signal(signum, _interrupt)
+    before = {signum: signal.signal(signum, _interrupt) for signum in (signal.SIGTERM,
+                                                                       signal.SIGHUP)}  # fmt: skip
     printer = Printer(out, as_json, target.axis)
     t0 = time.monotonic()
     try:
@@ -345,14 +360,15 @@ def run(target: Target, schedule: Schedule, cycle_ms: float, duration_s: float |
         counters = None
     finally:
         restored: list[tuple[str, Any]] = []
-        for signum in (signal.SIGTERM, signal.SIGHUP):  # a second signal cannot cut the restore
-            signal.signal(signum, signal.SIG_IGN)
-        try:
-            restored = plc.restore()
-        except PlcError as exc:  # the daemon went away: nothing left to hold
-            print(f"liftd plc: warning: {exc}", file=sys.stderr)
-        finally:
-            plc.close()
+        with signals_ignored():
+            try:
+                restored = plc.restore()
+            except PlcError as exc:  # the daemon went away: nothing left to hold
+                print(f"liftd plc: warning: {exc}", file=sys.stderr)
+            finally:
+                plc.close()
+        for signum, handler in before.items():  # as the caller had them
+            signal.signal(signum, handler)
         with contextlib.suppress(OSError):  # all restored first, even when stdout has gone
             for symbol, value in restored:
                 printer.wrote(time.monotonic() - t0, symbol, value)

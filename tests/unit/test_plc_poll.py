@@ -5,11 +5,12 @@ from __future__ import annotations
 
 import io
 import json
+import signal
 from typing import Any
 
 import pytest
 
-from liftd.clients.plc import WATCHED, Plc, Printer, Target, poll
+from liftd.clients.plc import ENDING_SIGNALS, WATCHED, Plc, Printer, Target, poll, signals_ignored
 from liftd.cnc.plc import Schedule
 
 
@@ -94,3 +95,11 @@ def test_a_signal_as_the_hold_write_returns_still_releases_the_hold_at_exit() ->
     assert conn.daemon["PLC.ch1.feed_hold"] is True  # the machine is held
     assert plc.restore() == [("PLC.ch1.feed_hold", 0)]
     assert conn.daemon["PLC.ch1.feed_hold"] is False  # released, as it was found
+
+
+def test_the_restore_runs_with_ctrl_c_sigterm_and_sighup_ignored_then_handlers_as_before() -> None:
+    """An operator's second Ctrl-C during the restore would leave the machine held."""
+    before = {s: signal.getsignal(s) for s in ENDING_SIGNALS}
+    with signals_ignored():
+        assert all(signal.getsignal(s) is signal.SIG_IGN for s in ENDING_SIGNALS)
+    assert {s: signal.getsignal(s) for s in ENDING_SIGNALS} == before
