@@ -92,7 +92,8 @@ def look_ahead_of(
             or stup.get(f"configuration.channel[{idx}].interpolator.parameter")
         )
         if value is None:
-            if not any(p.key and p.key.endswith(".number_blocks_lah") for p in rd.problems):
+            sizes_keys = (".number_blocks_lah", ".interpolator.parameter")
+            if not any(p.key and p.key.endswith(sizes_keys) for p in rd.problems):
                 # (a value out of range is reported where it is written, once)
                 rd.error(ipo_ref, "FCT_LOOK_AHEAD_CUSTOM needs number_blocks_lah (P-CHAN-00653)")
             return DEFAULT_LOOK_AHEAD

@@ -88,20 +88,21 @@ def load_settings(explicit: str | None = None, program: str | None = None) -> Se
         (("nc", "tool_list"), nc.tool_list, "tool list"),
         (("nc", "zero_offset_list"), nc.zero_offset_list, "zero-offset list"),
     )
+    readable: dict[str, Path | None] = {}
     for loc, value, what in named:
         if not value:
+            readable[loc[1]] = None
             continue
         reason = _unreadable(base / value)
         if reason is not None:
             where.error(loc, value, f"cannot read the {what} {base / value}: {reason}")
-    if located:
+        readable[loc[1]] = base / value if reason is None else None
+    if readable["startup_list"] is None:  # nothing else can be checked without it
         raise ConfigError(located)
     ids, problems = startup_channels(startup, config.cnc.channel)
+    problems = located + problems  # an unreadable tool list hides no other problem
     lists, more = read_channel_lists(
-        startup,
-        config.cnc.channel,
-        base / nc.tool_list if nc.tool_list else None,
-        base / nc.zero_offset_list if nc.zero_offset_list else None,
+        startup, config.cnc.channel, readable["tool_list"], readable["zero_offset_list"]
     )
     problems += more
     where = _Where(str(path), text, problems)
@@ -169,6 +170,8 @@ def _unreadable(file: Path) -> str | None:
             return None
     except OSError as exc:
         return exc.strerror or type(exc).__name__
+    except ValueError as exc:  # a NUL in the name (valid TOML): no such file
+        return str(exc)
 
 
 class _Where:
@@ -325,11 +328,9 @@ def program_problem(settings: Settings, explicit: str | None = None) -> Problem 
         if table.program:
             named.append((base / table.program, ("channel", n, "program"), table.program))
     for program, loc, value in named:
-        try:
-            with program.open("rb"):
-                continue
-        except OSError as exc:
-            reason = exc.strerror or str(exc)
+        reason = _unreadable(program)
+        if reason is None:
+            continue
         if explicit is not None and loc[0] == "program":
             return Problem(
                 Severity.ERROR, explicit, None, None, None, f"cannot read program: {reason}"

@@ -282,3 +282,39 @@ def test_lift_axis_must_be_a_channel_axis(machine: Machine) -> None:
         load_settings(str(cfg))
     (err,) = errors_of(exc.value)
     assert err.startswith(f"{cfg}:8: cnc.lift_axis = 'A' error: not an axis of channel 1")
+
+
+def test_an_unreadable_tool_list_hides_no_other_problem(machine: Machine) -> None:
+    cfg = machine()
+    cfg.write_text('[cnc]\nstartup_list = "cnc/hochlauf.lis"\nchannel = 7\n'
+                   '[nc]\ntool_list = "nope.lis"\n')  # fmt: skip
+    with pytest.raises(ConfigError) as exc:
+        load_settings(str(cfg))
+    errors = errors_of(exc.value)
+    assert any(
+        ":5: nc.tool_list = 'nope.lis' error: cannot read the tool list" in e for e in errors
+    )
+    assert any(":3: cnc.channel = '7' error:" in e for e in errors), errors
+
+
+def test_a_nul_in_a_list_name_is_a_configuration_error_not_a_traceback(machine: Machine) -> None:
+    cfg = machine()
+    cfg.write_text('[cnc]\nstartup_list = "cnc/hochlauf.lis"\n[nc]\ntool_list = "a\\u0000b"\n')
+    with pytest.raises(ConfigError) as exc:  # ValueError (embedded null byte) escaped
+        load_settings(str(cfg))
+    assert ":4: nc.tool_list = " in errors_of(exc.value)[0]
+
+
+def test_an_older_look_ahead_key_out_of_range_is_one_error(machine: Machine) -> None:
+    cfg = machine(
+        {
+            "cnc/hochlauf.lis": {
+                "configuration.channel[0].interpolator.function": "FCT_LOOK_AHEAD_CUSTOM | FCT_LIFT_UP_TIME",
+                "configuration.channel[0].interpolator.parameter": "300",
+            },
+        }
+    )
+    with pytest.raises(ConfigError) as exc:
+        load_settings(str(cfg))
+    errors = errors_of(exc.value)
+    assert len(errors) == 1 and "interpolator.parameter" in errors[0], errors
