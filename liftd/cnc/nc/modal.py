@@ -109,6 +109,8 @@ class ModalDecoder(GFunctions):
             message = "a value without an address letter (only G04 takes one: its time)"
             faults.append(NcFault(ErrorId.SYNTAX, col, message))
         feed_word = values.get("F")
+        if dwell and not w.bare and self.ctx.axis_names[0] not in values:
+            feed_word = None  # G04 F<s>: F is the time there (lenient form), not a feed rate
         if feed_word is not None:
             if feed_word[0] <= 0.0:
                 faults.append(NcFault(ErrorId.FEED_ZERO, feed_word[1], "feed rate F must be > 0"))

@@ -26,7 +26,7 @@ from liftd.cnc.nc.lexer import strip_comments
 MAX_LOCAL_SUBROUTINES = 50  # P-STUP-00053 default
 _LOCAL = re.compile(r"\s*%\s*L[ \t]+(\S+)", re.IGNORECASE)
 _N_WORD = re.compile(r"\s*N(\d+)", re.IGNORECASE)
-# Lines end at LF, CR LF or CR only: what an editor, `grep -n` and Python's universal newlines
+# Lines end at LF, CR LF or CR only: what editors and Python's universal newlines
 # (the CLI's read_text) count. str.splitlines also breaks at VT, FF, FS/GS/RS, NEL, U+2028/9,
 # which shifted every later line number and cut a comment holding one in two (the second half
 # an NC error); inside a line those characters are no NC separators (TF5200 programming manual,

@@ -124,6 +124,13 @@ def test_a_dwell_block_keeps_its_m_functions_lift_command_and_program_end() -> N
     assert ids(dec("G04 X2 M77\n")) == [(ErrorId.M_NOT_CONFIGURED, 1)]
 
 
+def test_g04_f_is_a_time_not_a_feed_rate() -> None:
+    # the lenient G04 F<s> set the modal feed to 0.1 mm/min as well: the next G01 crawled
+    b = ok("G01 X1 F6000\nG04 F0.1\nG01 X20\n").blocks
+    assert b[1].dwell == 0.1
+    assert b[2].motion is not None and b[2].motion.feed == pytest.approx(0.1)  # 6000 mm/min
+
+
 # -- lift syntax --------------------------------------------------------------------------------
 def test_cross_block_lift_with_defaults() -> None:
     r = ok("G01 X10 Z2 F600\nZ[LIFT_START POS_LIMIT=30]\nX20\nX30 Y5\nZ[LIFT_END]\nX40\n")
