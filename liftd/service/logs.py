@@ -7,8 +7,10 @@ queue without waiting; one writer thread does the blocking writes. When stderr i
 reads (journald busy, `liftd run | less` paused, a stuck container log driver), the queue fills
 and further lines are dropped and counted (`dropped()`: a metric and the ADS symbol
 GEO.ads.log_dropped); once the writer gets through again it logs `log.dropped` with the count.
-Under systemd (`$JOURNAL_STREAM` set) every line starts with its syslog priority `<N>`
-(sd-daemon(3)), so `journalctl -p warning` selects by level.
+When stderr is the journal stream systemd names in `$JOURNAL_STREAM` (its device:inode, as
+systemd.exec(5) says to compare: the variable is inherited by processes whose stderr goes
+elsewhere) every line starts with its syslog priority `<N>` (sd-daemon(3)), so `journalctl -p
+warning` selects by level.
 """
 
 from __future__ import annotations
@@ -140,6 +142,16 @@ def _priority_prefix(logger: Any, method: str, line: str) -> str:
     return f"<{PRIORITY.get(method, 6)}>{line}"
 
 
+def _to_journal(out: TextIO, journal_stream: str) -> bool:
+    """`out` is the stream systemd connected to the journal: its "device:inode" is the value
+    of $JOURNAL_STREAM (inherited, the variable outlives a redirection)."""
+    try:
+        st = os.fstat(out.fileno())
+    except (OSError, ValueError):  # no file descriptor (a test's StringIO)
+        return False
+    return journal_stream == f"{st.st_dev}:{st.st_ino}"
+
+
 def configure(
     level: str = "info", fmt: str = "auto", queue_lines: int = DEFAULT_QUEUE_LINES,
     stream: TextIO | None = None, env: Mapping[str, str] | None = None,
@@ -161,7 +173,7 @@ def configure(
         structlog.processors.format_exc_info,
         renderer,
     ]
-    if env.get("JOURNAL_STREAM"):
+    if _to_journal(out, env.get("JOURNAL_STREAM", "")):
         processors.append(_priority_prefix)
     if _lines is not None:
         _lines.flush(0.5)

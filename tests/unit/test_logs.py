@@ -5,6 +5,7 @@ syslog priority prefixes under journald, no colours for NO_COLOR or a non-TTY. E
 from __future__ import annotations
 
 import io
+import json
 import os
 import subprocess
 import sys
@@ -26,18 +27,38 @@ logs.flush(5.0)
 """
 
 
-def run(fmt: str, **env: str) -> list[str]:
+def run(fmt: str, journal: bool = False, **env: str) -> list[str]:
+    """The script's stderr lines; `journal`: JOURNAL_STREAM names its stderr pipe, as systemd
+    sets it for a unit whose stderr is the journal."""
     clean = {k: v for k, v in os.environ.items() if k not in ("JOURNAL_STREAM", "NO_COLOR")}
-    r = subprocess.run([sys.executable, "-c", SCRIPT, fmt], capture_output=True, text=True,
-                       env={**clean, **env}, cwd=REPO, timeout=60, check=True)  # fmt: skip
-    return r.stderr.splitlines()
+    read_end, write_end = os.pipe()
+    if journal:
+        st = os.fstat(write_end)
+        env = {**env, "JOURNAL_STREAM": f"{st.st_dev}:{st.st_ino}"}
+    with os.fdopen(read_end) as out:
+        proc = subprocess.Popen([sys.executable, "-c", SCRIPT, fmt], stderr=write_end,
+                                env={**clean, **env}, cwd=REPO, text=True)  # fmt: skip
+        os.close(write_end)
+        text = out.read()
+    assert proc.wait(60) == 0, text
+    return text.splitlines()
 
 
 def test_journald_gets_syslog_priority_prefixes() -> None:
-    lines = run("json", JOURNAL_STREAM="8:1234")
+    lines = run("json", journal=True)
     assert [line[:3] for line in lines] == ["<6>", "<4>", "<3>"]
     assert '"event": "t.warning"' in lines[1]
     assert not any(line.startswith("<") for line in run("json"))  # not under journald
+
+
+def test_an_inherited_journal_stream_with_stderr_elsewhere_keeps_plain_json_lines() -> None:
+    """$JOURNAL_STREAM outlives a redirection (`liftd run 2>log.jsonl` in a shell that a
+    systemd unit started, a desktop terminal): it names another stream, so no `<N>` prefix,
+    which made every line invalid JSON (systemd.exec(5): compare device and inode)."""
+    lines = run("json", JOURNAL_STREAM="8:1234")
+    assert len(lines) == 3 and [json.loads(line)["event"] for line in lines] == [
+        "t.info", "t.warning", "t.error",
+    ]  # fmt: skip
 
 
 def test_no_colour_for_no_color_and_for_a_pipe() -> None:
