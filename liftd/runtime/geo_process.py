@@ -134,6 +134,8 @@ class GeoProcess:
                 [sys.executable, "-m", "liftd.runtime", *map(str, fds)],
                 pass_fds=fds, stdin=subprocess.DEVNULL,
             )  # fmt: skip
+        except OSError as exc:  # no fork (TasksMax, ENOMEM), the venv's python gone or barred
+            raise GeoStartError(f"cannot start {sys.executable}: {exc.strerror}") from None
         finally:
             os.close(control_r)
         self.shared.block.unlink()  # the child holds the descriptor: no name left to leak

@@ -442,6 +442,29 @@ def test_no_failure_path_leaves_shared_memory_behind(tmp_path: Path) -> None:
         assert "leaked" not in "".join(d.raw) and "Traceback" not in "".join(d.raw)
 
 
+NO_EXEC_WRAPPER = """
+import runpy, sys
+sys.executable = sys.argv[1]  # what the GEO process is started with: a file it may not run
+sys.argv = ["liftd", *sys.argv[5:]]  # after: <python> -m liftd
+runpy.run_module("liftd", run_name="__main__")
+"""
+
+
+def test_a_geo_process_that_cannot_be_started_is_a_start_failure_exit_3(tmp_path: Path) -> None:
+    """Popen's OSError (EACCES here; EAGAIN at TasksMax, ENOMEM) went up as a traceback and
+    exit 1: now `daemon.start_failed` naming the cause and exit 3, what README says for a
+    runtime failure (systemd restarts it; exit 1 is a program error elsewhere in liftd)."""
+    barred = tmp_path / "python"
+    barred.write_text("")  # not executable: exec gives EACCES
+    d = Daemon(write_config(tmp_path),
+               wrapper=[sys.executable, "-c", NO_EXEC_WRAPPER, str(barred)])  # fmt: skip
+    assert d.wait() == 3, "".join(d.raw)
+    failed = d.event("daemon.start_failed", 5)
+    assert failed is not None and "Permission denied" in failed["reason"], d.raw
+    assert "Traceback" not in "".join(d.raw)
+    assert not shm_names(d.proc.pid)
+
+
 def test_the_geo_process_maps_no_library_the_loop_does_not_need(tmp_path: Path) -> None:
     d = Daemon(write_config(tmp_path, program={"repeat": True}))
     try:
