@@ -13,6 +13,7 @@ import shutil
 import signal
 import subprocess
 import sys
+import threading
 import time
 import urllib.request
 from pathlib import Path
@@ -413,6 +414,47 @@ def test_reload_fails_for_a_rejected_configuration_and_succeeds_when_applied(
         assert d.stop() == 0
         notify.close()
     assert liftd("reload", env=env).returncode == 3  # no daemon: no answer
+
+
+def test_a_reload_of_a_long_program_leaves_ads_and_the_watchdog_answering(
+    tmp_path: Path,
+) -> None:
+    """The daemon reads and decodes the new programs at a reload (their problems go to its
+    log). That ran on the event loop: 150 000 blocks held every ADS request (and WATCHDOG=1)
+    for 1.5 s here, 200 000 for 2.5 s, past the unit's WatchdogSec=2s (systemd's SIGABRT in
+    the middle of `systemctl reload`). Now it runs in a worker thread."""
+    big = tmp_path / "big.nc"
+    moves = (f"N{40 + 10 * i} X{i % 400 + 1} Y{i // 400 % 100 + i % 2}" for i in range(150_000))
+    big.write_text("\n".join(["%big", "N10 G90 G17 G94", "N20 G00 X0 Y0 Z1",
+                              "N30 G01 X1 Y0 F6000", *moves, "M30"]) + "\n")  # fmt: skip
+    env = runtime_env(tmp_path)
+    cfg = write_config(tmp_path)  # the demo runs: the new program waits for its end
+    d = Daemon(cfg, env=env)
+    latencies: list[float] = []
+    done = False
+
+    def poll() -> None:
+        while not done:
+            t0 = time.monotonic()
+            d.read_symbol("GEO.cycle", "<Q")
+            latencies.append(time.monotonic() - t0)
+            time.sleep(0.01)
+
+    try:
+        d.ready()
+        cfg.write_text(cfg.read_text().replace(str(SHIPPED / "programs" / "demo.nc"), str(big)))
+        poller = threading.Thread(target=poll, daemon=True)
+        poller.start()
+        r = liftd("reload", env=env)
+        done = True
+        poller.join(10)
+        assert r.returncode == 0, r.stderr
+        decoded = [rec["blocks"] for rec in d.logs if rec.get("event") == "daemon.program"]
+        assert decoded[-1] > 150_000, decoded  # it did decode the new program
+        assert max(latencies) < 0.5, f"ADS held {max(latencies):.2f} s during the reload"
+    finally:
+        done = True
+        assert d.stop() == 0
 
 
 def test_no_failure_path_leaves_shared_memory_behind(tmp_path: Path) -> None:
