@@ -8,7 +8,9 @@
 #
 # Reproducible: every Python package (and the build backend) is pinned in
 # docker/constraints.txt; pip is the base image's own, not upgraded. Pin the base image by
-# digest for bit-identical builds: --build-arg PYTHON_IMAGE=python:3.11-slim-bookworm@sha256:…
+# digest too: --build-arg PYTHON_IMAGE=python:3.11-slim-bookworm@sha256:…  Two --no-cache
+# builds of one tree then hold the same files, the compiled core included, except the .pyc
+# caches the build's own Python runs write (they embed build-time mtimes); not bit-identical.
 ARG PYTHON_IMAGE=python:3.11-slim-bookworm
 
 FROM ${PYTHON_IMAGE} AS build
