@@ -32,96 +32,38 @@ from liftd.ads.errors import AdsError
 from liftd.ads.server import AdsServer
 from liftd.ads.service import AdsService, DeviceInfo
 from liftd.ads.udp import UdpDiscovery
-from liftd.cnc.nc import DecoderContext, Severity, decode
 from liftd.cnc.snapshot import PlcWrite
 from liftd.objects.catalog import AdsStats, Catalog, GeoView
 from liftd.objects.provider import CncProvider
 from liftd.runtime.core import core_build
 from liftd.runtime.geo_process import GeoFailure, GeoGone, GeoProcess, GeoStartError, rss_mb
-from liftd.runtime.loop_config import ChannelConfig, LoopConfig
+from liftd.runtime.loop_config import LoopConfig
 from liftd.runtime.records import pack_input
-from liftd.runtime.rt import RtRequest, keep_off_cpu
+from liftd.runtime.rt import keep_off_cpu
 from liftd.runtime.shared import Shared
 from liftd.service import control, logs, systemd
 from liftd.service.adsconfig import server_config, service_limits
 from liftd.service.control import Verdict
 from liftd.service.geo_log import GeoEventLog
+from liftd.service.loop_settings import (
+    log_programs,
+    loop_config,
+    needs_restart,
+    shape,
+    trace_names,
+)
 from liftd.settings import ConfigError, Settings, load_settings
 from liftd.settings.load import program_problem
-from liftd.settings.model import LiftdConfig
-from liftd.settings.programs import program_channel, read_program
 
 if TYPE_CHECKING:
     from liftd.service.metrics import Sample
     from liftd.service.trace_recorder import TraceRecorder
 
 TRACE_CAPACITY_S = 10.0  # trace ring: this many seconds of cycles
-RESTART_KEYS = ("host", "port", "net_id", "extra_net_ids", "ams_ports")
-RESTART_SECTIONS = ("rt", "log", "metrics")  # applied when the processes start
-
-
-def needs_restart(running: LiftdConfig, new: LiftdConfig) -> list[str]:
-    """The keys of `new` that differ from what the daemon runs with and that only a restart
-    applies: the listen address and AMS identity, the real-time, log and metrics settings."""
-    keys = [f"ads.{k}" for k in RESTART_KEYS
-            if getattr(new.ads, k) != getattr(running.ads, k)]  # fmt: skip
-    for name in RESTART_SECTIONS:
-        old_s, new_s = getattr(running, name), getattr(new, name)
-        keys += [f"{name}.{k}" for k in type(new_s).model_fields
-                 if getattr(new_s, k) != getattr(old_s, k)]  # fmt: skip
-    return keys
 
 
 class StartError(Exception):
     """The daemon cannot start (occupied port, unwritable trace, GEO process failed)."""
-
-
-def loop_config(settings: Settings) -> LoopConfig:
-    """What the GEO process runs: every channel in channel order. A channel without a program
-    idles in READY, serving its objects, until a reload brings one (an empty program: a PLC
-    START ends at once)."""
-    cfg = settings.config
-    channels = []
-    for c in settings.machine:
-        program = c.program
-        text = read_program(program)
-        channels.append(
-            ChannelConfig(
-                channel=program_channel(settings, program, text, c.params),  # + subroutines
-                program_text=text,
-                program_name=str(program) if program else "(none)",
-                autostart=c.autostart and program is not None,
-                repeat=c.repeat and program is not None,
-            )
-        )
-    return LoopConfig(
-        channels=tuple(channels),
-        m_ack_auto=cfg.plc.m_ack == "auto",
-        m_ack_delay_s=cfg.plc.m_ack_delay_ms * 1e-3,
-        rt=RtRequest(**cfg.rt.model_dump(exclude={"stall_timeout_ms"})),
-    )
-
-
-def trace_names(trace: str, settings: Settings) -> list[str]:
-    """One trace per channel: the [cnc] channel's at OUT.csv, channel N's at OUT.chN.csv."""
-    out = Path(trace)
-    return [
-        trace if i == settings.primary_index
-        else str(out.with_name(f"{out.stem}.ch{c.params.channel_id}{out.suffix or '.csv'}"))
-        for i, c in enumerate(settings.machine)
-    ]  # fmt: skip
-
-
-def _shape(settings: Settings) -> tuple[tuple[int, int, tuple[int, ...]], ...]:
-    """What a reload cannot change: the channels, their axis counts and, with several
-    channels, which logical axes each has (channels take a reload one at a time, each at its
-    own program boundary: an axis moving between channels would be in two for a while)."""
-    several = len(settings.machine) > 1
-    return tuple(
-        (c.params.channel_id, len(c.params.axes),
-         tuple(ax.log_axis_nr for ax in c.params.axes) if several else ())
-        for c in settings.machine
-    )  # fmt: skip
 
 
 class Daemon:
@@ -285,24 +227,7 @@ class Daemon:
             cfg = loop_config(settings)
         except OSError as exc:
             raise StartError(f"{exc.filename}: cannot read the program: {exc.strerror}") from None
-        several = len(cfg.channels) > 1
-        for c, run in zip(settings.machine, cfg.channels, strict=True):
-            tag = {"channel": c.params.channel_id} if several else {}
-            if c.program is None:
-                idle = "no program: the channel idles until a reload brings one"
-                if not several:
-                    idle = "no [program] file: the channel idles until a reload brings one"
-                self.log.warning("daemon.no_program", detail=idle, **tag)
-                continue
-            ch = run.channel  # with the program's subroutine files
-            home = tuple(0.0 for _ in ch.axes)
-            result = decode(run.program_text, DecoderContext.from_channel(ch, home))
-            for err in result.errors:
-                level = "warning" if err.severity is Severity.WARNING else "error"
-                getattr(self.log, level)("nc.problem", file=err.file or str(c.program),
-                                         line=err.line, id=err.id, message=err.message,
-                                         **tag)  # fmt: skip
-            self.log.info("daemon.program", file=str(c.program), blocks=len(result.blocks), **tag)
+        log_programs(settings, cfg, self.log)
         return cfg
 
     async def _listen(self) -> None:
@@ -382,7 +307,7 @@ class Daemon:
                            detail="the running configuration is kept")  # fmt: skip
             return Verdict(False, "; ".join(problems))
         old = self.settings
-        if _shape(new) != _shape(old) or new.channel.cycle_time != old.channel.cycle_time:
+        if shape(new) != shape(old) or new.channel.cycle_time != old.channel.cycle_time:
             detail = "channels, axes or cycle time changed: restart"
             self.log.error("config.reload_rejected", detail=detail)
             return Verdict(False, detail)
