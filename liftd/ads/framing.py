@@ -44,6 +44,10 @@ class AmsFramer:
             del buf[:pos]  # one compaction per feed, not per frame
         return frames
 
+    def clear(self) -> None:
+        """Drop an incomplete frame (the connection closed)."""
+        self._buf = bytearray()
+
     @property
     def pending(self) -> int:
         """Bytes of an incomplete frame held back (for the idle timeout of half frames)."""

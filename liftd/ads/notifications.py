@@ -10,7 +10,10 @@ Rules (reference/ads.md §1.5–§1.6, Beckhoff "ADS Add Device Notification"):
   FIRST_SAMPLE_DELAY after subscribing: AdsLib registers its dispatcher only after it has read
   the handle from the response and drops a notification that comes earlier (seen with pyads);
 * a sample may wait up to its max delay, so samples of several cycles and handles share frames
-  (one stamp per poll, several samples per stamp); with max delay 0 it goes out at once;
+  (one stamp per poll, several samples per stamp); with max delay 0 it goes out at once; no
+  frame carries more than `max_payload` bytes (the server's frame cap less the AMS header): a
+  poll's samples are split over several stamps and frames where needed, and a subscription
+  whose sample could not fit a frame alone is refused (0x717);
 * the subscribed length is a maximum, as a Read's is: a sample carries the object's bytes, at
   most that many (TwinCAT.Ads: "Maximum amount of data in bytes to receive with this ADS
   Notification", infosys 1033/tc3_ads.net/21041338891; TwinCAT's logger sends samples shorter
@@ -33,6 +36,7 @@ from liftd.ads.wire import AddNotificationRequest, Sample, Stamp, encode_notific
 
 Reader = Callable[[int, int, int], bytes]  # (index group, index offset, length) → data
 FIRST_SAMPLE_DELAY_NS = 20_000_000
+SAMPLE_OVERHEAD = 28  # payload head (8), stamp (12) and sample head (8) around one sample
 
 
 class AmsAddr(NamedTuple):
@@ -76,8 +80,9 @@ class NotificationTable:
     ) -> None:
         self.max_handles = max_handles
         self.min_cycle_ns = min_cycle_ns
-        self.max_length = max_length
         self.max_payload = max_payload
+        # a sample alone in a frame: 8 bytes of payload head, 12 of stamp, 8 of sample head
+        self.max_length = min(max_length, max_payload - SAMPLE_OVERHEAD)
         self.subs: dict[int, Subscription] = {}
         self._next_handle = 1
         self._batches: dict[tuple[AmsAddr, AmsAddr], _Batch] = {}
@@ -169,13 +174,21 @@ class NotificationTable:
                 self._batches[key] = _Batch(now_ns + sub.max_delay_ns)
             else:
                 batch.deadline_ns = min(batch.deadline_ns, now_ns + sub.max_delay_ns)
-        for key, samples in fresh.items():
+        for key, samples in fresh.items():  # frames of at most max_payload: split stamps too
             batch = self._batches[key]
-            size = 12 + sum(8 + len(s.data) for s in samples)
-            if batch.stamps and batch.size + size > self.max_payload:
-                out.append(Outgoing(*key, encode_notification(batch.stamps)))
-                batch.stamps, batch.size = [], 8
-            batch.stamps.append(Stamp(stamp_time, tuple(samples)))
+            stamp: list[Sample] = []
+            size = 12
+            for sample in samples:
+                need = 8 + len(sample.data)
+                if batch.size + size + need > self.max_payload and (stamp or batch.stamps):
+                    if stamp:
+                        batch.stamps.append(Stamp(stamp_time, tuple(stamp)))
+                    out.append(Outgoing(*key, encode_notification(batch.stamps)))
+                    batch.stamps, batch.size = [], 8
+                    stamp, size = [], 12
+                stamp.append(sample)
+                size += need
+            batch.stamps.append(Stamp(stamp_time, tuple(stamp)))
             batch.size += size
         for key in [k for k, b in self._batches.items() if b.deadline_ns <= now_ns]:
             batch = self._batches.pop(key)

@@ -13,7 +13,7 @@ from liftd.cnc.params import AxisParams, ChannelParams
 from liftd.settings.cnc_lists import ChannelLists, read_channel_lists, startup_channels
 from liftd.settings.config_file import ConfigError, find_config, parse_config_text, toml_line
 from liftd.settings.isg_list import Problem, Severity
-from liftd.settings.model import ChannelSection, LiftdConfig
+from liftd.settings.model import AdsSection, ChannelSection, LiftdConfig
 
 
 @dataclass(frozen=True, slots=True)
@@ -106,6 +106,7 @@ def load_settings(explicit: str | None = None, program: str | None = None) -> Se
     )
     problems += more
     where = _Where(str(path), text, problems)
+    _ads_budgets(config.ads, where)
     if lists is not None:
         names = [ax.name for ax in lists.axes]
         if config.cnc.lift_axis not in names:
@@ -161,6 +162,17 @@ def load_settings(explicit: str | None = None, program: str | None = None) -> Se
         channels=tuple(machine),
         primary=[c.params.channel_id for c in machine].index(channel.channel_id),
     )
+
+
+def _ads_budgets(ads: AdsSection, where: _Where) -> None:
+    """A connection's budget holds a request and a reply of a frame each; the server's holds
+    a connection's."""
+    if ads.connection_budget_bytes < 2 * ads.max_frame_bytes:
+        where.error(("ads", "connection_budget_bytes"), ads.connection_budget_bytes,
+                    f"below 2 × max_frame_bytes ({2 * ads.max_frame_bytes})")  # fmt: skip
+    if ads.budget_bytes < ads.connection_budget_bytes:
+        where.error(("ads", "budget_bytes"), ads.budget_bytes,
+                    f"below connection_budget_bytes ({ads.connection_budget_bytes})")  # fmt: skip
 
 
 def _unreadable(file: Path) -> str | None:

@@ -84,6 +84,12 @@ class AdsSection(_Section):
     max_notifications_per_connection: int = Field(512, ge=1, le=100000)
     min_notification_cycle_us: int = Field(1000, ge=100, le=10_000_000)
     write_queue_frames: int = Field(1024, ge=16, le=1_000_000)
+    # bytes held for one connection (its replies, notifications and routed frames not yet
+    # taken by its peer, and a request not yet complete): beyond it the connection is closed;
+    # at least 2 × max_frame_bytes
+    connection_budget_bytes: int = Field(4 << 20, ge=2048, le=1 << 34)
+    # bytes held for all connections together: beyond it the one holding most is closed
+    budget_bytes: int = Field(48 << 20, ge=2048, le=1 << 36)
     incomplete_frame_timeout_s: float = Field(10.0, gt=0.0, le=3600.0)
     # a connection that sent no valid AMS frame (nor a router port connect) is closed after this
     first_frame_timeout_s: float = Field(10.0, gt=0.0, le=3600.0)

@@ -30,6 +30,9 @@ class FakeTransport:
     def write(self, data: bytes) -> None:
         self.out += data
 
+    def get_write_buffer_size(self) -> int:
+        return 0  # what the server wrote went to the peer (`out`); pause_writing says otherwise
+
     def abort(self) -> None:
         self.aborted = True
 
