@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from typing import cast
 
 from liftd.cnc.lift.advanced import FirstRise
 from liftd.cnc.lift.path_based import RangePlan, plan_range
@@ -28,6 +29,7 @@ from liftd.cnc.path.geometry import Vec, within
 from liftd.cnc.path.program import ActionKind, PathProgram, prepare
 from liftd.cnc.path.table import PathTable, build_table
 from liftd.cnc.path.velocity import brake_distance
+from liftd.cnc.pause import EVERY, pause, release
 from liftd.cnc.plc import MAX_OVERRIDE
 
 
@@ -84,6 +86,7 @@ def _first_rises(
     profiles: dict[str, LiftProfiles] = {}
     out: list[FirstRise | None] = []
     for rng, plan in zip(ranges, plans, strict=True):
+        pause()  # a ruckig solve per range
         spec = rng.start
         if plan is not None or rng.suppressed:
             out.append(None)
@@ -110,6 +113,7 @@ def _cap_for_lifts(
     profiles: dict[str, LiftProfiles] = {}
     segs = list(path.segments)
     for rng in ranges:
+        pause()
         if rng.k_end <= rng.k_start or not rng.moves_z:
             continue
         axis = rng.start.axis
@@ -142,6 +146,7 @@ def _couple_lifts(
     plans: list[RangePlan | None] = [None] * len(ranges)
     profiles: dict[str, LiftProfiles] = {}
     for rng in ranges:
+        pause()  # a range's z(s) plan
         k_last = rng.k_end if rng.k_end >= 0 else len(path.segments)
         if k_last <= rng.k_start:  # no path motion in the range: time-based, the path waits
             continue
@@ -176,6 +181,8 @@ def _stops_inside(path: PathProgram, rng: LiftRange) -> tuple[int, ...]:
 def _conditional(path: PathProgram) -> dict[int, tuple[int, ...]]:
     out: dict[int, list[int]] = {}
     for b in path.boundaries:
+        if not b.index & EVERY:
+            pause()
         if b.conditional_stop:
             for a in b.actions:
                 if a.kind is ActionKind.M_WAIT:
@@ -207,7 +214,10 @@ def _limits_reach(rng: LiftRange, changed: list[int], nominal: PathTable,
 
 
 def load_program(text: str, ch: ChannelParams, start: Vec) -> GeoProgram:
+    """Decode and prepare `text` for a run from `start`, with pause points (pause.py)
+    between its stages and in their loops."""
     result = decode(text, DecoderContext.from_channel(ch, start))
+    blocks = list(result.blocks)  # freed a piece at a time below (pause.py)
     path = prepare(result.blocks, ch, start)
     nominal = build_table(path)
     ranges = find_ranges(path, ch)
@@ -217,26 +227,47 @@ def load_program(text: str, ch: ChannelParams, start: Vec) -> GeoProgram:
         path = _cap_for_lifts(path, ranges, ch)
     elif ch.lift_method is LiftMethod.LIFTING:
         path, plans = _couple_lifts(path, ranges, ch)
-    changed = [k for k, (a, b) in enumerate(zip(original, path.segments, strict=True)) if a != b]
-    differs = tuple(_limits_reach(r, changed, nominal, ch) for r in ranges)
+    changed = []
+    for k, (a, b) in enumerate(zip(original, path.segments, strict=True)):
+        if a != b:
+            changed.append(k)
+        if not k & EVERY:
+            pause()
+    differs = []
+    for r in ranges:
+        differs.append(_limits_reach(r, changed, nominal, ch))
+        pause()
     first = result.blocks[0].line if result.blocks else 1
     warnings = tuple(e for e in result.errors if e.severity is Severity.WARNING)
+    error = result.first_error
+    del result
+    release(cast(list[object], blocks))
+    stops = []
+    for r in ranges:
+        stops.append(_stops_inside(path, r))
+        pause()
+    table = build_table(path)
+    conditional = _conditional(path)
+    names = ch.axis_names  # a property that builds the tuple: once, not per range
+    entry_dir = []
+    for r in ranges:
+        entry_dir.append(_direction_into(path, r.k_start, names.index(r.start.axis)))
+        if not len(entry_dir) & EVERY:
+            pause()
     return GeoProgram(
         path=path,
         ranges=ranges,
-        error=result.first_error,
+        error=error,
         warnings=warnings,
         first_line=first,
-        stops=tuple(_stops_inside(path, r) for r in ranges),
+        stops=tuple(stops),
         z_index=ch.lift_axis_index,
         plans=plans,
-        table=build_table(path),
+        table=table,
         nominal=nominal,
-        conditional=_conditional(path),
-        nominal_differs=differs,
-        entry_dir=tuple(
-            _direction_into(path, r.k_start, ch.axis_names.index(r.start.axis)) for r in ranges
-        ),
+        conditional=conditional,
+        nominal_differs=tuple(differs),
+        entry_dir=tuple(entry_dir),
         range_of={id(r.start): r.index for r in ranges},
         rises=_first_rises(ranges, plans, ch),
         lift_axes=tuple(dict.fromkeys(r.start.axis for r in ranges)),
@@ -278,7 +309,11 @@ class PreparedPrograms:
             return prog
         prog = load_program(self.text, self.ch, start)
         self.loads += 1
+        self.keep(start, prog)
+        return prog
+
+    def keep(self, start: Vec, prog: GeoProgram) -> None:
+        """Keep `prog`, prepared for `start` (by `from_start`, or off the cycle)."""
         if len(self._by_start) >= self.capacity:
             del self._by_start[next(iter(self._by_start))]
         self._by_start[start] = prog
-        return prog

@@ -18,6 +18,7 @@ only (its errors are reported once, not per call).
 from __future__ import annotations
 
 from collections.abc import Iterator
+from typing import cast
 
 from liftd.cnc.nc.blocks import (
     Block,
@@ -42,6 +43,7 @@ from liftd.cnc.nc.sources import Frame, Source, parse_source
 from liftd.cnc.nc.trc import TrcFault
 from liftd.cnc.nc.words import Template, Words, collect_plain, template
 from liftd.cnc.params import LiftMethod, SlopeType
+from liftd.cnc.pause import pause, release
 
 LINE_CACHE = 4096  # distinct lines prepared once and reused by their text (bounded memory)
 
@@ -50,7 +52,9 @@ def decode(text: str, ctx: DecoderContext) -> DecodeResult:
     """Decode a whole program. Never raises for any text: problems come back as NcErrors."""
     dec = _Decoder(ctx)
     blocks = tuple(dec.run(text))
-    return dec.result(blocks)
+    result = dec.result(blocks)
+    dec.release()
+    return result
 
 
 def iter_decode(text: str, ctx: DecoderContext) -> tuple[Iterator[Block], _Decoder]:
@@ -69,6 +73,7 @@ class _Decoder(SubroutineCalls):
         self.stopped = False  # an error was found: no further blocks are executed
         self.open_at_error: LiftStart | None = None  # lift range open at the first error
         self.stack: list[Frame] = []
+        self.main_source: Source | None = None
         self.files: dict[str, Source] = {}
         self.line_cache: dict[str, Words | Template] = {}  # prepared lines by their text
         self.missing: set[str] = set()
@@ -81,7 +86,7 @@ class _Decoder(SubroutineCalls):
 
     # -- program flow --------------------------------------------------------------------------
     def run(self, text: str) -> Iterator[Block]:
-        main = parse_source(self.ctx.sources.program, text)
+        main = self.main_source = parse_source(self.ctx.sources.program, text)
         self._source_problems(main)
         if main.main is None:
             self._error(
@@ -111,6 +116,7 @@ class _Decoder(SubroutineCalls):
                             file=frame.source.name)  # fmt: skip
                 break
             self._run_line(frame, idx)
+            pause()  # a line's work at most between two pause points
             if out:
                 yield from out
                 out.clear()
@@ -122,6 +128,18 @@ class _Decoder(SubroutineCalls):
             self._emit(Block(self.last_line, lift_end=end, file=self.last_file))
         yield from out
         out.clear()
+
+    def release(self) -> None:
+        """Free the files' lines and prepared lines a piece at a time (pause.py)."""
+        for source in [self.main_source, *self.files.values()]:
+            if source is not None:
+                cached = list(source.cache.values())
+                source.cache.clear()
+                release(cached)
+                release(cast(list[object], source.lines))
+        cached = list(self.line_cache.values())
+        self.line_cache.clear()
+        release(cached)
 
     def result(self, blocks: tuple[Block, ...]) -> DecodeResult:
         return DecodeResult(
