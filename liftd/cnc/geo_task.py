@@ -18,7 +18,7 @@ from __future__ import annotations
 import functools
 from typing import Final
 
-from liftd.cnc.geo_program import PreparedPrograms
+from liftd.cnc.geo_program import PreparedPrograms, same_start
 from liftd.cnc.lift.monitor import AccelMonitor
 from liftd.cnc.lift.profile import LiftProfiles, ProfileError
 from liftd.cnc.nc.blocks import ErrorId
@@ -27,7 +27,7 @@ from liftd.cnc.path.interpolator import Interpolator
 from liftd.cnc.path.program import PathProgram
 from liftd.cnc.plc import MAX_OVERRIDE
 from liftd.cnc.plc_commands import PlcCommands
-from liftd.cnc.runs import Runs
+from liftd.cnc.runs import Runs, RunState
 from liftd.cnc.snapshot import (
     ChannelState,
     GeoInputs,
@@ -109,6 +109,29 @@ class GeoTask(PlcCommands):
         built in the cycles after it, a piece per cycle (`Runs.deferred`)."""
         # before the first START: the run after run 1
         self.next_runs.prepare(self.prog.path.end_position, max(self.runs, 1))
+
+    def wants_run(self) -> tuple[float, ...] | None:
+        """Where a START now would load the program from, when the run from there is not
+        built yet: the channel READY after a run (a RESET, an NC error's RESET, the end of
+        a program not repeated) with nothing built ahead for where its axes are; None
+        otherwise. The GEO process builds that run off the cycle (`build_run`, in a
+        thread) and hands it over (`offer_run`) before it lets the START through, so that
+        a START after a RESET costs its cycle what a repeat START does."""
+        if self.state is not READY or not self.runs or self.reset_requested:
+            return None
+        pos = self._positions()
+        ahead = self.next_runs.ahead
+        if ahead is not None and ahead.lift is not None and same_start(ahead.start, pos):
+            return None
+        return pos
+
+    def build_run(self, start: tuple[float, ...]) -> RunState:
+        """The run from `start` (see `wants_run`); reads only what does not change."""
+        return self.next_runs.build_for(start)
+
+    def offer_run(self, run: RunState) -> None:
+        """The run `build_run` built, for the next START (cheap: a GEO cycle may call it)."""
+        self.next_runs.offer(run, self.runs)
 
     @property
     def next_run_ready(self) -> bool:
