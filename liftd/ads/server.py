@@ -33,6 +33,7 @@ import asyncio
 import contextlib
 import ipaddress
 import socket
+import struct
 import time
 from collections import deque
 from collections.abc import Callable
@@ -70,7 +71,8 @@ __all__ = ["AdsConnection", "AdsServer", "Counters", "IpNetwork", "RateLimiter",
 # net.core.somaxconn, 4096 by default)
 LISTEN_BACKLOG = socket.SOMAXCONN
 IDLE_POLL_S = 0.1  # notification task wake-up when nothing is due (incomplete-frame checks)
-TURN_S = 0.001  # a connection's frames handled at once before the others get a turn
+LINGER_RESET = struct.pack("ii", 1, 0)  # struct linger {l_onoff 1, l_linger 0}
+TURN_S = 0.00025  # a connection's frames handled at once before the others get a turn
 BUDGET_STEP = 256 * 1024  # growth of a connection's held bytes that makes the server check its own
 
 
@@ -270,6 +272,12 @@ class AdsConnection(asyncio.Protocol):
         self.server.counters.closed_for_errors += error
         self.closed = True
         if self.transport is not None:
+            # a reset, not a close: the kernel would keep sending what a peer that does not
+            # read left in the socket's buffer (up to tcp_wmem's 4 MiB) and that peer would
+            # never see the end; with SO_LINGER 0 both go at once
+            sock = self.transport.get_extra_info("socket")
+            with contextlib.suppress(OSError, AttributeError):
+                sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, LINGER_RESET)
             self.transport.abort()  # drops the transport's buffer at once
         self.queue.clear()  # and what waited behind it
         self.queued = 0
