@@ -143,7 +143,7 @@ def test_max_connections() -> None:
 
 
 def test_a_client_pipelining_thousands_of_requests_does_not_make_others_wait_for_them() -> None:
-    """Issue 41: a connection's received frames are handled for a turn of 1 ms at most, then
+    """Issue 41: a connection's received frames are handled for a turn of 0.25 ms at most, then
     the others get theirs. A client sends 20 000 reads in one go (880 kB), another a single
     read just after: in the order the server handles them, the single read comes before the
     flood's 2 000th (asyncio reads 64–256 kB a time, 1 500–6 000 of these frames, which were
