@@ -551,5 +551,10 @@ class AdsServer:
                     raise got
                 return got
 
-            for out in table.poll(now_ns, unix_ns, read):
+            try:
+                outgoing = table.poll(now_ns, unix_ns, read)
+            except Exception as exc:  # this connection's, never the notification task's end
+                conn.fail(exc)
+                continue
+            for out in outgoing:
                 conn.notify(out)

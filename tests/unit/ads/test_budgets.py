@@ -298,3 +298,24 @@ def test_the_service_never_answers_more_than_a_frame() -> None:
     header = wire.AmsHeader(NET, 551, SOURCE, 30000, 2, 4, 0, 0, 1)
     reply = svc.handle(s, header, upload, True, 0)
     assert reply.failure is None and wire.decode_read_response(reply.payload)[0] == 0x70A
+
+
+def test_an_exception_while_sampling_closes_only_that_connection(monkeypatch: pytest.MonkeyPatch) -> None:  # fmt: skip
+    """The notification task polls every connection: one whose poll raises is closed, the
+    task and the others go on (it used to end the task silently: no more notifications)."""
+    srv = server()
+    bad, bad_peer = connect(srv)
+    good, good_peer = connect(srv)
+    spec = struct.pack("<IIIIII16s", *LIFT, 1, 3, 0, 10_000, bytes(16))
+    for conn, peer in ((bad, bad_peer), (good, good_peer)):
+        conn.data_received(frame(6, spec))
+        peer.read_all()
+    broken = bad.session.notifications
+
+    def poll(*a: object) -> list[object]:
+        raise MemoryError
+
+    monkeypatch.setattr(broken, "poll", poll)
+    srv.poll_notifications(after_first_sample(), 0)
+    assert bad.closed and srv.counters.protocol_errors == 1
+    assert any(f.header.command == 8 for f in good_peer.read_all())
