@@ -54,6 +54,7 @@ OBJECTS = [0x121301, 0x21301, 0x121401, 0x121302, 0x120101, 0x23900, 0x123900, 0
 LENGTHS = [0, 1, 2, 4, 8, 1000, 65536, 1 << 20, 256 << 20, 2 << 30, 0xFFFFFFF0, 0xFFFFFFFF]
 SOURCE = bytes([10, 9, 8, 7, 1, 1])
 POOL = 4096  # distinct frames per surface, sent in random order
+BASELINE_S = 30.0  # the probe alone before the attack: its p99 and the GEO loop's misses
 SURFACES = ("reads", "sums", "plc", "garbage", "reads-unread", "notify-stalled",
             "routing-stalled", "udp")  # fmt: skip
 
@@ -353,6 +354,19 @@ def run(d: Daemon, udp_port: int, total: int, seed: int, surfaces: set[str]) -> 
     ctx = mp.get_context("spawn")
     budget = 48 << 20  # [ads] budget_bytes default
     time.sleep(1.0)
+    # the baseline of the same run: the probe alone for BASELINE_S
+    stop = ctx.Event()
+    probed_alone: mp.Queue[dict[str, object]] = ctx.Queue()
+    alone = ctx.Process(target=probe, args=(d.port, d.net_id, probed_alone, stop))
+    exceeded0 = d.read_exceeded()
+    alone.start()
+    time.sleep(BASELINE_S)
+    stop.set()
+    baseline = probed_alone.get(timeout=60)
+    alone.join(10)
+    baseline["geo_exceeded_per_min"] = round((d.read_exceeded() - exceeded0) * 60 / BASELINE_S, 1)
+    print(json.dumps({"bench": "fuzz_daemon", "surface": "none (baseline)",
+                      "seconds": BASELINE_S, **baseline}), flush=True)  # fmt: skip
     rss0 = rss_mb(d.proc.pid) or 0.0
     exceeded0 = d.read_exceeded()
     stop = ctx.Event()
@@ -385,7 +399,8 @@ def run(d: Daemon, udp_port: int, total: int, seed: int, surfaces: set[str]) -> 
         "frames_per_s": round(frames / wall), "daemon_alive": alive,
         "rss_before_mb": round(rss0, 1), "rss_peak_mb": round(peak, 1),
         "rss_growth_mb": round(peak - rss0, 1), "budget_mb": budget >> 20, **summary,
-        "geo_exceeded": exceeded, "tracebacks": sum("Traceback" in line for line in d.raw),
+        "geo_exceeded": exceeded, "geo_exceeded_per_min": round(exceeded * 60 / wall, 1),
+        "tracebacks": sum("Traceback" in line for line in d.raw),
         "protocol_errors": d.count("ads.protocol_error") + d.count("ads.handler_failed"),
         "log_events": dict(events.most_common(12)),
     }), flush=True)  # fmt: skip

@@ -161,14 +161,14 @@ def test_without_a_program_the_daemon_idles_and_liftd_reload_brings_one(tmp_path
             time.sleep(0.02)
         assert d.read_symbol("GEO.cycle", "<Q") > cycles  # GEO cycles since start: only rises
         # the program was read, decoded and planned off the cycle (runtime/preparer.py): no
-        # cycle of the reload cost the loop's thread a quarter of the period (until issue 41
-        # the cycle that decoded it did; VM stalls may still make a cycle's wall time long,
-        # which its geo.compute_over line then shows with a small CPU time)
+        # cycle of the reload decoded on the loop's thread (until issue 41 the cycle that
+        # took it did: 2.5-3.5 ms of CPU for the demo; a cold cycle is a few hundred µs, and
+        # this VM's stalls count on the CPU clock too, hence 1 ms)
         slow = [rec for rec in list(d.logs) if rec.get("event") == "geo.compute_over"]
         took = [rec for rec in slow
                 if "reload" in (rec.get("text") or "").split(";")[0].split(",")]  # fmt: skip
         cpu_us = [int(rec["text"].split("; cpu ")[1].split(" µs")[0]) for rec in took]
-        assert all(us < 250 for us in cpu_us), took
+        assert all(us < 1000 for us in cpu_us), took
     finally:
         assert d.stop() == 0
 
