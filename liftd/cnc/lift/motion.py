@@ -232,7 +232,7 @@ class TimeBasedLift(LiftMotion):
 
     def error_in_range(self, t: float) -> None:
         gen, spec = self.gen, self.rng.start
-        gen.rise_and_hold(t)
+        gen.rise_and_hold(t, spec.z_start)
         # the bounds of a lift from where Z is to where it holds: a suppressed (direct)
         # range's were only its start and POS, and clamped Z there at full speed (bench_reset)
         margin = stop_margin(gen.vz, gen.az, self.guard.axis.a_max, self.guard.axis.j_max)
