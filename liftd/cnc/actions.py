@@ -220,9 +220,17 @@ class BoundaryActions:
             self.interp.nominal_flush()  # a step an event's cycle left (`nominal_step`)
             nominal = self.interp.nominal_arrival
             start = rec.departure if rec.departure is not None else rec.t_start
-            if rng is not None and rng.k_end > rng.k_start and nominal is not None:
-                rec.nominal_time = nominal - start
-                rec.path_delay = max(0.0, rec.t_end - start - rec.waits - rec.nominal_time)
+            if rng is not None and rng.k_end > rng.k_start:
+                if nominal is not None:
+                    rec.nominal_time = nominal - start
+                    rec.path_delay = max(0.0, rec.t_end - start - rec.waits - rec.nominal_time)
+                else:
+                    # the nominal run has not arrived yet (it was stepped to this cycle's end):
+                    # the path without the lift's limits is no faster, the lift cost nothing.
+                    # Its time is at least the path's own (issue 37 item 4: path-based Lifting
+                    # reported the whole range, 1.57 s, where its path arrived 0.4 ms early)
+                    rec.nominal_time = rec.t_end - start - rec.waits
+                    rec.path_delay = 0.0
             else:  # no path motion: all the time is the path waiting for Z
                 rec.path_delay = max(0.0, rec.t_end - rec.t_start - rec.waits)
             self.interp.nominal_stop()

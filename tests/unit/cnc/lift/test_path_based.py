@@ -327,3 +327,38 @@ def test_hsc_slope_is_allowed_with_path_based_lifting() -> None:
     task, snaps = run_task(ch, text)
     assert snaps[-1].state is ChannelState.READY and snaps[-1].error_id == 0
     assert task.lift.records[0].peak == pytest.approx(0.04, abs=1e-9)
+
+
+def _range_time_without_lift(ch: ChannelParams, text: str, x0: float, x1: float) -> float:
+    """The same program without its lift commands: the path's time from leaving X = x0 to
+    arriving at X = x1 (cycle-resolved)."""
+    plain = text.replace("Z[LIFT_START POS=1 POS_LIMIT=40]\n", "").replace("Z[LIFT_END]\n", "")
+    _, snaps = run_task(ch, plain)
+    t0 = max(s.t for s in snaps if s.positions[0] <= x0 + 1e-12)
+    t1 = min(s.t for s in snaps if s.positions[0] >= x1 - 1e-12)
+    return t1 - t0
+
+
+@pytest.mark.parametrize(
+    "blocks",
+    [
+        "X100 F12000\nX200 F6000\n",  # a programmed feed drop (issue 37 item 4)
+        "X100 F6000\nX200 F12000\n",
+        "X200 F6000\n",  # from rest, one block: the lift's limits cost time here
+    ],
+)
+def test_path_delay_is_what_the_lift_cost_against_the_nominal_run(blocks: str) -> None:
+    """path_delay_s is the time the lift cost against the same program's nominal run: the
+    range's time minus the time the path takes there without the lift's limits (the same
+    program without lift commands), never below 0. A programmed feed drop inside the range
+    is the program's, not the lift's: it reported the whole range (1.57 s) when the path
+    arrived at LIFT_END before the nominal run did."""
+    ch = lifting()
+    text = f"G01 X0 Y0 Z1 F12000\nZ[LIFT_START POS=1 POS_LIMIT=40]\n{blocks}Z[LIFT_END]\nM30\n"
+    task, snaps = run_task(ch, text)
+    assert snaps[-1].state is ChannelState.READY
+    (rec,) = task.lift.records
+    nominal = _range_time_without_lift(ch, text, 0.0, 0.2)
+    lifted = rec.t_end - rec.t_start
+    assert rec.path_delay == pytest.approx(max(0.0, lifted - nominal), abs=1.5e-3)  # 1 cycle
+    assert rec.path_delay < 0.5 * lifted
