@@ -39,6 +39,9 @@ class GeoProgram:
     warnings: tuple[NcError, ...]
     first_line: int
     stops: tuple[tuple[int, ...], ...]  # per range: waiting points strictly inside it
+    # per range: boundaries strictly inside it where the path stops only for a #FLUSH / #FLUSH
+    # WAIT (not waiting points of the lift: vendor §2.1.3 case 3, `LiftAhead._horizon`)
+    flushes: tuple[tuple[int, ...], ...]
     z_index: int
     plans: tuple[RangePlan | None, ...]  # per range: z(s) of path-based Lifting, else None
     table: PathTable  # what the path tracker reads (with the lift ranges' limits)
@@ -167,10 +170,26 @@ def _couple_lifts(
     return dataclasses.replace(path, segments=tuple(segs)), tuple(plans)
 
 
-def _stops_inside(path: PathProgram, rng: LiftRange) -> tuple[int, ...]:
+_WAITS = frozenset((ActionKind.M_WAIT, ActionKind.M00, ActionKind.DWELL, ActionKind.PROGRAM_END))
+
+
+def _flush_only(path: PathProgram, k: int) -> bool:
+    """Whether the path stops at boundary k for a #FLUSH and for nothing that waits."""
+    b = path.boundaries[k]
+    kinds = {a.kind for a in b.actions}
+    return ActionKind.FLUSH in kinds and not kinds & _WAITS and not b.conditional_stop
+
+
+def _stops_inside(path: PathProgram, rng: LiftRange, flush: bool) -> tuple[int, ...]:
+    """The boundaries strictly inside `rng` where the path stops: those that wait (`flush`
+    False) or those that stop only for a #FLUSH (`flush` True)."""
     if rng.k_end < 0:
         return ()
-    return tuple(k for k in range(rng.k_start + 1, rng.k_end) if path.boundaries[k].stop)
+    return tuple(
+        k
+        for k in range(rng.k_start + 1, rng.k_end)
+        if path.boundaries[k].stop and _flush_only(path, k) == flush
+    )
 
 
 def _conditional(path: PathProgram) -> dict[int, tuple[int, ...]]:
@@ -227,7 +246,8 @@ def load_program(text: str, ch: ChannelParams, start: Vec) -> GeoProgram:
         error=result.first_error,
         warnings=warnings,
         first_line=first,
-        stops=tuple(_stops_inside(path, r) for r in ranges),
+        stops=tuple(_stops_inside(path, r, False) for r in ranges),
+        flushes=tuple(_stops_inside(path, r, True) for r in ranges),
         z_index=ch.lift_axis_index,
         plans=plans,
         table=build_table(path),

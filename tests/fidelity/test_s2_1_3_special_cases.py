@@ -1,12 +1,16 @@
-"""Vendor §2.1.3 "Special cases" (Advanced Lifting)."""
+"""Vendor §2.1.3 "Special cases" (Advanced Lifting; case 2 for both methods, §2.4)."""
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from liftd.cnc.nc import Severity
+from liftd.cnc.params import LiftMethod
+from liftd.cnc.snapshot import ChannelState
 from tests.fidelity.helpers import MM, decoded, ids, run_z
 from tests.support.channel import make_channel
+from tests.support.closed_loop import run_task
 
 
 def _first_at(z: list[float], value: float) -> int:
@@ -49,3 +53,90 @@ def test_s2_1_3_special_case_1_mirrored_for_down() -> None:
     in_range = z[start:end]
     assert min(in_range) >= 5 * MM - 1e-9 and max(in_range) <= 10 * MM + 1e-6  # no limit
     assert z[-1] == pytest.approx(5 * MM, abs=1e-9)
+
+
+@pytest.mark.parametrize("method", [LiftMethod.ADVANCED, LiftMethod.LIFTING])
+def test_s2_1_3_special_case_2_syntax_error_positions_at_the_maximum_lift_height(
+    method: LiftMethod,
+) -> None:
+    """§2.1.3 special case 2, the vendor's example (N10 Z10, LIFT_START POS_LIMIT=30, X10,
+    X20, X35, a syntax error): "the traversing motion is executed up to the last correctly
+    decoded point ... the lift axis is positioned at the maximum lift height at the error
+    point" (§2.4, both methods: it "stays at POS_LIMIT")."""
+    ch = make_channel(method)
+    text = (
+        "N10 G01 X0 Y0 Z10 F6000\nN20 Z[LIFT_START POS_LIMIT=30]\nN30 X10\nN40 X20\nN50 X35\n"
+        "N100 syntax error\nN560 X50\nN600 Z[LIFT_END]\n"
+    )
+    _, snaps = run_task(ch, text, max_time=5.0)
+    last = snaps[-1]
+    assert last.state is ChannelState.ERROR and last.error_line == 6
+    assert last.positions[0] == pytest.approx(0.035, abs=1e-12)  # the last correct block
+    assert last.positions[2] == pytest.approx(30 * MM, abs=1e-9)
+    assert last.lift_vz == 0.0
+
+
+@pytest.mark.parametrize("method", [LiftMethod.ADVANCED, LiftMethod.LIFTING])
+def test_s2_1_3_special_cases_1_and_2_the_raised_limit_is_the_height_an_error_holds(
+    method: LiftMethod,
+) -> None:
+    """§2.1.1: where POS lies beyond POS_LIMIT the limit "is raised to the maximum of start
+    and target position"; so the maximum lift height of special case 2 is POS here (issue 37
+    item 1: Advanced Lifting brought Z from 40 down to 30 after the error). Decided: the
+    method-specific passages (§2.1.1, §2.1.3) over §2.4's "POS_LIMIT", and the workpiece's
+    safety: an error never moves Z toward it."""
+    ch = make_channel(method)
+    text = (
+        "N10 G01 X0 Y0 Z10 F6000\nN20 Z[LIFT_START POS=40 POS_LIMIT=30]\nN30 X10\nN40 X20\n"
+        "N50 X35\nN100 syntax error\nN600 Z[LIFT_END]\n"
+    )
+    task, snaps = run_task(ch, text, max_time=5.0)
+    assert snaps[-1].state is ChannelState.ERROR
+    k = next(i for i, s in enumerate(snaps) if s.positions[2] >= 40 * MM - 1e-9)
+    z = np.array([s.positions[2] for s in snaps[k:]])
+    assert np.all(np.abs(z - 40 * MM) <= 1e-9)  # up at POS from early on, and it stays
+
+
+@pytest.mark.parametrize("flush", ["#FLUSH", "#FLUSH WAIT"])
+def test_s2_1_3_special_case_3_a_flush_has_no_influence_on_the_lift_profile(flush: str) -> None:
+    """§2.1.3 special case 3 (Advanced Lifting): "emptying the channel (#FLUSH, #FLUSH WAIT)
+    can mean that the path has to be stopped if the lift axis can no longer reach the lift
+    position in time. Otherwise #FLUSH WAIT has no influence on the lift profile." The same
+    range with and without the flush: Z rises once to the same height and lowers once, and
+    it is up at the flush, not at POS. §2.4 (both methods: "the programmed
+    target position is reached briefly in the flush block") disagrees; liftd follows the
+    method-specific passage (issue 37 item 2)."""
+    ch = make_channel()
+    body = "N40 X150\nN50 X140\n{}N70 X90\nN80 X40\nN90 Z[LIFT_END]\nM30\n"
+    head = "N10 G01 X10 Y10 F6000\nN20 X40 Z2\nN30 Z[LIFT_START POS=12 POS_LIMIT=40]\n"
+    profiles = []
+    for text in (head + body.format(f"N60 {flush}\n"), head + body.format("")):
+        task, snaps = run_task(ch, text)
+        assert snaps[-1].state is ChannelState.READY and len(task.lift.records) == 1
+        assert task.lift.records[0].arrival_error <= 1e-9
+        lifted = [s for s in snaps if s.lift_active]
+        profiles.append((np.array([s.positions[2] for s in lifted]), lifted))
+    (z_flush, lifted), (z_plain, _) = profiles
+    assert z_flush.max() == pytest.approx(z_plain.max()) == pytest.approx(40 * MM)
+    back = lifted[int(np.argmax([s.positions[0] for s in lifted])) :]
+    at_flush = min(back, key=lambda s: abs(s.positions[0] - 0.14))
+    assert at_flush.positions[2] == pytest.approx(40 * MM, abs=1e-9)
+    top = int(np.argmax(z_flush))  # one rise, one descent: no landing in between
+    assert np.all(np.diff(z_flush[: top + 1]) >= -1e-12)
+    assert np.all(np.diff(z_flush[top:]) <= 1e-12)
+
+
+def test_s2_1_3_special_case_3_the_path_stops_if_z_could_not_reach_pos_in_time() -> None:
+    """§2.1.3 special case 3, its first sentence: 2 mm of path after the flush are 20 ms at
+    F6000; Z, up at 40 mm, needs about 0.14 s to POS = 12: the path stops at the flush until Z
+    can make it from there, and Z is never late."""
+    ch = make_channel()
+    text = (
+        "N10 G01 X10 Y10 F6000\nN20 X40 Z2\nN30 Z[LIFT_START POS=12 POS_LIMIT=40]\nN40 X150\n"
+        "N60 #FLUSH WAIT\nN70 X148\nN90 Z[LIFT_END]\nN100 X100\nM30\n"
+    )
+    task, snaps = run_task(ch, text)
+    assert snaps[-1].state is ChannelState.READY
+    waiting = [s for s in snaps if s.lift_active and s.v_path == 0.0 and s.positions[0] == 0.15]
+    assert len(waiting) > 50 and waiting[-1].positions[2] > 12 * MM
+    assert task.lift.records[0].arrival_error <= 1e-9

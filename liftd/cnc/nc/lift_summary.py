@@ -129,7 +129,7 @@ def describe(
     30.000 mm, path 23.400 mm: lifts (planned peak 41.2 mm, nominal 0.120 s)`. `program`:
     the program's own file, named where a range spans two files."""
     s = r.start
-    kind = ", single block" if s.single_block else ", resumed after #FLUSH" if s.implicit else ""
+    kind = ", single block" if s.single_block else ""
     down = ", DOWN" if s.down else ""
     head = (
         f"lift {r.index}: {_lines(r, program)}{kind}{down}, {METHOD_NAMES[method]}, "
