@@ -5,8 +5,9 @@ and feed holds. Checks: |v|, |a|, |j| of every axis ≤ limit (+1e-9 relative, f
 differences), no excursion beyond POS_LIMIT or the software limits (+0.1 µm), arrival error
 ≤ 1 µm, never late (no lift.late). Prints one JSON line with the counts and the first failures.
 
-Path-based Lifting (METHOD = lifting) is checked the same way except Z's acceleration, which
-may reach a_max·(1 + P442/1000·override²) by the method's design (lift/path_based.py).
+Path-based Lifting (METHOD = lifting) is checked the same way, except that an override above
+100 % scales Z's acceleration and jerk with override² and override³ (the overload band the
+vendor allows for feed changes, §2.2.1; lift/path_based.py `segment_cap`).
 
 With --stops every run also gets a PLC STOP at a random moment (inside a lift range in two of
 three runs; the moment from a first run without it) and START after a random hold of 1 ms–2 s

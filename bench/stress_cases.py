@@ -201,9 +201,12 @@ def violations(sc: Scenario, snaps: list, records: list) -> list[str]:  # type: 
     for i, ax in enumerate(ch.axes):
         checks = [("v", v, ax.v_max), ("a", a, ax.a_max), ("j", j, ax.j_max)]
         if coupled and ax.name == ch.lift_axis:
-            # path-based Lifting: plan a_max·P442/1000 × override², plus a_max for the path's
-            # own acceleration (lift/path_based.py); the jerk is not bounded by the method
-            checks = [("v", v, ax.v_max), ("a", a, ax.a_max * (1.0 + ax.dyn_a_err * ov * ov))]
+            # path-based Lifting: within a_max and j_max at 100 % override, whatever the path
+            # does (issue 37 item 3, lift/path_based.py `segment_cap`); an override above
+            # 100 % scales the plan's share with ov² (ov³): the overload band of P-AXIS-00442
+            big = max(1.0, ov)
+            checks = [("v", v, ax.v_max), ("a", a, ax.a_max * big * big),
+                      ("j", j, ax.j_max * big * big * big)]  # fmt: skip
         for name, arr, lim in checks:
             got = float(np.abs(arr[:, i]).max()) / lim
             if got > 1 + 1e-9:

@@ -18,7 +18,7 @@ import dataclasses
 from dataclasses import dataclass
 
 from liftd.cnc.lift.advanced import FirstRise
-from liftd.cnc.lift.path_based import RangePlan, plan_range
+from liftd.cnc.lift.path_based import RangePlan, ZLimits, plan_range
 from liftd.cnc.lift.profile import LiftProfiles, ProfileError
 from liftd.cnc.lift.ranges import LiftRange, find_ranges
 from liftd.cnc.nc import DecoderContext, NcError, decode
@@ -152,21 +152,24 @@ def _couple_lifts(
         z = ch.axis(axis)
         if axis not in profiles:
             profiles[axis] = lifting_profiles(ch, axis)
+        # Z within its limits at 100 % override: a_max, or P-AXIS-00442's planning
+        # acceleration where that is higher (the vendor's a_max,Lift, §4.1); v_max at any
+        keep = 1.0 - PLANNING_MARGIN
+        a_lift = max(z.a_max, profiles[axis].a_max)
+        z_lim = ZLimits(z.v_max * keep, a_lift * keep, z.j_max * keep)
         try:
-            plan, caps = plan_range(path, rng, profiles[axis])
+            plan, caps = plan_range(path, rng, profiles[axis], z_lim)
         except ProfileError:
             continue
         plans[rng.index] = plan
         for cap in caps:
             seg = segs[cap.k]
-            a, j, v = seg.a_max, seg.j_max, seg.v_lift
-            if cap.dz_ds > 0.0:  # the coupling term (dz/ds)·s̈ gets a_max of Z (see path_based)
-                a = min(a, z.a_max / cap.dz_ds)
-                j = min(j, z.j_max / cap.dz_ds)
-                # Z is coupled like a path axis: whatever the override, ż = (dz/ds)·ṡ ≤ v_max
-                v = min(v, z.v_max * (1.0 - PLANNING_MARGIN) / cap.dz_ds)
-            v_ov = min(seg.v_lift_ov, cap.v_cap)
-            segs[cap.k] = seg.limited(v_ov, a, j, v)
+            segs[cap.k] = seg.limited(
+                min(seg.v_lift_ov, cap.v_ov),
+                min(seg.a_max, cap.a),
+                min(seg.j_max, cap.j),
+                min(seg.v_lift, cap.v),
+            )
     return dataclasses.replace(path, segments=tuple(segs)), tuple(plans)
 
 
