@@ -7,10 +7,10 @@ import pytest
 
 from liftd.cnc.nc import Severity
 from liftd.cnc.params import LiftMethod
-from liftd.cnc.snapshot import ChannelState
-from tests.fidelity.helpers import MM, decoded, ids, run_z
+from liftd.cnc.snapshot import ChannelState, GeoInputs
+from tests.fidelity.helpers import MM, decoded, flush_run, ids, on_return, run_z
 from tests.support.channel import make_channel
-from tests.support.closed_loop import run_task
+from tests.support.closed_loop import events, fd_ratios, run_task
 
 
 def _first_at(z: list[float], value: float) -> int:
@@ -92,51 +92,76 @@ def test_s2_1_3_special_cases_1_and_2_the_raised_limit_is_the_height_an_error_ho
     )
     task, snaps = run_task(ch, text, max_time=5.0)
     assert snaps[-1].state is ChannelState.ERROR
+    t_end = snaps[-1].t  # the channel stays in error: 300 more cycles (path-based Lifting's Z
+    snaps += [task.step(GeoInputs(), t_end + (k + 1) * ch.cycle_time) for k in range(300)]
     k = next(i for i, s in enumerate(snaps) if s.positions[2] >= 40 * MM - 1e-9)
-    z = np.array([s.positions[2] for s in snaps[k:]])
+    z = np.array([s.positions[2] for s in snaps[k:]])  # came down after simulate's driver ended)
     assert np.all(np.abs(z - 40 * MM) <= 1e-9)  # up at POS from early on, and it stays
 
 
-@pytest.mark.parametrize("flush", ["#FLUSH", "#FLUSH WAIT"])
+FLUSHES = ["#FLUSH", "#FLUSH WAIT"]
+
+
+@pytest.mark.parametrize("flush", FLUSHES)
 def test_s2_1_3_special_case_3_a_flush_has_no_influence_on_the_lift_profile(flush: str) -> None:
     """§2.1.3 special case 3 (Advanced Lifting): "emptying the channel (#FLUSH, #FLUSH WAIT)
     can mean that the path has to be stopped if the lift axis can no longer reach the lift
     position in time. Otherwise #FLUSH WAIT has no influence on the lift profile." The same
-    range with and without the flush: Z rises once to the same height and lowers once, and
-    it is up at the flush, not at POS. §2.4 (both methods: "the programmed
-    target position is reached briefly in the flush block") disagrees; liftd follows the
-    method-specific passage (issue 37 item 2)."""
+    range with and without the flush: Z rises once to the same height and lowers once, it is
+    up at the flush, not at POS, and the path does not wait there. §2.4 (both methods: "the
+    programmed target position is reached briefly in the flush block") disagrees; liftd
+    follows the method-specific passage (issue 37 item 2)."""
     ch = make_channel()
-    body = "N40 X150\nN50 X140\n{}N70 X90\nN80 X40\nN90 Z[LIFT_END]\nM30\n"
-    head = "N10 G01 X10 Y10 F6000\nN20 X40 Z2\nN30 Z[LIFT_START POS=12 POS_LIMIT=40]\n"
-    profiles = []
-    for text in (head + body.format(f"N60 {flush}\n"), head + body.format("")):
-        task, snaps = run_task(ch, text)
-        assert snaps[-1].state is ChannelState.READY and len(task.lift.records) == 1
-        assert task.lift.records[0].arrival_error <= 1e-9
+    heights = []
+    for blocks in (f"N40 X150\nN50 X140\nN60 {flush}\nN70 X90\nN80 X40\n",
+                   "N40 X150\nN50 X140\nN70 X90\nN80 X40\n"):  # fmt: skip
+        _, snaps = flush_run(ch, blocks)
         lifted = [s for s in snaps if s.lift_active]
-        profiles.append((np.array([s.positions[2] for s in lifted]), lifted))
-    (z_flush, lifted), (z_plain, _) = profiles
-    assert z_flush.max() == pytest.approx(z_plain.max()) == pytest.approx(40 * MM)
-    back = lifted[int(np.argmax([s.positions[0] for s in lifted])) :]
-    at_flush = min(back, key=lambda s: abs(s.positions[0] - 0.14))
+        heights.append(np.array([s.positions[2] for s in lifted]))
+    z, plain = heights
+    assert z.max() == pytest.approx(plain.max()) == pytest.approx(40 * MM)
+    _, snaps = flush_run(ch, f"N40 X150\nN50 X140\nN60 {flush}\nN70 X90\nN80 X40\n")
+    at_flush = on_return(snaps, 0.14)
+    assert at_flush.positions[0] == pytest.approx(0.14, abs=1e-4)
     assert at_flush.positions[2] == pytest.approx(40 * MM, abs=1e-9)
-    top = int(np.argmax(z_flush))  # one rise, one descent: no landing in between
-    assert np.all(np.diff(z_flush[: top + 1]) >= -1e-12)
-    assert np.all(np.diff(z_flush[top:]) <= 1e-12)
+    assert not [s for s in snaps if s.v_path == 0.0 and s.positions[0] == 0.14]  # no wait
+    top = int(np.argmax(z))  # one rise, one descent: no landing in between
+    assert np.all(np.diff(z[: top + 1]) >= -1e-12) and np.all(np.diff(z[top:]) <= 1e-12)
 
 
-def test_s2_1_3_special_case_3_the_path_stops_if_z_could_not_reach_pos_in_time() -> None:
+@pytest.mark.parametrize("flush", FLUSHES)
+def test_s2_1_3_special_case_3_the_path_stops_if_z_could_not_reach_pos_in_time(
+    flush: str,
+) -> None:
     """§2.1.3 special case 3, its first sentence: 2 mm of path after the flush are 20 ms at
-    F6000; Z, up at 40 mm, needs about 0.14 s to POS = 12: the path stops at the flush until Z
-    can make it from there, and Z is never late."""
+    F6000; Z, up at 40 mm, needs about 0.14 s to POS = 12: the path stops at the flush while Z
+    descends and leaves as soon as Z can land from there, Z still above POS; never late. The
+    wait is the lift's path delay, not a program wait."""
+    ch = make_channel()
+    task, snaps = flush_run(ch, f"N40 X150\nN60 {flush}\nN70 X148\n")
+    rest = [s for s in snaps if s.lift_active and s.v_path == 0.0 and s.positions[0] == 0.15]
+    assert len(rest) > 50  # waits for Z
+    assert rest[0].positions[2] > 39.9 * MM  # not landed: it starts down when the path stops
+    assert rest[-1].positions[2] > 12 * MM + 1e-4  # leaves before Z is down
+    assert np.all(np.diff([s.positions[2] for s in rest]) <= 0.0)
+    assert fd_ratios(ch, snaps).max() <= 1.0 + 1e-9 and not events(snaps, "lift.late")
+    (rec,) = task.lift.records
+    assert rec.waits == 0.0
+    assert rec.path_delay == pytest.approx(len(rest) * ch.cycle_time, abs=0.03)
+
+
+def test_s2_1_1_a_waiting_point_after_a_flush_is_still_one() -> None:
+    """A dwell after the flush is a waiting point (§2.1.1: Z "moves on to target height"):
+    Z is at POS while the path waits there; the flush before it changes nothing of that."""
     ch = make_channel()
     text = (
-        "N10 G01 X10 Y10 F6000\nN20 X40 Z2\nN30 Z[LIFT_START POS=12 POS_LIMIT=40]\nN40 X150\n"
-        "N60 #FLUSH WAIT\nN70 X148\nN90 Z[LIFT_END]\nN100 X100\nM30\n"
+        "G01 X10 Y10 Z1 F6000\nZ[LIFT_START POS=1 POS_LIMIT=40]\nG01 X100\n#FLUSH\nX200\n"
+        "G04 0.2\nX300\nZ[LIFT_END]\nM30\n"
     )
-    task, snaps = run_task(ch, text)
+    _, snaps = run_task(ch, text)
     assert snaps[-1].state is ChannelState.READY
-    waiting = [s for s in snaps if s.lift_active and s.v_path == 0.0 and s.positions[0] == 0.15]
-    assert len(waiting) > 50 and waiting[-1].positions[2] > 12 * MM
-    assert task.lift.records[0].arrival_error <= 1e-9
+    assert min(snaps, key=lambda s: abs(s.positions[0] - 0.1)).positions[2] == pytest.approx(
+        40 * MM, abs=1e-9
+    )
+    dwell = [s for s in snaps if s.lift_active and s.v_path == 0.0 and s.positions[0] == 0.2]
+    assert len(dwell) >= 195 and dwell[len(dwell) // 2].positions[2] == pytest.approx(1 * MM)

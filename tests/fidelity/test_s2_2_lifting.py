@@ -3,13 +3,12 @@ feed changes do to Z, §2.2.3 special case 2 (#FLUSH)."""
 
 from __future__ import annotations
 
-import numpy as np
 import pytest
 
 from liftd.cnc.params import LiftMethod
 from liftd.cnc.plc import Schedule, parse_feedhold_spec, parse_override_spec
 from liftd.cnc.snapshot import ChannelState, GeoSnapshot
-from tests.fidelity.helpers import MM
+from tests.fidelity.helpers import MM, flush_run, on_return
 from tests.support.channel import make_channel
 from tests.support.closed_loop import events, fd_ratios, run_task
 
@@ -71,16 +70,11 @@ def test_s2_2_3_special_case_2_flush_is_lift_end_at_pos_limit_then_lift_start() 
     POS=40 POS_LIMIT=40: Z is at POS_LIMIT at the flush, then lowers to POS = 12. The
     method-specific passage; §2.4's "target position reached in the flush block" is not
     followed (issue 37 item 2)."""
-    ch = make_channel(LiftMethod.LIFTING)
-    text = (
-        "N10 G01 X10 Y10 F6000\nN20 X40 Z2\nN30 Z[LIFT_START POS=12 POS_LIMIT=40]\nN40 X50\n"
-        "N50 X40\nN60 #FLUSH\nN70 X30\nN80 X20\nN90 Z[LIFT_END]\nM30\n"
-    )
-    task, snaps = run_task(ch, text)
-    assert snaps[-1].state is ChannelState.READY
-    (rec,) = task.lift.records
-    back = snaps[int(np.argmax([s.positions[0] for s in snaps])) :]
-    at_flush = min(back, key=lambda s: abs(s.positions[0] - 0.04))
+    task, snaps = flush_run(make_channel(LiftMethod.LIFTING), "N40 X50\nN50 X40\nN60 #FLUSH\n"
+                            "N70 X30\nN80 X20\n", end="")  # fmt: skip
+    plan = task.prog.plans[0]  # one range, its plan cut at the flush
+    assert plan is not None and [p.z1 for p in plan.parts] == [40 * MM, 12 * MM]
+    at_flush = on_return(snaps, 0.04)
     assert at_flush.positions[0] == pytest.approx(0.04, abs=2e-5)
-    assert at_flush.positions[2] == pytest.approx(40 * MM, abs=1e-6)
-    assert rec.arrival_error == 0.0 and snaps[-1].positions[2] == pytest.approx(12 * MM)
+    assert at_flush.positions[2] == pytest.approx(40 * MM, abs=1e-6)  # at rest at POS_LIMIT
+    assert snaps[-1].positions[2] == pytest.approx(12 * MM)

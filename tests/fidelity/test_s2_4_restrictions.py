@@ -8,7 +8,7 @@ import pytest
 
 from liftd.cnc.params import LiftMethod
 from liftd.cnc.snapshot import ChannelState
-from tests.fidelity.helpers import MM
+from tests.fidelity.helpers import MM, flush_run, on_return
 from tests.support.channel import make_channel
 from tests.support.closed_loop import run_task
 
@@ -53,15 +53,5 @@ def test_s2_4_flush_in_a_range_is_decided_by_each_methods_own_passage(method: Li
     influence on the lift profile) and §2.2.3 case 2 (the first part ends at POS_LIMIT = 40).
     liftd follows those, and they keep Z up: one range, Z at POS_LIMIT at the flush, not at
     POS = 12 (issue 37 item 2)."""
-    ch = make_channel(method)
-    text = (
-        "N10 G01 X10 Y10 F6000\nN20 X40 Z2\nN30 Z[LIFT_START POS=12 POS_LIMIT=40]\nN40 X150\n"
-        "N50 X140\nN60 #FLUSH\nN70 X90\nN80 X40\nN90 Z[LIFT_END]\nM30\n"
-    )
-    task, snaps = run_task(ch, text)
-    assert snaps[-1].state is ChannelState.READY
-    (rec,) = task.lift.records
-    back = snaps[int(np.argmax([s.positions[0] for s in snaps])) :]
-    at_flush = min(back, key=lambda s: abs(s.positions[0] - 0.14))
-    assert at_flush.positions[2] == pytest.approx(40 * MM, abs=1e-6)
-    assert rec.arrival_error <= 1e-9
+    _, snaps = flush_run(make_channel(method), "N40 X150\nN50 X140\nN60 #FLUSH\nN70 X90\nN80 X40\n")
+    assert on_return(snaps, 0.14).positions[2] == pytest.approx(40 * MM, abs=1e-6)

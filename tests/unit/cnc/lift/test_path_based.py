@@ -272,26 +272,6 @@ def test_m_functions_count_as_internal_blocks() -> None:
     assert not task.lift.records[0].premature  # exactly 20: still one plan
 
 
-def test_flush_is_lift_end_at_pos_limit_then_lift_start() -> None:
-    """The vendor's example (§2.2.3 case 2): Z is at POS_LIMIT = 40 at the #FLUSH, at rest,
-    then lowers to POS = 12 mm at LIFT_END."""
-    ch = lifting()
-    text = (
-        "N10 G01 X10 Y10 F6000\nN20 X40 Z2\nN30 Z[LIFT_START POS=12 POS_LIMIT=40]\nN40 X50\n"
-        "N50 X40\nN60 #FLUSH\nN70 X30\nN80 X20\nN90 Z[LIFT_END]\nM30\n"
-    )
-    task, snaps = run_task(ch, text)
-    assert snaps[-1].state is ChannelState.READY
-    (rec,) = task.lift.records  # one range, its plan cut at the flush
-    plan = task.prog.plans[0]
-    assert plan is not None and [p.z1 for p in plan.parts] == [0.04, 0.012]
-    back = [s for s in in_range(snaps) if s.t > rec.t_start + 0.15]  # after X50, going back
-    near = min(back, key=lambda s: abs(s.positions[0] - 0.04))  # the path stops at the flush
-    assert near.positions[0] == pytest.approx(0.04, abs=2e-5)
-    assert near.positions[2] == pytest.approx(0.04, abs=1e-6)  # Z at POS_LIMIT there
-    assert rec.arrival_error == 0.0 and snaps[-1].positions[2] == pytest.approx(0.012)
-
-
 def test_waiting_inside_the_range_stops_path_and_lift_together() -> None:
     ch = lifting()
     text = (
