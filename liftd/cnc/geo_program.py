@@ -153,7 +153,10 @@ def _couple_lifts(
         if axis not in profiles:
             profiles[axis] = lifting_profiles(ch, axis)
         # Z within its limits at 100 % override: a_max, or P-AXIS-00442's planning
-        # acceleration where that is higher (the vendor's a_max,Lift, §4.1); v_max at any
+        # acceleration where that is higher (the vendor's a_max,Lift, §4.1); v_max at any.
+        # P-AXIS-00442 (dyn_monitoring_a_err, 0.1 %, default 1000):
+        # https://infosys.beckhoff.com/content/1033/tf5200_axis_parameter/117565323.html,
+        # its use for the lift: https://infosys.beckhoff.com/content/1033/tf5200_lift_axis/223158923.html
         keep = 1.0 - PLANNING_MARGIN
         a_lift = max(z.a_max, profiles[axis].a_max)
         z_lim = ZLimits(z.v_max * keep, a_lift * keep, z.j_max * keep)
