@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from typing import cast
 
 from liftd.cnc.lift.advanced import FirstRise
-from liftd.cnc.lift.path_based import RangePlan, plan_range
+from liftd.cnc.lift.path_based import RangePlan, ZLimits, plan_range
 from liftd.cnc.lift.profile import LiftProfiles, ProfileError
 from liftd.cnc.lift.ranges import LiftRange, find_ranges
 from liftd.cnc.nc import DecoderContext, NcError, decode
@@ -41,6 +41,9 @@ class GeoProgram:
     warnings: tuple[NcError, ...]
     first_line: int
     stops: tuple[tuple[int, ...], ...]  # per range: waiting points strictly inside it
+    # per range: boundaries strictly inside it where the path stops only for a #FLUSH / #FLUSH
+    # WAIT (not waiting points of the lift: vendor §2.1.3 case 3, `LiftAhead._horizon`)
+    flushes: tuple[tuple[int, ...], ...]
     z_index: int
     plans: tuple[RangePlan | None, ...]  # per range: z(s) of path-based Lifting, else None
     table: PathTable  # what the path tracker reads (with the lift ranges' limits)
@@ -154,28 +157,50 @@ def _couple_lifts(
         z = ch.axis(axis)
         if axis not in profiles:
             profiles[axis] = lifting_profiles(ch, axis)
+        # Z within its limits at 100 % override: a_max, or P-AXIS-00442's planning
+        # acceleration where that is higher (the vendor's a_max,Lift, §4.1); v_max at any.
+        # P-AXIS-00442 (dyn_monitoring_a_err, 0.1 %, default 1000):
+        # https://infosys.beckhoff.com/content/1033/tf5200_axis_parameter/117565323.html,
+        # its use for the lift: https://infosys.beckhoff.com/content/1033/tf5200_lift_axis/223158923.html
+        keep = 1.0 - PLANNING_MARGIN
+        a_lift = max(z.a_max, profiles[axis].a_max)
+        z_lim = ZLimits(z.v_max * keep, a_lift * keep, z.j_max * keep)
         try:
-            plan, caps = plan_range(path, rng, profiles[axis])
+            plan, caps = plan_range(path, rng, profiles[axis], z_lim)
         except ProfileError:
             continue
         plans[rng.index] = plan
         for cap in caps:
             seg = segs[cap.k]
-            a, j, v = seg.a_max, seg.j_max, seg.v_lift
-            if cap.dz_ds > 0.0:  # the coupling term (dz/ds)·s̈ gets a_max of Z (see path_based)
-                a = min(a, z.a_max / cap.dz_ds)
-                j = min(j, z.j_max / cap.dz_ds)
-                # Z is coupled like a path axis: whatever the override, ż = (dz/ds)·ṡ ≤ v_max
-                v = min(v, z.v_max * (1.0 - PLANNING_MARGIN) / cap.dz_ds)
-            v_ov = min(seg.v_lift_ov, cap.v_cap)
-            segs[cap.k] = seg.limited(v_ov, a, j, v)
+            segs[cap.k] = seg.limited(
+                min(seg.v_lift_ov, cap.v_ov),
+                min(seg.a_max, cap.a),
+                min(seg.j_max, cap.j),
+                min(seg.v_lift, cap.v),
+            )
     return dataclasses.replace(path, segments=tuple(segs)), tuple(plans)
 
 
-def _stops_inside(path: PathProgram, rng: LiftRange) -> tuple[int, ...]:
+_WAITS = frozenset((ActionKind.M_WAIT, ActionKind.M00, ActionKind.DWELL, ActionKind.PROGRAM_END))
+
+
+def _flush_only(path: PathProgram, k: int) -> bool:
+    """Whether the path stops at boundary k for a #FLUSH and for nothing that waits."""
+    b = path.boundaries[k]
+    kinds = {a.kind for a in b.actions}
+    return ActionKind.FLUSH in kinds and not kinds & _WAITS and not b.conditional_stop
+
+
+def _stops_inside(path: PathProgram, rng: LiftRange, flush: bool) -> tuple[int, ...]:
+    """The boundaries strictly inside `rng` where the path stops: those that wait (`flush`
+    False) or those that stop only for a #FLUSH (`flush` True)."""
     if rng.k_end < 0:
         return ()
-    return tuple(k for k in range(rng.k_start + 1, rng.k_end) if path.boundaries[k].stop)
+    return tuple(
+        k
+        for k in range(rng.k_start + 1, rng.k_end)
+        if path.boundaries[k].stop and _flush_only(path, k) == flush
+    )
 
 
 def _conditional(path: PathProgram) -> dict[int, tuple[int, ...]]:
@@ -242,9 +267,10 @@ def load_program(text: str, ch: ChannelParams, start: Vec) -> GeoProgram:
     error = result.first_error
     del result
     release(cast(list[object], blocks))
-    stops = []
+    stops, flushes = [], []
     for r in ranges:
-        stops.append(_stops_inside(path, r))
+        stops.append(_stops_inside(path, r, False))
+        flushes.append(_stops_inside(path, r, True))
         pause()
     table = build_table(path)
     conditional = _conditional(path)
@@ -261,6 +287,7 @@ def load_program(text: str, ch: ChannelParams, start: Vec) -> GeoProgram:
         warnings=warnings,
         first_line=first,
         stops=tuple(stops),
+        flushes=tuple(flushes),
         z_index=ch.lift_axis_index,
         plans=plans,
         table=table,

@@ -15,7 +15,6 @@ same inputs give bit-identical snapshots. Order within a cycle:
 
 from __future__ import annotations
 
-import functools
 from typing import Final
 
 from liftd.cnc.geo_program import PreparedPrograms, same_start
@@ -23,7 +22,6 @@ from liftd.cnc.lift.monitor import AccelMonitor
 from liftd.cnc.lift.profile import LiftProfiles, ProfileError
 from liftd.cnc.nc.blocks import ErrorId
 from liftd.cnc.params import ChannelParams
-from liftd.cnc.path.interpolator import Interpolator
 from liftd.cnc.path.program import PathProgram
 from liftd.cnc.plc import MAX_OVERRIDE
 from liftd.cnc.plc_commands import PlcCommands
@@ -36,7 +34,6 @@ from liftd.cnc.snapshot import (
     new_snapshot,
 )
 
-INF = float("inf")
 LIFT_LATE_ID = int(ErrorId.LIFT_LATE)  # the path passed LIFT_END with Z not at POS
 
 # Enum members as C statics of the compiled module: `ChannelState.ACTIVE` is a dict and a type
@@ -246,12 +243,7 @@ class GeoTask(PlcCommands):
             ip = self.interp
             t_rem, refine = 0.0, None
             if m.uses_time:
-                k, t_z = self._horizon(), m.t
-                if k < 0:
-                    t_rem = INF
-                else:  # a bound that costs nothing while it still holds; exact on demand
-                    t_rem = ip.arrival_bound(k) - t_z
-                    refine = functools.partial(_remaining, ip, k, t_z)
+                t_rem, refine = self._lift_time(t, m.t)
             self.lift.step(t, ip.s, ip.v, ip.a, t_rem, self.ov_eff, refine)
             for finding in self.lift.findings:
                 self._emit(finding.name, t, self.line, finding.value)
@@ -300,14 +292,8 @@ class GeoTask(PlcCommands):
                 rested = self.interp.t_state
                 self.interp.resume(self.wait_since)
                 self.z_rest = None
-                rng = self.lift.current
-                rec = self.lift.record
-                if rng is not None and rng.k_start < k and (rng.k_end < 0 or k < rng.k_end):
-                    self.lift.resume_in_range(self.wait_since)
-                    if rec is not None and k not in self.interp.lift_stops:
-                        rec.waits += self.wait_since - rested
-                elif rng is not None and rec is not None and k == rng.k_start:
-                    self._departure(rec, self.wait_since, None)
+                if k is not None:
+                    self._resumed(k, rested)
             for crossing in self.interp.advance(t):
                 self._cross(crossing)
             if self.interp.stopped_at is None or self.state is not ACTIVE:
@@ -352,11 +338,6 @@ class GeoTask(PlcCommands):
                 lift.counts,
             )
         )
-
-
-def _remaining(interp: Interpolator, k: int, t_z: float) -> float:
-    """The path's remaining time to boundary k from the lift's time t_z (exact or its bound)."""
-    return interp.arrival(k) - t_z
 
 
 def lead_cycles(ch: ChannelParams, axis: str) -> int:

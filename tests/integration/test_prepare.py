@@ -101,8 +101,13 @@ def test_a_burst_of_plc_writes_is_read_a_bounded_number_a_cycle(tmp_path: Path) 
             assert wait_for(lambda: plc.read_by_name("GEO.ch1.override_requested") == 755, 10)
         finally:
             plc.close()
-        writes = [r for r in list(d.logs) if r.get("event") == "geo.plc_input"
-                  and r.get("text") == "override"]  # fmt: skip
+
+        def writes_logged() -> list[dict[str, object]]:
+            return [r for r in list(d.logs) if r.get("event") == "geo.plc_input"
+                    and r.get("text") == "override"]  # fmt: skip
+
+        assert wait_for(lambda: len(writes_logged()) >= n, 10)  # the log trails the objects
+        writes = writes_logged()
         assert [round(r["value"] * 1000) for r in writes] == list(range(500, 500 + n))
         per_cycle = Counter(r["t"] for r in writes)
         assert max(per_cycle.values()) <= INPUTS_PER_CYCLE

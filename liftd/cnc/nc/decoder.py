@@ -25,7 +25,6 @@ from liftd.cnc.nc.blocks import (
     CallSite,
     DecodeResult,
     ErrorId,
-    FlushKind,
     LiftEndCause,
     LiftStart,
     NcError,
@@ -369,25 +368,12 @@ class _Decoder(SubroutineCalls):
     def _command(self, lineno: int, n: int | None, cmd: CommandResult) -> None:
         tag = self._file_tag()
         if cmd.kind is CommandKind.FLUSH:
+            # inside a lift range too: a flush, not an implicit LIFT_END + LIFT_START (§2.4).
+            # The lift follows its method's own passage (issue 37 item 2): Advanced Lifting
+            # plans on across it and the path may have to wait there for Z (§2.1.3 case 3,
+            # lift_ahead.py); path-based Lifting cuts its plan there at POS_LIMIT (§2.2.3
+            # case 2, lift/path_based.py)
             assert cmd.flush is not None
-            if (
-                self.open_lift is not None
-                and cmd.flush is not FlushKind.CONTINUE
-                and self.ctx.lift_method is not LiftMethod.LIFTING
-            ):
-                # #FLUSH / #FLUSH WAIT inside a range: implicit LIFT_END + LIFT_START (§2.4),
-                # POS reached in the flush block. Path-based Lifting keeps one range and cuts
-                # its plan at the flush instead, where Z is at POS_LIMIT (vendor §2.2.3 case 2,
-                # lift/path_based.py).
-                interrupted = self.open_lift
-                end = self._close_lift(LiftEndCause.FLUSH)
-                self._emit(Block(lineno, n, flush=cmd.flush, lift_end=end, file=tag))
-                restart = interrupted._replace(
-                    z_start=interrupted.target, single_block=False, implicit=True
-                )
-                self.open_lift = restart
-                self._emit(Block(lineno, n, lift_start=restart, file=tag))
-                return
             self._emit(Block(lineno, n, flush=cmd.flush, file=tag))
         elif cmd.kind in (CommandKind.SLOPE, CommandKind.SLOPE_DEFAULT):
             slope = cmd.slope if cmd.slope is not None else self.ctx.slope
