@@ -24,6 +24,7 @@ import argparse
 import contextlib
 import json
 import multiprocessing as mp
+import os
 import random
 import socket
 import struct
@@ -298,7 +299,10 @@ class _Target:
 
 def attack(port: int, net: str, udp_port: int, total: int, seed: int, surfaces: set[str],
            out: mp.Queue[list[dict[str, object]]], stop: Event) -> None:  # fmt: skip
-    """The attackers of every surface, in a process of their own."""
+    """The attackers of every surface, in a process of their own, at the lowest priority: on
+    a network they would be other hosts; here they share the 2 vCPUs with the daemon and the
+    probe, and their own CPU would otherwise be what the probe measures."""
+    os.nice(19)
     d = cast(Daemon, _Target(port, net))
     addresses = plc_addresses(port, net)
     share = total // 6
