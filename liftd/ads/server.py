@@ -85,10 +85,7 @@ class AdsConnection(asyncio.Protocol):
         self.session: Session = server.service.new_session()
         self.queue: deque[bytes] = deque()
         self.queued = 0  # bytes in `queue`
-        self.backlog: deque[bytes] = deque()  # frames received, not handled yet (turns)
-        self.backlog_bytes = 0
-        self.waiting_turn = False  # the rest of the backlog is handled in a later turn
-        self.broken: FramingError | None = None  # the stream broke after the backlog
+        self.waiting_turn = False  # the frames received are handled on in a later turn
         self.next_check = BUDGET_STEP  # held bytes at which the server's budget is looked at
         self.paused = False
         self.partial_since: float | None = None
@@ -139,8 +136,6 @@ class AdsConnection(asyncio.Protocol):
         self.queue.clear()
         self.queued = 0
         self.framer.clear()
-        self.backlog.clear()
-        self.backlog_bytes = 0
 
     def data_received(self, data: bytes) -> None:
         try:
@@ -149,40 +144,36 @@ class AdsConnection(asyncio.Protocol):
             self.fail(exc)  # through asyncio's `Fatal error on transport`
 
     def _received(self, data: bytes) -> None:
-        try:
-            frames = self.framer.feed(data)
-        except FramingError as exc:  # answer what came before the break, then close
-            frames, self.broken = exc.frames, exc
-        self.partial_since = time.monotonic() if self.framer.pending else None
-        self.backlog.extend(frames)
-        self.backlog_bytes += sum(len(f) for f in frames)
-        if self.framer.pending or self.backlog:
-            self.grew()  # a request under way (at most a frame), frames not yet handled
-        if not self.waiting_turn:
+        self.framer.add(data)
+        self.grew()  # frames not handled yet, a request under way (at most a frame)
+        if not self.waiting_turn and not self.closed:
             self._work()
 
     def _work(self) -> None:
-        """Handle the frames received, for TURN_S at most: then the other connections get a
-        turn (asyncio's next iteration) while this one reads nothing more; a chunk of 64 kB
-        of small requests is ~1 500 frames, tens of ms, and one sum command of 1 000
-        sub-commands a few ms, which every other client's request waited for."""
+        """Cut and handle the frames received, for TURN_S at most: then the other connections
+        get a turn (asyncio's next iteration) while this one reads nothing more; a chunk of
+        64 kB of small requests is ~1 500 frames, tens of ms, and one sum command of 1 000
+        sub-commands a few ms, which every other client's request waited for. A broken
+        stream is closed once the frames before the break are answered."""
         self.waiting_turn = False
         end = time.perf_counter() + TURN_S
-        backlog = self.backlog
-        while backlog:
-            if self.closed:
+        framer = self.framer
+        while not self.closed:
+            try:
+                raw = framer.next()
+            except FramingError as exc:
+                self.close_for("ads.framing_error", str(exc))
                 return
-            raw = backlog.popleft()
-            self.backlog_bytes -= len(raw)
+            if raw is None:
+                break
             self.handle(raw)
-            if backlog and time.perf_counter() > end and self._later(self._turn):
+            if framer.pending and time.perf_counter() > end and self._later(self._turn):
                 self.waiting_turn = True
                 if self.transport is not None:
                     self.transport.pause_reading()
                 return
-        if self.broken is not None and not self.closed:
-            self.close_for("ads.framing_error", str(self.broken))
-        elif not self.paused and self.transport is not None and not self.closed:
+        self.partial_since = time.monotonic() if framer.pending else None
+        if not self.paused and self.transport is not None and not self.closed:
             self.transport.resume_reading()
 
     def _turn(self) -> None:
@@ -216,7 +207,7 @@ class AdsConnection(asyncio.Protocol):
     def held(self) -> int:
         """Bytes held for this connection: unsent output and an incomplete request."""
         buffered = self.transport.get_write_buffer_size() if self.transport is not None else 0
-        return self.queued + buffered + self.framer.pending + self.backlog_bytes
+        return self.queued + buffered + self.framer.pending
 
     def pause_writing(self) -> None:
         self.paused = True
