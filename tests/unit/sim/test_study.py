@@ -9,10 +9,10 @@ from pathlib import Path
 
 import pytest
 
-from liftd.cnc.params import ChannelParams
+from liftd.cnc.params import NcSources
 from liftd.sim import report, study
 from liftd.sim.progress import ProgressBar
-from liftd.sim.study import ProgramResult, ProgramRow, Status, StudyConfig
+from liftd.sim.study import ProgramResult, ProgramRow, RunSettings, Status, StudyConfig
 from tests.support.channel import make_channel
 
 PROGRAM = (
@@ -21,24 +21,24 @@ PROGRAM = (
 )
 
 
-def prepare(path: Path, text: str) -> ChannelParams:
-    """The study's `program_channel`, without files: the demo machine's channel."""
-    return make_channel()
+def sources(path: Path, text: str) -> NcSources:
+    """The study's `read_sources`, without files."""
+    return NcSources(str(path))
 
 
-def dying_prepare(path: Path, text: str) -> ChannelParams:
+def dying_sources(path: Path, text: str) -> NcSources:
     """Kills its worker process for programs named die*.nc (a crash in native code)."""
     if path.name.startswith("die"):
         os._exit(3)
-    return make_channel()
+    return NcSources(str(path))
 
 
-def failing_prepare(path: Path, text: str) -> ChannelParams:
+def failing_sources(path: Path, text: str) -> NcSources:
     raise ZeroDivisionError("a bug")
 
 
-def config(prep: study.Prepare = prepare) -> StudyConfig:
-    return StudyConfig(prep, 0.02, 60.0)
+def config(read: study.Sources = sources, max_time: float = 60.0) -> StudyConfig:
+    return StudyConfig(RunSettings(make_channel(), 0.02, max_time), read)
 
 
 def library(tmp_path: Path, n: int, name: str = "p{k:02d}.nc") -> list[str]:
@@ -70,7 +70,7 @@ def test_unreadable_programs_and_failures_of_liftd_are_rows(tmp_path: Path) -> N
     row = study.run_one(config(), str(tmp_path / "none.nc")).row
     assert row.status is Status.UNREADABLE and "cannot read program" in row.why
     (program,) = library(tmp_path, 1)
-    row = study.run_one(config(failing_prepare), program).row
+    row = study.run_one(config(failing_sources), program).row
     assert row.status is Status.FAILED and "ZeroDivisionError: a bug" in row.why
 
 
@@ -80,7 +80,7 @@ def test_an_unfinished_program_says_why_and_counts_its_open_range_once(tmp_path:
     program = tmp_path / "long.nc"
     program.write_text("G01 X10 Y10 Z1 F6000\nZ[LIFT_START POS=1 POS_LIMIT=30]\n"
                        "G01 X1000 F600\nZ[LIFT_END]\nM30\n")  # fmt: skip
-    row = study.run_one(StudyConfig(prepare, 0.02, 1.5), str(program)).row
+    row = study.run_one(config(max_time=1.5), str(program)).row
     assert row.status is Status.UNFINISHED
     assert row.why == "did not finish within 1.5 s simulated (--max-time)"
     assert row.to_json()["errors"] == [] and (row.lifts, row.open) == (1, 1)
@@ -110,7 +110,7 @@ def test_a_worker_that_dies_fails_only_its_own_program(tmp_path: Path) -> None:
     programs = (
         library(tmp_path, 3) + library(tmp_path, 1, "die.nc") + library(tmp_path, 3, "q{k}.nc")
     )
-    rows = [r.row for r in study.run_programs(programs, config(dying_prepare), 2)]
+    rows = [r.row for r in study.run_programs(programs, config(dying_sources), 2)]
     assert [r.program for r in rows] == programs
     assert [r.status for r in rows] == [Status.OK] * 3 + [Status.FAILED] + [Status.OK] * 3
     assert "worker process died" in rows[3].why
