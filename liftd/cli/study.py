@@ -24,8 +24,10 @@ from liftd.cli.common import (
 from liftd.settings.programs import read_sources
 
 if TYPE_CHECKING:
+    from liftd.cnc.params import ChannelParams
+    from liftd.settings import Settings
     from liftd.sim.cluster import Cluster
-    from liftd.sim.study import ProgramResult
+    from liftd.sim.study import ProgramResult, StudyConfig
     from liftd.sim.summary import JsonObject
 
 INSTALL_CLUSTER = "pip install 'liftd[cluster]'"
@@ -43,6 +45,17 @@ def study_programs(paths: Sequence[str]) -> list[str]:
         else:
             out.append(name)  # unreadable ones are reported as such, with the others
     return list(dict.fromkeys(out))
+
+
+def study_config(settings: Settings, channel: ChannelParams, max_time: float) -> StudyConfig:
+    """What the study's workers need: the channel, the simulated PLC's M acknowledge and
+    max_time, and the reader of the subroutine files a program calls (run by the pool's
+    workers, or by the client of a cluster)."""
+    from liftd.sim import study  # noqa: PLC0415
+
+    delay = settings.config.plc.m_ack_delay_ms * 1e-3
+    reader = functools.partial(read_sources, dirs=settings.subroutine_dirs)
+    return study.StudyConfig(study.RunSettings(channel, delay, max_time), reader)
 
 
 def _arguments_problem(args: argparse.Namespace) -> str | None:
@@ -70,11 +83,7 @@ def cmd_study(args: argparse.Namespace) -> int:
     if problem := _arguments_problem(args):
         print(f"liftd study: {problem}", file=sys.stderr)
         return EXIT_CONFIG
-    cfg = study.StudyConfig(
-        study.RunSettings(chosen.params, settings.config.plc.m_ack_delay_ms * 1e-3, args.max_time),
-        # the subroutine files a program calls: read by the pool's workers, or the client
-        functools.partial(read_sources, dirs=settings.subroutine_dirs),
-    )
+    cfg = study_config(settings, chosen.params, args.max_time)
     meta: JsonObject = {"liftd": __version__, "config": str(settings.path),
             "method": chosen.params.lift_method.value, "programs": len(programs)}  # fmt: skip
     if args.scheduler is None:

@@ -29,6 +29,7 @@ from __future__ import annotations
 import contextlib
 import functools
 import hashlib
+import itertools
 import logging
 import pickle
 import queue
@@ -69,6 +70,10 @@ DIED = (
 File = tuple[str, str, Any, str | None]  # NcFile's fields; the text may be a scattered Future
 
 
+class TaskFailed(Exception):
+    """liftd raised on the worker (the task returns it as text)."""
+
+
 class ClusterError(Exception):
     """No study on this cluster (unreachable, no worker, another liftd version)."""
 
@@ -102,9 +107,12 @@ def _make_task() -> Callable[..., tuple[str, object]]:
             import distributed  # noqa: PLC0415
 
             return "refused", (str(liftd.__version__), distributed.get_worker().address)
-        from liftd.sim.cluster import work  # noqa: PLC0415
+        try:
+            from liftd.sim.cluster import work  # noqa: PLC0415
 
-        return "done", work(settings, program, text, name, files)
+            return "done", work(settings, program, text, name, files)
+        except Exception as exc:  # as text: an exception Dask cannot pickle hangs the client
+            return "failed", f"{type(exc).__name__}: {exc}"
 
     return liftd_study  # nested: pickled by value, so any worker runs it and can refuse
 
@@ -235,9 +243,20 @@ def run_programs(
 ) -> Iterator[ProgramResult]:
     """Every program's result in the order of `programs`, from the cluster's workers (as
     `study.run_programs` from a local pool). Raises StudyStopped."""
+    with _quiet_dask():  # the reasons are the rows' and StudyStopped's: no reconnect tracebacks
+        yield from _run(cluster, programs, cfg, on_done)
+
+
+def _run(
+    cluster: Cluster,
+    programs: Sequence[str],
+    cfg: StudyConfig,
+    on_done: Callable[[ProgramResult], None] | None,
+) -> Iterator[ProgramResult]:
     client = cluster.client
     task = _make_task()
     tag = uuid.uuid4().hex[:8]
+    keys = itertools.count()  # a program run again alone gets a new key
     settings = client.scatter(pickle.dumps(cfg.run), broadcast=True, hash=False)
     shared = _SharedFiles(client)
     done: queue.Queue[tuple[int, distributed.Future[Any]]] = queue.Queue()
@@ -255,7 +274,7 @@ def run_programs(
         text, sources = read
         files = [(f.name, f.path, shared.text(f), f.error) for f in sources.files]
         fut = client.submit(task, __version__, settings, programs[i], text, sources.program,
-                            files, key=f"liftd-study-{tag}-{i}", pure=False)  # fmt: skip
+                            files, key=f"liftd-study-{tag}-{next(keys)}", pure=False)  # fmt: skip
         fut.add_done_callback(lambda f: done.put((i, f)))
         flight[i] = (fut, len(text))
         return None
@@ -329,6 +348,8 @@ def _next(
         if kind == "refused":
             version, worker = value
             return i, (str(version), str(worker))
+        if kind == "failed":
+            return i, TaskFailed(str(value))
         assert isinstance(value, ProgramResult)
         return i, value
 
@@ -336,6 +357,8 @@ def _next(
 def _failed(program: str, exc: BaseException) -> ProgramResult:
     if isinstance(exc, distributed.KilledWorker):
         reason = DIED
+    elif isinstance(exc, TaskFailed):  # raised by liftd outside run_text, which catches its own
+        reason = f"liftd failed: {exc}"
     else:
         reason = f"the cluster could not run it: {type(exc).__name__}: {exc}"
     return ProgramResult(ProgramRow.failed(program, Status.FAILED, reason))
