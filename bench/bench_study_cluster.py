@@ -20,15 +20,14 @@ from __future__ import annotations
 
 import json
 import os
-import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from bench.bench_study import run_study  # noqa: E402
 from bench.cli import parser  # noqa: E402
 from bench.gen_library import write_library  # noqa: E402
 from tests.support.dask_cluster import DaskCluster  # noqa: E402
@@ -38,16 +37,7 @@ TINY = "G90 G17 G94\nG00 X10 Y10 Z1\nZ[LIFT_START POS=1 POS_LIMIT=30]\nG00 X{x} 
 
 
 def study(library: Path, out: Path, *extra: str) -> dict[str, object]:
-    t0 = time.perf_counter()
-    r = subprocess.run(
-        [sys.executable, "-m", "liftd", "study", str(library), "-c", CONFIG, "--out", str(out),
-         *extra],
-        capture_output=True, text=True, check=False,
-    )  # fmt: skip
-    wall = time.perf_counter() - t0
-    if r.returncode != 0:
-        raise SystemExit(f"liftd study exited {r.returncode}: {r.stderr[-2000:]}")
-    report = json.loads((out / "report.json").read_text())
+    wall, report = run_study(library, out, *extra)
     n = report["summary"]["programs"]
     return {
         "programs": n,

@@ -204,6 +204,34 @@ def test_a_worker_killed_during_a_study_leaves_every_program_with_a_row(
         assert {**row, "program": ""} == {**want[Path(row["program"]).name], "program": ""}
 
 
+def test_results_come_in_program_order_with_a_bounded_window(
+    setup: Setup, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The client's bound: at most WINDOW_PER_THREAD × threads programs read and submitted
+    and not yet handed on (2 with 1 per thread on the 2 workers)."""
+    monkeypatch.setattr(dask_study, "WINDOW_PER_THREAD", 1)
+    real_read = dask_study.read_one
+    submitted: list[str] = []
+    handed: list[str] = []
+    held: list[int] = []
+
+    def read(cfg, program, max_bytes=None):  # type: ignore[no-untyped-def]
+        submitted.append(program)
+        held.append(len(submitted) - len(handed))
+        return real_read(cfg, program, max_bytes)
+
+    monkeypatch.setattr(dask_study, "read_one", read)
+    programs = study_programs([str(setup.lib)])[:8]
+    connected = dask_study.connect(setup.cluster.address, 60)
+    try:
+        for result in dask_study.run_programs(connected, programs, setup.config()):
+            handed.append(result.row.program)
+    finally:
+        dask_study.close(connected.client)
+    assert handed == programs == submitted and connected.threads == 2
+    assert max(held) <= 2
+
+
 def test_a_program_that_kills_its_worker_is_a_failed_row(setup: Setup) -> None:
     crash = setup.root / "crashing"
     crash.mkdir()

@@ -30,6 +30,7 @@ class DaskCluster:
 
     def __init__(self, root: Path, hide: Path | None = None, env: dict[str, str] | None = None):
         self.root = root
+        root.mkdir(parents=True, exist_ok=True)
         self.hide = hide if hide is not None and can_hide() else None
         self.env = dict(os.environ, **(env or {}))
         self.file = root / "scheduler.json"

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from liftd.cnc.params import NcSources
+from liftd.cnc.params import NcFile, NcSources
 from liftd.sim import report, study
 from liftd.sim.progress import ProgressBar
 from liftd.sim.study import ProgramResult, ProgramRow, RunSettings, Status, StudyConfig
@@ -72,6 +72,40 @@ def test_unreadable_programs_and_failures_of_liftd_are_rows(tmp_path: Path) -> N
     (program,) = library(tmp_path, 1)
     row = study.run_one(config(failing_sources), program).row
     assert row.status is Status.FAILED and "ZeroDivisionError: a bug" in row.why
+
+
+def test_a_program_too_large_to_send_is_a_failed_row_with_its_size(tmp_path: Path) -> None:
+    """The cluster's limit (read_one's max_bytes): the program alone, or with the subroutine
+    files it calls; a local study (no limit) runs it."""
+    (program,) = library(tmp_path, 1)
+    size = Path(program).stat().st_size
+    row = study.read_one(config(), program, max_bytes=size - 1)
+    assert isinstance(row, ProgramResult) and row.row.status is Status.FAILED
+    assert row.row.why.startswith("too large to send to the cluster: ")
+
+    def big_file(path: Path, text: str) -> NcSources:
+        return NcSources(str(path), (NcFile("big.nc", "big.nc", "N1 G01 X1\n" * 1000),))
+
+    row = study.read_one(config(big_file), program, max_bytes=size + 1000)
+    assert isinstance(row, ProgramResult) and "with its subroutine files" in row.row.why
+    text, files = study.read_one(config(big_file), program, max_bytes=size + 20_000)  # type: ignore[misc]
+    assert text == Path(program).read_text() and files.files[0].name == "big.nc"
+    assert study.run_one(config(), program).row.status is Status.OK
+
+
+def test_bytes_that_are_not_utf8_are_read_as_simulate_reads_them(tmp_path: Path) -> None:
+    """In a comment (CP1252 from a Windows CAM): the program runs; in a word: ISG 990001 at its
+    line, a row that says why."""
+    comment = tmp_path / "comment.nc"
+    comment.write_bytes(b"( St\xe4rke )\n" + PROGRAM.format(x=80).encode())
+    assert study.run_one(config(), str(comment)).row.status is Status.OK
+    word = tmp_path / "word.nc"
+    word.write_bytes(b"G90 G17 G94\nG01 X1\xe40 Y10 Z1 F6000\nM30\n")
+    row = study.run_one(config(), str(word)).row
+    assert row.status is Status.ERROR and (row.errors[0].error_id, row.errors[0].line) == (
+        990001,
+        2,
+    )
 
 
 def test_an_unfinished_program_says_why_and_counts_its_open_range_once(tmp_path: Path) -> None:
