@@ -36,6 +36,7 @@ import queue
 import uuid
 from collections import deque
 from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import CancelledError
 from dataclasses import dataclass
 from typing import Any
 
@@ -62,6 +63,8 @@ MAX_SEND_BYTES = 32 * 2**20  # a program with its subroutine files; larger: a FA
 MAX_SHARED_FILES = 256  # subroutine files scattered once (called by two programs or more)
 MAX_SHARED_BYTES = 64 * 2**20
 MAX_SIGHTINGS = 8192  # subroutine files remembered to find the second caller
+MAX_RENEWALS = 20  # times the shared data is scattered again after every holder died
+CANCELLED = "cancelled"
 POLL_S = 1.0  # how often a wait for results looks at the client's connection
 DIED = (
     "the Dask workers running it died (alone on its worker: Dask gave up after its "
@@ -235,6 +238,24 @@ class _SharedFiles:
         return fut
 
 
+class _Scattered:
+    """What the tasks share on the workers: the settings and the library's files. Scattered
+    data has no lineage: when every worker holding it has died, Dask cancels the tasks that
+    need it ("lost dependencies") while the scheduler is still there; `renew` scatters it
+    again, as a new generation, and those tasks are submitted again."""
+
+    def __init__(self, client: distributed.Client, payload: bytes) -> None:
+        self.client = client
+        self.payload = payload
+        self.generation = -1
+        self.renew()
+
+    def renew(self) -> None:
+        self.generation += 1
+        self.settings = self.client.scatter(self.payload, broadcast=True, hash=False)
+        self.files = _SharedFiles(self.client)
+
+
 def run_programs(
     cluster: Cluster,
     programs: Sequence[str],
@@ -257,11 +278,11 @@ def _run(
     task = _make_task()
     tag = uuid.uuid4().hex[:8]
     keys = itertools.count()  # a program run again alone gets a new key
-    settings = client.scatter(pickle.dumps(cfg.run), broadcast=True, hash=False)
-    shared = _SharedFiles(client)
+    shared = _Scattered(client, pickle.dumps(cfg.run))
     done: queue.Queue[tuple[int, distributed.Future[Any]]] = queue.Queue()
     window = WINDOW_PER_THREAD * cluster.threads
-    flight: dict[int, tuple[distributed.Future[Any], int]] = {}  # position → (task, its bytes)
+    # position → (task, its bytes, the generation of the shared data it uses)
+    flight: dict[int, tuple[distributed.Future[Any], int, int]] = {}
     ready: dict[int, ProgramResult] = {}
     suspects: deque[int] = deque()  # were on a worker that died: run again, alone
     alone: int | None = None
@@ -272,11 +293,12 @@ def _run(
         if isinstance(read, ProgramResult):
             return read
         text, sources = read
-        files = [(f.name, f.path, shared.text(f), f.error) for f in sources.files]
-        fut = client.submit(task, __version__, settings, programs[i], text, sources.program,
-                            files, key=f"liftd-study-{tag}-{next(keys)}", pure=False)  # fmt: skip
+        files = [(f.name, f.path, shared.files.text(f), f.error) for f in sources.files]
+        fut = client.submit(task, __version__, shared.settings, programs[i], text,
+                            sources.program, files, key=f"liftd-study-{tag}-{next(keys)}",
+                            pure=False)  # fmt: skip
         fut.add_done_callback(lambda f: done.put((i, f)))
-        flight[i] = (fut, len(text))
+        flight[i] = (fut, len(text), shared.generation)
         return None
 
     def finish(i: int, result: ProgramResult) -> None:
@@ -285,7 +307,7 @@ def _run(
             on_done(result)
 
     def stopped(message: str, lost: bool) -> StudyStopped:
-        for fut, _ in flight.values():
+        for fut, _, _ in flight.values():
             fut.cancel()
         return StudyStopped(message, [r for _, r in sorted(ready.items())], lost)
 
@@ -295,7 +317,7 @@ def _run(
             while (
                 normal
                 and submitted < min(len(programs), handed + window)
-                and (not flight or sum(b for _, b in flight.values()) < WINDOW_BYTES)
+                and (not flight or sum(b for _, b, _ in flight.values()) < WINDOW_BYTES)
             ):
                 if (result := submit(submitted)) is not None:
                     finish(submitted, result)
@@ -307,9 +329,18 @@ def _run(
                     alone = None
             if flight:
                 i, outcome = _next(done, client)
-                if outcome is None:
+                if outcome is None or (isinstance(outcome, str) and client.status != "running"):
                     raise stopped(_lost(cluster.address, len(ready) + handed, len(programs)), True)
-                flight.pop(i)
+                _, _, generation = flight.pop(i)
+                if isinstance(outcome, str):  # CANCELLED, the scheduler there: the workers lost
+                    # the shared data (every worker that held it died): scatter it again
+                    if shared.generation >= MAX_RENEWALS:
+                        raise stopped(_renewals(cluster.address), True)
+                    if generation == shared.generation:
+                        shared.renew()
+                    if (result := submit(i)) is not None:
+                        finish(i, result)
+                    continue
                 if isinstance(outcome, BaseException):
                     if isinstance(outcome, distributed.KilledWorker) and i != alone:
                         suspects.append(i)
@@ -324,15 +355,16 @@ def _run(
                 yield ready.pop(handed)
                 handed += 1
     finally:
-        for fut, _ in flight.values():
+        for fut, _, _ in flight.values():
             fut.cancel()
 
 
 def _next(
     done: queue.Queue[tuple[int, distributed.Future[Any]]], client: distributed.Client
-) -> tuple[int, ProgramResult | BaseException | tuple[str, str] | None]:
+) -> tuple[int, ProgramResult | BaseException | tuple[str, str] | str | None]:
     """The next task to finish: its result, its exception, (the other liftd version, worker)
-    that refused it, or None when the scheduler went away (its tasks are cancelled)."""
+    that refused it, CANCELLED (the scheduler went away, or the data it needed was lost), or
+    None when the client has closed."""
     while True:
         try:
             i, fut = done.get(timeout=POLL_S)
@@ -341,10 +373,15 @@ def _next(
                 return -1, None
             continue
         if fut.status == "cancelled":
-            return i, None
+            return i, CANCELLED
         if fut.status == "error":
             return i, fut.exception()
-        kind, value = fut.result()
+        try:
+            kind, value = fut.result()
+        except CancelledError:  # finished, but its worker died before the result came over
+            return i, CANCELLED
+        except Exception as exc:
+            return i, exc
         if kind == "refused":
             version, worker = value
             return i, (str(version), str(worker))
@@ -362,6 +399,11 @@ def _failed(program: str, exc: BaseException) -> ProgramResult:
     else:
         reason = f"the cluster could not run it: {type(exc).__name__}: {exc}"
     return ProgramResult(ProgramRow.failed(program, Status.FAILED, reason))
+
+
+def _renewals(address: str) -> str:
+    return (f"the Dask workers at {address} lost the study's shared data {MAX_RENEWALS} times "
+            "(every worker holding it died)")  # fmt: skip
 
 
 def _lost(address: str, received: int, total: int) -> str:

@@ -177,9 +177,12 @@ def test_the_report_equals_the_local_one_row_for_row(setup: Setup, local: dict) 
     assert f"on the Dask cluster at {setup.cluster.address}" in r.stdout
 
 
+@pytest.mark.parametrize("victims", [1, 2])
 def test_a_worker_killed_during_a_study_leaves_every_program_with_a_row(
-    setup: Setup, local: dict
+    setup: Setup, local: dict, victims: int
 ) -> None:
+    """One worker, or both: then the settings scattered to them are lost with them, and Dask
+    cancels the tasks that need them ("lost dependencies"): scattered again, run again."""
     client = setup.client()
     pids = client.run(os.getpid)  # the worker processes (their nannies start new ones)
     client.close()
@@ -188,9 +191,10 @@ def test_a_worker_killed_during_a_study_leaves_every_program_with_a_row(
     killed: list[int] = []
 
     def done(result: ProgramResult) -> None:
-        if len(killed) == 0:
-            killed.append(sorted(pids.values())[0])
-            os.kill(killed[0], signal.SIGKILL)
+        if not killed:
+            killed.extend(sorted(pids.values())[:victims])
+            for pid in killed:
+                os.kill(pid, signal.SIGKILL)
 
     try:
         rows = [r.row.to_json() for r in dask_study.run_programs(connected, programs,
@@ -222,6 +226,7 @@ def test_results_come_in_program_order_with_a_bounded_window(
 
     monkeypatch.setattr(dask_study, "read_one", read)
     programs = study_programs([str(setup.lib)])[:8]
+    setup.client().close()  # both workers back (a test before may have killed them)
     connected = dask_study.connect(setup.cluster.address, 60)
     try:
         for result in dask_study.run_programs(connected, programs, setup.config()):
