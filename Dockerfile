@@ -1,4 +1,7 @@
 # liftd in a container. Build: docker build -t liftd .
+# A worker for `liftd study --scheduler` (README "A study on a Dask cluster"):
+#   docker build --build-arg EXTRAS=cluster -t liftd-worker .
+#   docker run --rm --network host --entrypoint dask liftd-worker worker tcp://SCHEDULER:8786 --nthreads 1
 # Run (README "Docker"):
 #   docker run --rm --init -p 127.0.0.1:48898:48898 \
 #     --ulimit rtprio=80 --ulimit memlock=-1 --cap-drop=ALL --security-opt no-new-privileges \
@@ -14,6 +17,8 @@
 ARG PYTHON_IMAGE=python:3.11-slim-bookworm
 
 FROM ${PYTHON_IMAGE} AS build
+# optional extras of liftd, e.g. cluster (distributed, for a Dask worker); none by default
+ARG EXTRAS=
 ENV PIP_NO_CACHE_DIR=1 PIP_DISABLE_PIP_VERSION_CHECK=1 \
     PIP_CONSTRAINT=/src/docker/constraints.txt
 # A C compiler for the compiled GEO core (mypyc, tools/compile_core.py), in this stage only
@@ -30,7 +35,7 @@ COPY tools ./tools
 # the extensions (pyproject: wheel artifacts), then drop mypy: the extensions do not need it.
 # `liftd --version` must say "GEO core: compiled", or the build fails.
 RUN python -m venv /opt/liftd \
- && /opt/liftd/bin/pip install --no-compile . mypy \
+ && /opt/liftd/bin/pip install --no-compile ".${EXTRAS:+[$EXTRAS]}" mypy \
  && /opt/liftd/bin/python tools/compile_core.py \
  && /opt/liftd/bin/pip install --no-compile --no-deps --force-reinstall . \
  && /opt/liftd/bin/pip uninstall -y mypy mypy-extensions librt ast-serialize pathspec \

@@ -1,5 +1,5 @@
 """Command line (DESIGN.md §3.1): the parser and the dispatch here, one module per group of
-commands (`check`; `simulate` and `study`; the service commands; `common`: what they share).
+commands (`check`; `simulate`; `study`; the service commands; `common`: what they share).
 The only place that maps outcomes to exit codes: 0 ok, 1 NC program error, 2 configuration
 error, 3 runtime failure (`healthcheck`: 1 unhealthy). A configuration or schedule error
 raised by any command is printed once, in `main`."""
@@ -15,7 +15,8 @@ from liftd import __version__
 from liftd.cli.check import cmd_check
 from liftd.cli.common import EXIT_CONFIG, EXIT_SIGPIPE, EXIT_UNHEALTHY
 from liftd.cli.service import cmd_healthcheck, cmd_objects, cmd_plc, cmd_reload, cmd_run
-from liftd.cli.simulate import cmd_simulate, cmd_study
+from liftd.cli.simulate import cmd_simulate
+from liftd.cli.study import cmd_study
 from liftd.runtime.core import core_build
 from liftd.settings import ConfigError
 
@@ -146,6 +147,16 @@ def build_parser() -> argparse.ArgumentParser:
     st.add_argument("paths", nargs="+", metavar="DIR|FILE", help="directories of *.nc, or programs")
     st.add_argument("-c", "--config", help="liftd.toml")
     st.add_argument("--jobs", type=int, metavar="N", help="worker processes (default: all cores)")
+    st.add_argument(
+        "--scheduler", metavar="ADDRESS",
+        help="run on the Dask cluster of this scheduler (e.g. tcp://10.0.0.5:8786) instead of "
+        "local processes; needs the cluster extra: pip install 'liftd[cluster]'",
+    )  # fmt: skip
+    st.add_argument(
+        "--timeout", type=float, metavar="S",
+        help="with --scheduler: seconds to wait for the scheduler, then for a worker "
+        "(default 30)",
+    )  # fmt: skip
     st.add_argument(
         "--channel", type=int, metavar="N", help="run the programs in channel N (default: [cnc])"
     )

@@ -34,6 +34,8 @@ GEO_PROCESS_FORBIDDEN = {"numpy", "matplotlib", "pyads", "structlog"} | {
     "uvloop",
     "asyncio",
     "prometheus_client",
+    "dask",  # the study's cluster client (liftd.sim.cluster)
+    "distributed",
 }
 
 
