@@ -86,8 +86,14 @@ class LiveHub:
 
     # -- updates ----------------------------------------------------------------------------------
     async def run(self) -> None:
+        """Update while a page is open; with none the hub costs the daemon nothing but the
+        GEO events it keeps for the next page."""
         while True:
-            self.tick()
+            if self.waiters:
+                self.tick()
+            else:
+                self.events.extend(self._event(ev) for ev in self._pending if ev.name not in QUIET)
+                self._pending.clear()
             await asyncio.sleep(self.period)
 
     def tick(self) -> None:
@@ -179,9 +185,11 @@ class LiveSession:
     def __init__(self, hub: LiveHub) -> None:
         self.hub = hub
         self.version = hub.version
-        self._wakes: list[asyncio.Event] = []
+        self.wake: asyncio.Event | None = None
 
     def hello(self) -> dict[str, Any]:
+        if not self.hub.waiters - {self.wake}:  # the hub was idle: bring it up to date first
+            self.hub.tick()
         full = self.hub.full()
         self.version = full["v"]
         return {"op": "hello", "mode": "live", **describe(self.hub.catalog), "state": full}
@@ -195,6 +203,7 @@ class LiveSession:
         return None
 
     def attach(self, wake: asyncio.Event) -> None:
+        self.wake = wake
         self.hub.waiters.add(wake)
 
     def detach(self, wake: asyncio.Event) -> None:

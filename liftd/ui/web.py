@@ -22,6 +22,7 @@ import contextlib
 import hmac
 import ipaddress
 import json
+import socket
 import time
 from collections import deque
 from collections.abc import Awaitable, Callable
@@ -44,6 +45,7 @@ HEADERS = {
 }  # fmt: skip
 STATIC = {"index.html": "text/html", "app.js": "text/javascript", "style.css": "text/css"}
 SEND_TIMEOUT_S = 5.0
+SOCKET_BUFFER = 1 << 16
 MAX_BAD = 20
 MAX_AUTH_FAILURES = 3
 MAX_MESSAGES_PER_S = 100
@@ -214,6 +216,9 @@ class UiServer:
             return web.Response(status=503, text="too many pages open\n")
         ws = web.WebSocketResponse(max_msg_size=self.cfg.max_message_bytes, compress=False,
                                    heartbeat=20.0, writer_limit=1 << 16)  # fmt: skip
+        sock = request.transport.get_extra_info("socket") if request.transport else None
+        if sock is not None:  # a fixed buffer (no autotuning to MBs): a page that does not
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, SOCKET_BUFFER)  # read is seen
         self.open += 1
         self.counters.pages += 1
         page = _Page(request.remote or "?")
@@ -232,6 +237,11 @@ class UiServer:
                         page.replies.append(encode(reply))
                         page.wake.set()
                     if page.bad > MAX_BAD or page.auth_failures >= MAX_AUTH_FAILURES:
+                        if sender is not None:  # the refusal first, then the close
+                            sender.cancel()
+                        with contextlib.suppress(Exception):
+                            while page.replies:
+                                await self._send(ws, request, page.replies.popleft())
                         await ws.close(code=1008, message=b"too many refused messages")
                         break
                 elif msg.type == WSMsgType.BINARY:

@@ -53,7 +53,8 @@
       el.classList.toggle("missing", absent);
       if (absent) el.dataset.missing = "true"; else delete el.dataset.missing;
       el.textContent = fmt(o, absent ? null : v);
-      if (o.type === "BOOLEAN" && v) { el.classList.remove("flash"); void el.offsetWidth; el.classList.add("flash"); }
+      // a TRUE that lasts one update still catches the eye (no forced layout: Web Animations)
+      if (o.type === "BOOLEAN" && v && el.animate) el.animate([{ background: "#ffcdd2" }, { background: "transparent" }], 400);
     }
   }
 
@@ -318,9 +319,11 @@
     ctx.lineWidth = 1;
   }
 
-  function frame() {
-    if (dirty && hello) {
+  let drawn = 0;
+  function frame(now) {
+    if (dirty && hello && now - drawn >= 100) {  // the figures at 10 Hz: the values stay at 50
       dirty = false;
+      drawn = now;
       document.querySelectorAll(".channel").forEach((node, i) => { drawXY(node, i); drawZ(node, i, hello.channels[i]); });
     }
     requestAnimationFrame(frame);

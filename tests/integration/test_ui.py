@@ -1,0 +1,271 @@
+"""The live view against a running `liftd run` (WebSocket client, no browser): what the page
+gets, the control round trip through the ADS write path, the refused cases, and the endpoint
+fuzzed (malformed and oversized messages, 200 connections, a page that never reads) while the
+ADS server and the GEO loop go on."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import re
+import subprocess
+import sys
+import time
+import urllib.request
+from collections.abc import Iterator
+from pathlib import Path
+
+import aiohttp
+import pytest
+
+from tests.support.daemon import Daemon, write_config
+from tests.support.paths import REPO
+from tests.support.ui import never_reading, open_page, run, ui_url
+
+pytestmark = pytest.mark.integration
+TOKEN = "ui-test-token-0123456789"
+
+
+def _daemon(tmp: Path, **ui: object) -> Daemon:
+    cfg = write_config(
+        tmp, program={"repeat": True},
+        ui={"enabled": True, "port": 0, "max_connections": 16, **ui},
+        rt={"sched_fifo_priority": 0, "hold_cpu_dma_latency": False, "lock_memory": False,
+            "stall_timeout_ms": 20000},
+    )  # fmt: skip
+    d = Daemon(cfg)
+    d.ready()
+    return d
+
+
+@pytest.fixture(scope="module")
+def daemon(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Daemon]:
+    d = _daemon(tmp_path_factory.mktemp("ui"), control=True, token=TOKEN)
+    yield d
+    d.stop()
+
+
+def test_the_page_and_its_files_come_from_liftd_with_a_csp(daemon: Daemon) -> None:
+    url = ui_url(daemon)
+    with urllib.request.urlopen(url, timeout=10) as r:
+        html = r.read().decode()
+        csp = r.headers["Content-Security-Policy"]
+    assert "default-src 'none'" in csp and "script-src 'self'" in csp
+    assert "frame-ancestors 'none'" in csp and "unsafe-inline" not in csp
+    assert 'src="/static/app.js"' in html and "http" not in html.split("<body>")[0]
+    for name in ("app.js", "style.css"):
+        with urllib.request.urlopen(url + "static/" + name, timeout=10) as r:
+            assert re.search(r"https?://|//[a-z0-9.-]+\.[a-z]{2,}/", r.read().decode()) is None
+    req = urllib.request.Request(url, headers={"Host": "rebound.example:8551"})
+    with pytest.raises(urllib.error.HTTPError) as exc:
+        urllib.request.urlopen(req, timeout=10)
+    assert exc.value.code == 421
+
+
+def test_hello_has_every_object_and_updates_follow(daemon: Daemon) -> None:
+    async def go() -> None:
+        page = await open_page(ui_url(daemon))
+        symbols = {o["symbol"] for o in page.hello["objects"]}
+        assert {"GEO.ch1.Z.lift_active", "GEO.ch1.Z.lift_count", "GEO.timing.lateness_max_us",
+                "GEO.ads.connections", "PLC.ch1.override"} <= symbols  # fmt: skip
+        first = page.values["GEO.cycle"]
+        end = time.monotonic() + 5
+        while page.values["GEO.cycle"] == first and time.monotonic() < end:
+            await page.receive()
+        assert page.values["GEO.cycle"] > first
+        assert page.hello["control"]["enabled"] is True
+        await page.close()
+
+    run(go())
+
+
+def test_a_foreign_origin_is_refused(daemon: Daemon) -> None:
+    async def go() -> None:
+        with pytest.raises(aiohttp.WSServerHandshakeError) as exc:
+            await open_page(ui_url(daemon), origin="http://evil.example")
+        assert exc.value.status == 403
+
+    run(go())
+
+
+def test_control_needs_the_token(daemon: Daemon) -> None:
+    async def go() -> None:
+        page = await open_page(ui_url(daemon))
+        await page.send({"op": "write", "id": 1, "symbol": "PLC.ch1.override", "value": 300})
+        r = await page.reply("result")
+        assert r["ok"] is False and "token" in r["detail"]
+        for n in range(3):
+            await page.send({"op": "auth", "token": f"guess-{n}"})
+        replies = [await page.reply("auth") for _ in range(3)]
+        assert [r["ok"] for r in replies] == [False, False, False]
+        closed = await page.reply("closed")
+        assert closed["code"] == 1008  # three wrong tokens close the connection
+        await page.close()
+        assert daemon.read_symbol("GEO.ch1.override_requested", "<H") != 300
+
+    run(go())
+
+
+def test_control_round_trip_and_bad_values(daemon: Daemon) -> None:
+    async def go() -> None:
+        page = await open_page(ui_url(daemon))
+        await page.send({"op": "auth", "token": TOKEN})
+        assert (await page.reply("auth"))["ok"] is True
+        for i, (symbol, value, code) in enumerate([
+            ("PLC.ch1.override", 5000, "0x706"), ("PLC.ch1.override", True, "0x706"),
+            ("PLC.ch1.feed_hold", 1, "0x706"), ("GEO.ch1.line", 3, "only PLC"),
+            ("PLC.ch1.nothing", 1, "0x710"), ("PLC.ch1.override", "x", "value"),
+            ("PLC.ch1.override", 1.5, "value"), (7, 1, "symbol"),
+        ]):  # fmt: skip
+            await page.send({"op": "write", "id": i, "symbol": symbol, "value": value})
+            r = await page.reply("result")
+            assert r["ok"] is False and code in r["detail"], (symbol, value, r)
+        await page.send({"op": "write", "id": 99, "symbol": "PLC.ch1.override", "value": 650})
+        assert (await page.reply("result"))["ok"] is True
+        end = time.monotonic() + 5
+        while page.values.get("GEO.ch1.override_requested") != 650 and time.monotonic() < end:
+            await page.receive()
+        assert page.values["GEO.ch1.override_requested"] == 650  # the GEO task took it
+        assert daemon.read_symbol("GEO.ch1.override_requested", "<H") == 650  # ADS sees it
+        await page.send({"op": "write", "id": 100, "symbol": "PLC.ch1.override", "value": 1000})
+        assert (await page.reply("result"))["ok"] is True
+        await page.close()
+
+    run(go())
+
+
+def test_fuzz_malformed_oversized_and_many(daemon: Daemon) -> None:
+    url = ui_url(daemon)
+
+    async def go() -> None:
+        page = await open_page(url)
+        for bad in [
+            "",
+            "{",
+            "[]",
+            "null",
+            '{"op": 5}',
+            '{"op": "zz"}',
+            '{"op":"seek","t":1}',
+            '{"op": "write", "id": "x"}',
+            '{"op":"auth","token":{}}',
+            "\u0000" * 100,
+        ]:
+            await page.ws.send_str(bad)
+            r = await page.reply("error") if "auth" not in bad and "write" not in bad else (
+                await page.reply("auth" if "auth" in bad else "result"))  # fmt: skip
+            assert r.get("ok") in (None, False), (bad, r)
+        await page.ws.send_bytes(b"\x00\x01")
+        assert (await page.reply("error"))["detail"] == "binary message"
+        await page.ws.send_str("x" * 10_000)  # over max_message_bytes: the page is closed
+        assert (await page.reply("closed"))["code"] == 1009
+        await page.close()
+        pages, refused = [], 0
+        for _ in range(200):
+            try:
+                pages.append(await open_page(url))
+            except aiohttp.WSServerHandshakeError as exc:
+                assert exc.status == 503
+                refused += 1
+        assert len(pages) == 16 and refused == 184
+        # the ADS server and the GEO loop meanwhile
+        c0 = daemon.read_symbol("GEO.cycle", "<Q")
+        await asyncio.sleep(0.3)
+        assert daemon.read_symbol("GEO.cycle", "<Q") > c0
+        for p in pages:
+            await p.close()
+        await asyncio.sleep(0.3)
+        fresh = await open_page(url)  # and a page opens again
+        await fresh.close()
+
+    run(go())
+
+
+def test_a_page_that_never_reads_is_dropped(daemon: Daemon) -> None:
+    url = ui_url(daemon)
+    dropped = daemon.count("ui.page_dropped")
+    sock = never_reading(url)
+    try:
+        end = time.monotonic() + 60
+        cycles = []
+        while daemon.count("ui.page_dropped") == dropped and time.monotonic() < end:
+            cycles.append(daemon.read_symbol("GEO.cycle", "<Q"))  # ADS answers meanwhile
+            time.sleep(0.5)
+        assert daemon.count("ui.page_dropped") > dropped
+        assert cycles == sorted(cycles) and cycles[-1] > cycles[0]
+    finally:
+        with contextlib.suppress(OSError):
+            sock.close()
+
+
+def test_control_off_is_read_only(tmp_path: Path) -> None:
+    d = _daemon(tmp_path)
+    try:
+
+        async def go() -> None:
+            page = await open_page(ui_url(d))
+            assert page.hello["control"]["enabled"] is False
+            await page.send({"op": "auth", "token": TOKEN})
+            assert (await page.reply("auth"))["ok"] is False
+            await page.send({"op": "write", "id": 1, "symbol": "PLC.ch1.stop", "value": True})
+            r = await page.reply("result")
+            assert r["ok"] is False and "read only" in r["detail"]
+            await page.close()
+
+        run(go())
+        assert d.read_symbol("GEO.ch1.state", "<I") != 5  # no STOP reached the channel (HOLD)
+    finally:
+        d.stop()
+
+
+def test_page_writes_keep_run_trace_equal_to_simulate(tmp_path: Path) -> None:
+    """Override and feed hold from the page while `run --trace` records the demo: the loop
+    logs the cycle each took effect in (geo.plc_input), and `simulate` with that schedule
+    gives the same trace, row for row, as with writes over ADS (test_daemon.py)."""
+    cfg = write_config(tmp_path, ui={"enabled": True, "port": 0, "control": True, "token": TOKEN},
+                       rt={"sched_fifo_priority": 0, "hold_cpu_dma_latency": False,
+                           "lock_memory": False, "stall_timeout_ms": 20000})  # fmt: skip
+    trace = tmp_path / "run.csv"
+    d = Daemon(cfg, "--trace", str(trace))
+    try:
+        d.ready()
+
+        async def go() -> None:
+            page = await open_page(ui_url(d))
+            await page.send({"op": "auth", "token": TOKEN})
+            assert (await page.reply("auth"))["ok"] is True
+            for i, (pause, symbol, value) in enumerate([
+                (1.0, "PLC.ch1.override", 500), (1.5, "PLC.ch1.feed_hold", True),
+                (0.4, "PLC.ch1.feed_hold", False), (1.0, "PLC.ch1.override", 1250),
+            ]):  # fmt: skip
+                await asyncio.sleep(pause)
+                await page.send({"op": "write", "id": i, "symbol": symbol, "value": value})
+                assert (await page.reply("result"))["ok"] is True
+            await page.close()
+
+        run(go())
+        assert d.event("geo.program_end", 60) is not None
+    finally:
+        assert d.stop() == 0
+    inputs = [(round(r["t"] * 1000), r["text"], r["value"]) for r in d.logs
+              if r.get("event") == "geo.plc_input"]  # fmt: skip
+    assert [(name, value) for _, name, value in inputs] == [
+        ("override", 0.5), ("feed_hold", 1.0), ("feed_hold", 0.0), ("override", 1.25)]  # fmt: skip
+    (k_ov1, _, _), (k_hold, _, _), (k_free, _, _), (k_ov2, _, _) = inputs
+
+    def at(k: int) -> str:  # between cycle k − 1 and cycle k
+        return f"{(k - 0.5) / 1000:.4f}"
+
+    sim = tmp_path / "sim.csv"
+    demo = str(REPO / "config" / "programs" / "demo.nc")
+    r = subprocess.run([sys.executable, "-m", "liftd", "simulate", demo, "-c", str(cfg),
+                        "--override", f"{at(k_ov1)}:50,{at(k_ov2)}:125",
+                        "--feedhold", f"{at(k_hold)}:{(k_free - k_hold) / 1000:.4f}",
+                        "--trace", str(sim)], capture_output=True, text=True, timeout=120,
+                       check=False)  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    expected = sim.read_text().splitlines()
+    got = trace.read_text().splitlines()
+    assert len(got) >= len(expected) > k_ov2 + 1000
+    diff = next((i for i, (a, b) in enumerate(zip(got, expected, strict=False)) if a != b), None)
+    assert diff is None, (diff, got[diff], expected[diff])
