@@ -7,9 +7,12 @@
 - load: the daemon's CPU and RSS and the GEO loop's lateness and compute (from /metrics:
   histogram deltas per phase, p50/p99 by bucket upper bound, exceeded and >25 % counts) with
   0, 1 and 10 open pages (Python WebSocket clients in another process that take every
-  update), phases alternated in one run (A/B: this is a shared 2-vCPU VM).
+  update), phases alternated in one run (A/B: this is a shared 2-vCPU VM), while a pyads
+  client polls lift_active at 1 kHz (the ADS server's rate and latency in each phase).
 
-Run: .venv/bin/python bench/bench_ui.py [--changes 200] [--phase-seconds 20] [--rounds 2]
+- rss: the daemon's RSS with [ui] off and on (no page), alternated.
+
+Run: .venv/bin/python bench/bench_ui.py [--rt] [--changes 200] [--phase-seconds 20] [--rounds 2]
 """
 
 from __future__ import annotations
@@ -30,6 +33,8 @@ from typing import Any
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+
+from bench import load as ads_load  # noqa: E402
 
 LIFT = "GEO.ch1.Z.lift_active"
 RT_OFF = {"sched_fifo_priority": 0, "hold_cpu_dma_latency": False, "lock_memory": False,
@@ -216,9 +221,11 @@ def load(d: Any, url: str, metrics_port: int, phase_s: float, rounds: int, rt: b
                                           str(pages), str(phase_s + 2)],
                                          stdout=subprocess.PIPE, text=True)  # fmt: skip
                 time.sleep(1.5)  # connected
+            procs, out = ads_load.start(d.net_id, d.address, phase_s, 1, 1000.0, 0, 10)
             a = scrape(metrics_port)
             time.sleep(phase_s)
             b = scrape(metrics_port)
+            (poll,) = ads_load.collect(procs, out, phase_s + 30)
             frames = 0
             if child is not None:
                 out, _ = child.communicate(timeout=60)
@@ -235,12 +242,40 @@ def load(d: Any, url: str, metrics_port: int, phase_s: float, rounds: int, rt: b
                 - a["liftd_geo_compute_over_25pct_total"],
                 "cycles": b["liftd_geo_cycles_total"] - a["liftd_geo_cycles_total"],
                 "frames_received": frames,
+                "pyads_1khz_reads_per_s": round(poll["rate"]),
+                "pyads_latency_us": poll["latency_us"],
                 **{f"lateness_{k}": v for k, v in hist(a, b, "lateness").items()},
                 **{f"compute_{k}": v for k, v in hist(a, b, "compute").items()},
             }  # fmt: skip
             results[pages].append(rec)
     for pages, recs in results.items():
         emit({"bench": "ui_load", "pages": pages, "phase_s": phase_s, "rt": rt, "phases": recs})
+
+
+def rss_without_and_with_ui(rounds: int = 2) -> None:
+    """The daemon's RSS 5 s after READY with [ui] off and on (no page), alternated."""
+    from tests.support.daemon import Daemon, write_config  # noqa: PLC0415
+
+    def rss_mb(pid: int) -> float:
+        for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+            if line.startswith("VmRSS"):
+                return int(line.split()[1]) / 1024
+        return float("nan")
+
+    got: dict[bool, list[float]] = {False: [], True: []}
+    for _ in range(rounds):
+        for ui in (False, True):
+            with tempfile.TemporaryDirectory() as tmp:
+                cfg = write_config(Path(tmp), program={"repeat": True},
+                                   ui={"enabled": ui, "port": 0}, rt=RT_OFF)  # fmt: skip
+                d = Daemon(cfg)
+                try:
+                    d.ready()
+                    time.sleep(5)
+                    got[ui].append(round(rss_mb(d.proc.pid), 1))
+                finally:
+                    d.stop()
+    emit({"bench": "ui_daemon_rss", "ui_off_mb": got[False], "ui_on_mb": got[True]})
 
 
 def main() -> None:
@@ -260,10 +295,13 @@ def main() -> None:
     ap.add_argument("--skip-latency", action="store_true")
     ap.add_argument("--skip-load", action="store_true")
     ap.add_argument("--rt", action="store_true", help="SCHED_FIFO 80, mlockall (as root)")
+    ap.add_argument("--skip-rss", action="store_true")
     args = ap.parse_args()
     from tests.support.daemon import Daemon, free_port, write_config  # noqa: PLC0415
     from tests.support.ui import ui_url  # noqa: PLC0415
 
+    if not args.skip_rss:
+        rss_without_and_with_ui()
     with tempfile.TemporaryDirectory() as tmp:
         program = Path(tmp) / "hops.nc"
         program.write_text(hops_program())

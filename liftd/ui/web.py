@@ -165,9 +165,8 @@ class UiServer:
         site = web.TCPSite(self._runner, self.cfg.host, self.cfg.port, backlog=64,
                            shutdown_timeout=0.5)  # fmt: skip
         await site.start()
-        server = site._server  # the asyncio server: its socket's real port (port 0 = any)
-        sockets = getattr(server, "sockets", None) or []
-        self.port = int(sockets[0].getsockname()[1]) if sockets else self.cfg.port
+        addresses = self._runner.addresses  # the real port (port 0 = any)
+        self.port = int(addresses[0][1]) if addresses else self.cfg.port
         return self.port
 
     async def close(self) -> None:
@@ -228,27 +227,25 @@ class UiServer:
             await ws.prepare(request)
             sender = asyncio.create_task(self._send_loop(ws, request, session, page))
             async for msg in ws:
+                if msg.type not in (WSMsgType.TEXT, WSMsgType.BINARY):
+                    break  # ERROR (e.g. a frame over max_message_bytes: aiohttp closed it)
+                if not _rate_ok(page.window, MAX_MESSAGES_PER_S, time.monotonic()):
+                    await ws.close(code=1008, message=b"too many messages")
+                    break
                 if msg.type == WSMsgType.TEXT:
-                    if not _rate_ok(page.window, MAX_MESSAGES_PER_S, time.monotonic()):
-                        await ws.close(code=1008, message=b"too many messages")
-                        break
                     reply = self._message(page, session, msg.data)
-                    if reply is not None:
-                        page.replies.append(encode(reply))
-                        page.wake.set()
-                    if page.bad > MAX_BAD or page.auth_failures >= MAX_AUTH_FAILURES:
-                        if sender is not None:  # the refusal first, then the close
-                            sender.cancel()
-                        with contextlib.suppress(Exception):
-                            while page.replies:
-                                await self._send(ws, request, page.replies.popleft())
-                        await ws.close(code=1008, message=b"too many refused messages")
-                        break
-                elif msg.type == WSMsgType.BINARY:
-                    page.bad += 1
-                    page.replies.append(encode({"op": "error", "detail": "binary message"}))
+                else:
+                    reply = self._bad(page, "binary message")
+                if reply is not None:
+                    page.replies.append(encode(reply))
                     page.wake.set()
-                elif msg.type == WSMsgType.ERROR:
+                if page.bad > MAX_BAD or page.auth_failures >= MAX_AUTH_FAILURES:
+                    if sender is not None:  # the refusal first, then the close
+                        sender.cancel()
+                    with contextlib.suppress(Exception):
+                        while page.replies:
+                            await self._send(ws, request, page.replies.popleft())
+                    await ws.close(code=1008, message=b"too many refused messages")
                     break
         finally:
             self.open -= 1
@@ -280,6 +277,10 @@ class UiServer:
                 else:
                     with contextlib.suppress(TimeoutError):
                         await asyncio.wait_for(page.wake.wait(), session.period)
+        except Exception as exc:  # a bug must not leave a page open that shows stale values
+            self.log.error("ui.page_failed", peer=page.ip, error=f"{type(exc).__name__}: {exc}")
+            if request.transport is not None:
+                request.transport.abort()
         finally:
             session.detach(page.wake)
 

@@ -8,8 +8,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import re
-import subprocess
-import sys
+import socket
 import time
 import urllib.request
 from collections.abc import Iterator
@@ -19,23 +18,15 @@ import aiohttp
 import pytest
 
 from tests.support.daemon import Daemon, write_config
-from tests.support.paths import REPO
-from tests.support.ui import never_reading, open_page, run, ui_url
+from tests.support.replay import WRITES, first_difference, simulate_logged_writes
+from tests.support.ui import QUIET_RT, never_reading, open_page, run, ui_daemon, ui_url
 
 pytestmark = pytest.mark.integration
 TOKEN = "ui-test-token-0123456789"
 
 
 def _daemon(tmp: Path, **ui: object) -> Daemon:
-    cfg = write_config(
-        tmp, program={"repeat": True},
-        ui={"enabled": True, "port": 0, "max_connections": 16, **ui},
-        rt={"sched_fifo_priority": 0, "hold_cpu_dma_latency": False, "lock_memory": False,
-            "stall_timeout_ms": 20000},
-    )  # fmt: skip
-    d = Daemon(cfg)
-    d.ready()
-    return d
+    return ui_daemon(tmp, max_connections=16, **ui)
 
 
 @pytest.fixture(scope="module")
@@ -160,6 +151,10 @@ def test_fuzz_malformed_oversized_and_many(daemon: Daemon) -> None:
         await page.ws.send_str("x" * 10_000)  # over max_message_bytes: the page is closed
         assert (await page.reply("closed"))["code"] == 1009
         await page.close()
+        idle = []  # 200 TCP connections that never send a request
+        for _ in range(200):
+            s = socket.create_connection(("127.0.0.1", int(url.rsplit(":", 1)[1].strip("/"))))
+            idle.append(s)
         pages, refused = [], 0
         for _ in range(200):
             try:
@@ -174,9 +169,33 @@ def test_fuzz_malformed_oversized_and_many(daemon: Daemon) -> None:
         assert daemon.read_symbol("GEO.cycle", "<Q") > c0
         for p in pages:
             await p.close()
+        for s in idle:
+            s.close()
         await asyncio.sleep(0.3)
         fresh = await open_page(url)  # and a page opens again
         await fresh.close()
+
+    run(go())
+
+
+def test_a_flood_or_a_stream_of_bad_messages_closes_the_page(daemon: Daemon) -> None:
+    async def go() -> None:
+        page = await open_page(ui_url(daemon))
+        for _ in range(25):
+            await page.ws.send_str("not json")
+        errors = 0
+        while (m := await page.receive())["op"] != "closed":
+            errors += m["op"] == "error"
+        assert (errors, m["code"]) == (21, 1008)  # the 21st refusal, then the close
+        await page.close()
+        page = await open_page(ui_url(daemon))
+        for _ in range(150):  # more than 100 a second (each refused: no token, not malformed)
+            await page.ws.send_str('{"op": "write", "symbol": "PLC.ch1.stop", "value": true}')
+        results = 0
+        while (m := await page.receive())["op"] != "closed":
+            results += m["op"] == "result"
+        assert m["code"] == 1008 and results <= 100
+        await page.close()
 
     run(go())
 
@@ -223,8 +242,7 @@ def test_page_writes_keep_run_trace_equal_to_simulate(tmp_path: Path) -> None:
     logs the cycle each took effect in (geo.plc_input), and `simulate` with that schedule
     gives the same trace, row for row, as with writes over ADS (test_daemon.py)."""
     cfg = write_config(tmp_path, ui={"enabled": True, "port": 0, "control": True, "token": TOKEN},
-                       rt={"sched_fifo_priority": 0, "hold_cpu_dma_latency": False,
-                           "lock_memory": False, "stall_timeout_ms": 20000})  # fmt: skip
+                       rt=QUIET_RT)  # fmt: skip
     trace = tmp_path / "run.csv"
     d = Daemon(cfg, "--trace", str(trace))
     try:
@@ -234,10 +252,7 @@ def test_page_writes_keep_run_trace_equal_to_simulate(tmp_path: Path) -> None:
             page = await open_page(ui_url(d))
             await page.send({"op": "auth", "token": TOKEN})
             assert (await page.reply("auth"))["ok"] is True
-            for i, (pause, symbol, value) in enumerate([
-                (1.0, "PLC.ch1.override", 500), (1.5, "PLC.ch1.feed_hold", True),
-                (0.4, "PLC.ch1.feed_hold", False), (1.0, "PLC.ch1.override", 1250),
-            ]):  # fmt: skip
+            for i, (pause, symbol, value) in enumerate(WRITES):
                 await asyncio.sleep(pause)
                 await page.send({"op": "write", "id": i, "symbol": symbol, "value": value})
                 assert (await page.reply("result"))["ok"] is True
@@ -247,25 +262,7 @@ def test_page_writes_keep_run_trace_equal_to_simulate(tmp_path: Path) -> None:
         assert d.event("geo.program_end", 60) is not None
     finally:
         assert d.stop() == 0
-    inputs = [(round(r["t"] * 1000), r["text"], r["value"]) for r in d.logs
-              if r.get("event") == "geo.plc_input"]  # fmt: skip
-    assert [(name, value) for _, name, value in inputs] == [
-        ("override", 0.5), ("feed_hold", 1.0), ("feed_hold", 0.0), ("override", 1.25)]  # fmt: skip
-    (k_ov1, _, _), (k_hold, _, _), (k_free, _, _), (k_ov2, _, _) = inputs
-
-    def at(k: int) -> str:  # between cycle k − 1 and cycle k
-        return f"{(k - 0.5) / 1000:.4f}"
-
-    sim = tmp_path / "sim.csv"
-    demo = str(REPO / "config" / "programs" / "demo.nc")
-    r = subprocess.run([sys.executable, "-m", "liftd", "simulate", demo, "-c", str(cfg),
-                        "--override", f"{at(k_ov1)}:50,{at(k_ov2)}:125",
-                        "--feedhold", f"{at(k_hold)}:{(k_free - k_hold) / 1000:.4f}",
-                        "--trace", str(sim)], capture_output=True, text=True, timeout=120,
-                       check=False)  # fmt: skip
-    assert r.returncode == 0, r.stderr
-    expected = sim.read_text().splitlines()
+    expected, k_last = simulate_logged_writes(d.logs, cfg, tmp_path)
     got = trace.read_text().splitlines()
-    assert len(got) >= len(expected) > k_ov2 + 1000
-    diff = next((i for i, (a, b) in enumerate(zip(got, expected, strict=False)) if a != b), None)
+    diff = first_difference(got, expected, k_last)
     assert diff is None, (diff, got[diff], expected[diff])

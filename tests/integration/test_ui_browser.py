@@ -19,9 +19,9 @@ import pyads
 import pytest
 
 from tests.support.browser import OBSERVE, browser
-from tests.support.daemon import Daemon, write_config
+from tests.support.daemon import Daemon
 from tests.support.paths import REPO
-from tests.support.ui import ui_url
+from tests.support.ui import ui_daemon, ui_url
 
 pytestmark = pytest.mark.integration
 TOKEN = "browser-test-token-0123"
@@ -30,14 +30,7 @@ LIFT = "GEO.ch1.Z.lift_active"
 
 @pytest.fixture(scope="module")
 def daemon(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Daemon]:
-    cfg = write_config(
-        tmp_path_factory.mktemp("uib"), program={"repeat": True},
-        ui={"enabled": True, "port": 0, "control": True, "token": TOKEN},
-        rt={"sched_fifo_priority": 0, "hold_cpu_dma_latency": False, "lock_memory": False,
-            "stall_timeout_ms": 20000},
-    )  # fmt: skip
-    d = Daemon(cfg)
-    d.ready()
+    d = ui_daemon(tmp_path_factory.mktemp("uib"), control=True, token=TOKEN)
     yield d
     d.stop()
 
@@ -149,10 +142,8 @@ def test_refused_without_token_and_from_a_foreign_origin(daemon: Daemon, tmp_pat
 
 
 def test_control_disabled_shows_no_control(tmp_path: Path) -> None:
-    cfg = write_config(tmp_path, ui={"enabled": True, "port": 0})
-    d = Daemon(cfg)
+    d = ui_daemon(tmp_path)
     try:
-        d.ready()
         with browser() as ctx:
             page = ctx.new_page()
             page.goto(ui_url(d))

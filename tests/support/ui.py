@@ -9,11 +9,26 @@ import json
 import os
 import socket
 import time
+from pathlib import Path
 from typing import Any
 
 import aiohttp
 
-from tests.support.daemon import Daemon
+from tests.support.daemon import Daemon, write_config
+
+# the tests share 2 vCPUs with other sessions' suites: no RT settings, and a stall timeout that
+# a busy minute does not reach (the daemon would exit 3 under the test)
+QUIET_RT = {"sched_fifo_priority": 0, "hold_cpu_dma_latency": False, "lock_memory": False,
+            "stall_timeout_ms": 20000}  # fmt: skip
+
+
+def ui_daemon(tmp: Path, *args: str, **ui: object) -> Daemon:
+    """`liftd run` on the demo, repeating, with the live view on a free port, ready."""
+    cfg = write_config(tmp, program={"repeat": True}, ui={"enabled": True, "port": 0, **ui},
+                       rt=QUIET_RT)  # fmt: skip
+    d = Daemon(cfg, *args)
+    d.ready()
+    return d
 
 
 def ui_url(d: Daemon) -> str:

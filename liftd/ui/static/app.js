@@ -275,12 +275,12 @@
     const map = fit(path.concat(trail.slice(-1)), cv.width, cv.height, 16);
     ctx.lineWidth = 1; ctx.strokeStyle = "#9aa4ae"; line(ctx, path, map);
     $(".geo-note", node).textContent = geo ? (geo.error || "") : "path: being prepared (or no program)";
+    ctx.strokeStyle = "rgba(21,101,192,0.35)"; ctx.lineWidth = 6; line(ctx, trail, map);
     if (geo) for (const r of geo.ranges) {
-      ctx.strokeStyle = COLORS[r.method] || "#d32f2f"; ctx.lineWidth = 3;
+      ctx.strokeStyle = COLORS[r.method] || "#d32f2f"; ctx.lineWidth = 2;
       ctx.setLineDash(r.method === "direct" ? [5, 4] : []); line(ctx, r.path, map);
     }
     ctx.setLineDash([]);
-    ctx.strokeStyle = "#1565c0"; ctx.lineWidth = 2; line(ctx, trail, map);
     if (trail.length) {
       const [x, y] = map(trail[trail.length - 1]);
       ctx.fillStyle = "#1565c0"; ctx.beginPath(); ctx.arc(x, y, 5, 0, 2 * Math.PI); ctx.fill();
