@@ -47,21 +47,6 @@ def emit(rec: dict[str, Any]) -> None:
     print(json.dumps(rec), flush=True)
 
 
-def hops_program(parts: int = 60) -> str:
-    """Cut 10 mm, lift over a 30 mm hop, again: a lift every ~0.25 s."""
-    lines = ["%hops", "N10 G90 G17 G94", "#SLOPE[TYPE=TRAPEZ]", "N20 G00 X10 Y10 Z1"]
-    x = 10
-    for i in range(parts):
-        lines += [f"G01 X{x + 10} F6000", "Z[LIFT_START POS=1 POS_LIMIT=20]",
-                  f"G01 X{x + 40} F24000", "Z[LIFT_END]"]  # fmt: skip
-        x += 40
-        if x > 1200:
-            lines.append("G00 X10")
-            x = 10
-        del i
-    return "\n".join([*lines, "M30", ""])
-
-
 def percentile(xs: list[float], q: float) -> float:
     s = sorted(xs)
     return s[min(len(s) - 1, round(q * (len(s) - 1)))]
@@ -298,7 +283,7 @@ def main() -> None:
     ap.add_argument("--skip-rss", action="store_true")
     args = ap.parse_args()
     from tests.support.daemon import Daemon, free_port, write_config  # noqa: PLC0415
-    from tests.support.ui import ui_url  # noqa: PLC0415
+    from tests.support.ui import hops_program, ui_url  # noqa: PLC0415
 
     if not args.skip_rss:
         rss_without_and_with_ui()

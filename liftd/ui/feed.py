@@ -81,7 +81,10 @@ class Feed:
         self.history = [deque() for _ in self.catalog.channels]
 
     def read(self, view: GeoView) -> dict[str, Value]:
-        return {sym: rnd(get(view)) for sym, get, rnd in self.objects}
+        """Every symbol's value (null for what the source does not have)."""
+        out: dict[str, Value] = dict.fromkeys(self.missing)
+        out.update((sym, rnd(get(view))) for sym, get, rnd in self.objects)
+        return out
 
     def update(self, view: GeoView, suppressed_seen: Iterable[int] = ()) -> list[dict[str, Value]]:
         """The deltas (symbol → value) that bring the published values to `view`, pulses

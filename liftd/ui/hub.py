@@ -60,18 +60,23 @@ class LiveHub:
         self.feed = Feed(catalog)
         self.ring: deque[tuple[int, str]] = deque(maxlen=RING)
         self.geometry: list[Geometry | None] = [None] * len(catalog.channels)
-        self.extras: dict[str, Any] = {"range": {}, "text": {}, "peers": [], "geo": "starting"}
+        self.extras: dict[str, Any] = {"range": {}, "text": {}, "peers": [], "geo": "starting",
+                                       "error": {}}  # fmt: skip
         self.events: deque[dict[str, Any]] = deque(maxlen=EVENTS_KEPT)
         self._pending: deque[Event] = deque()
         self.events_dropped = 0
         self.waiters: set[asyncio.Event] = set()  # the open pages' wake-ups
+        self.errors: dict[int, tuple[int, str]] = {}  # machine index → (error id, text)
         self._peers_at = 0.0
         self.ticks = 0
         self._v = 0  # the last frame's version
 
     # -- inputs -----------------------------------------------------------------------------------
     def on_event(self, ev: Event) -> None:
-        """A GEO event (the daemon's event callback): kept for the next update, bounded."""
+        """A GEO event (the daemon's event callback): kept for the next update, bounded; an
+        error's text kept for as long as the channel shows its id."""
+        if ev.name == "geo.error":
+            self.errors[self._index(ev.channel)] = (int(ev.value), ev.text)
         if len(self._pending) < EVENTS_PER_TICK:
             self._pending.append(ev)
         else:
@@ -123,6 +128,9 @@ class LiveHub:
                 if value != self.extras[key]:
                     extras[key] = value
             extras["t"] = times(view)
+            errors = self._error_texts(view)
+            if errors != self.extras["error"]:
+                extras["error"] = errors
         self._publish(deltas, extras)
 
     def _publish(self, deltas: list[dict[str, Any]], extras: dict[str, Any]) -> None:
@@ -137,6 +145,15 @@ class LiveHub:
             self.ring.append((self._v, encode(frame)))
         for wake in self.waiters:
             wake.set()
+
+    def _error_texts(self, view: GeoView) -> dict[str, str]:
+        """Per channel id: the text of the error the channel shows (geo.error's message)."""
+        out = {}
+        for i, snap in enumerate(view.channels or (view.snapshot,)):
+            known = self.errors.get(i)
+            text = known[1] if known is not None and known[0] == snap.error_id else ""
+            out[str(self.catalog.channels[i].channel_id)] = text if snap.error_id else ""
+        return out
 
     def _index(self, channel_id: int) -> int:
         return self.catalog.index_of(channel_id) or 0 if channel_id else 0

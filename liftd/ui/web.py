@@ -45,7 +45,7 @@ HEADERS = {
 }  # fmt: skip
 STATIC = {"index.html": "text/html", "app.js": "text/javascript", "style.css": "text/css"}
 SEND_TIMEOUT_S = 5.0
-SOCKET_BUFFER = 1 << 16
+SOCKET_BUFFER = 1 << 15  # a page takes ~20-50 KB/s: room for a second of it
 MAX_BAD = 20
 MAX_AUTH_FAILURES = 3
 MAX_MESSAGES_PER_S = 100
@@ -214,10 +214,13 @@ class UiServer:
             self.counters.refused += 1
             return web.Response(status=503, text="too many pages open\n")
         ws = web.WebSocketResponse(max_msg_size=self.cfg.max_message_bytes, compress=False,
-                                   heartbeat=20.0, writer_limit=1 << 16)  # fmt: skip
-        sock = request.transport.get_extra_info("socket") if request.transport else None
-        if sock is not None:  # a fixed buffer (no autotuning to MBs): a page that does not
-            sock.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, SOCKET_BUFFER)  # read is seen
+                                   heartbeat=20.0, writer_limit=SOCKET_BUFFER)  # fmt: skip
+        transport = request.transport
+        sock = transport.get_extra_info("socket") if transport else None
+        if sock is not None:  # fixed buffers (no autotuning to MBs): a page that does not read
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, SOCKET_BUFFER)  # is seen soon
+        if transport is not None:
+            transport.set_write_buffer_limits(high=SOCKET_BUFFER)
         self.open += 1
         self.counters.pages += 1
         page = _Page(request.remote or "?")

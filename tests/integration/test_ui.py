@@ -9,6 +9,8 @@ import asyncio
 import contextlib
 import re
 import socket
+import subprocess
+import sys
 import time
 import urllib.request
 from collections.abc import Iterator
@@ -266,3 +268,29 @@ def test_page_writes_keep_run_trace_equal_to_simulate(tmp_path: Path) -> None:
     got = trace.read_text().splitlines()
     diff = first_difference(got, expected, k_last)
     assert diff is None, (diff, got[diff], expected[diff])
+
+
+def test_simulate_view_serves_the_runs_trace(tmp_path: Path) -> None:
+    cfg = write_config(tmp_path, ui={"port": 0})
+    demo = cfg.read_text().split('file = "')[1].split('"')[0]
+    proc = subprocess.Popen([sys.executable, "-m", "liftd", "simulate", demo, "-c", str(cfg),
+                             "--view"], stdout=subprocess.PIPE, text=True)  # fmt: skip
+    try:
+        assert proc.stdout is not None
+        url = None
+        for line in proc.stdout:  # the run's summary, then the view's address
+            if found := re.search(r"liftd view: (http://\S+/)", line):
+                url = found.group(1)
+                break
+        assert url is not None
+
+        async def go() -> None:
+            page = await open_page(url)
+            assert page.hello["mode"] == "trace" and page.hello["control"]["enabled"] is False
+            assert page.hello["state"]["x"]["trace"]["t1"] > 14.0  # the demo's 14.4 s
+            await page.close()
+
+        run(go())
+    finally:
+        proc.terminate()
+        assert proc.wait(10) == 0

@@ -30,7 +30,7 @@ LIFT = "GEO.ch1.Z.lift_active"
 
 @pytest.fixture(scope="module")
 def daemon(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Daemon]:
-    d = ui_daemon(tmp_path_factory.mktemp("uib"), control=True, token=TOKEN)
+    d = ui_daemon(tmp_path_factory.mktemp("uib"), hops=True, control=True, token=TOKEN)
     yield d
     d.stop()
 
@@ -60,7 +60,7 @@ def test_lift_active_follows_the_geo_task_within_100_ms_of_pyads(daemon: Daemon)
         page.wait_for_selector("body[data-ready=true]")
         page.evaluate(OBSERVE, LIFT)
         seen: list[tuple[float, bool]] = []
-        poller = threading.Thread(target=_poll, args=(daemon, 16.0, seen))
+        poller = threading.Thread(target=_poll, args=(daemon, 6.0, seen))
         poller.start()
         poller.join(60)
         changes = page.evaluate("window.__changes")

@@ -22,9 +22,29 @@ QUIET_RT = {"sched_fifo_priority": 0, "hold_cpu_dma_latency": False, "lock_memor
             "stall_timeout_ms": 20000}  # fmt: skip
 
 
-def ui_daemon(tmp: Path, *args: str, **ui: object) -> Daemon:
-    """`liftd run` on the demo, repeating, with the live view on a free port, ready."""
-    cfg = write_config(tmp, program={"repeat": True}, ui={"enabled": True, "port": 0, **ui},
+def hops_program(parts: int = 60) -> str:
+    """Cut 10 mm, lift over a 30 mm hop, again: a lift every ~0.25 s."""
+    lines = ["%hops", "N10 G90 G17 G94", "#SLOPE[TYPE=TRAPEZ]", "N20 G00 X10 Y10 Z1"]
+    x = 10
+    for _ in range(parts):
+        lines += [f"G01 X{x + 10} F6000", "Z[LIFT_START POS=1 POS_LIMIT=20]",
+                  f"G01 X{x + 40} F24000", "Z[LIFT_END]"]  # fmt: skip
+        x += 40
+        if x > 1200:
+            lines.append("G00 X10")
+            x = 10
+    return "\n".join([*lines, "M30", ""])
+
+
+def ui_daemon(tmp: Path, *args: str, hops: bool = False, **ui: object) -> Daemon:
+    """`liftd run` on the demo (or `hops_program`), repeating, with the live view on a free
+    port, ready."""
+    program = None
+    if hops:
+        program = tmp / "hops.nc"
+        program.write_text(hops_program())
+    cfg = write_config(tmp, program_file=str(program) if program else None,
+                       program={"repeat": True}, ui={"enabled": True, "port": 0, **ui},
                        rt=QUIET_RT)  # fmt: skip
     d = Daemon(cfg, *args)
     d.ready()

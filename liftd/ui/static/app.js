@@ -74,6 +74,9 @@
           ["override_max", "override_max"], ["feed hold", "feed_hold"], ["path velocity", "path_velocity"],
           ["block max velocity", "max_path_velocity"], ["error id", "error_id"], ["error line", "error_line"],
           ["M pending", "m_pending"]]) row(chan, label, g + name);
+      const err = chan.insertRow();
+      err.insertCell().textContent = "error text"; err.cells[0].className = "k";
+      err.insertCell().className = "error-text";
       const body = $(".axes tbody", node);
       for (const ax of ch.axes) {
         const tr = body.insertRow();
@@ -152,7 +155,7 @@
   function applyExtras(x) {
     if (!x) return;
     if (x.geometry) geometry = x.geometry;
-    for (const k of ["range", "text", "peers", "geo", "trace"]) if (k in x) extras[k] = x[k];
+    for (const k of ["range", "text", "peers", "geo", "trace", "error"]) if (k in x) extras[k] = x[k];
     if (x.events && x.events.length) addEvents(x.events);
     if (x.t) sample(x.t);
     if ("geo" in x) {
@@ -161,7 +164,7 @@
     }
     if ("peers" in x) peers(x.peers);
     if ("trace" in x) timeline(x.trace);
-    if ("text" in x || "range" in x) notes();
+    if ("text" in x || "range" in x || "error" in x) notes();
     dirty = true;
   }
 
@@ -188,6 +191,7 @@
     for (const node of document.querySelectorAll(".channel")) {
       const id = node.dataset.channel;
       $(".block-text code", node).textContent = (extras.text || {})[id] || "";
+      $(".error-text", node).textContent = (extras.error || {})[id] || "";
       const r = (extras.range || {})[id];
       $(".range-note", node).textContent = r ? `open range N${r.start_line}–N${r.end_line} (${r.method}${r.suppressed ? ", suppressed" : ""}): POS ${r.pos} mm, POS_LIMIT ${r.pos_limit} mm` : "no range open";
     }
@@ -317,6 +321,9 @@
     ctx.strokeStyle = "#c62828"; ctx.lineWidth = 2;
     line(ctx, h.map((s) => [s[0], s[1][zi]]), ([t, z]) => [X(t), Y(z)]);
     ctx.lineWidth = 1;
+    const phase = values[`GEO.ch${ch.id}.${ch.axes[zi]}.lift_phase`];
+    ctx.fillStyle = "#333"; ctx.font = "12px sans-serif";
+    ctx.fillText(`${ch.axes[zi]} ${((h[h.length - 1][1][zi]) || 0).toFixed(2)} mm, lift phase: ${phase == null ? "—" : PHASES[phase] || phase}`, pad + 6, pad + 14);
   }
 
   let drawn = 0;
