@@ -37,8 +37,9 @@ def main() -> None:
                 page.click(".control .auth button")
                 page.wait_for_selector(".control:not(.locked)")
                 time.sleep(15)  # a whole run of the demo in the trail and the Z plot
-                page.wait_for_selector('[data-symbol="GEO.ch1.Z.lift_phase"][data-value="1"]',
-                                       timeout=30000)  # Z rising: a range open
+                page.wait_for_selector(
+                    '[data-symbol="GEO.ch1.Z.lift_phase"][data-value="1"]', timeout=30000
+                )  # Z rising: a range open
                 page.wait_for_timeout(60)
                 page.screenshot(path=str(out), full_page=True)
         finally:
