@@ -20,6 +20,7 @@ import aiohttp
 import pytest
 
 from tests.support.daemon import Daemon, write_config
+from tests.support.paths import REPO
 from tests.support.replay import WRITES, first_difference, simulate_logged_writes
 from tests.support.ui import QUIET_RT, never_reading, open_page, run, ui_daemon, ui_url
 
@@ -294,3 +295,39 @@ def test_simulate_view_serves_the_runs_trace(tmp_path: Path) -> None:
     finally:
         proc.terminate()
         assert proc.wait(10) == 0
+
+
+def test_liftd_view_of_two_channels_and_a_sibling_left_out(tmp_path: Path) -> None:
+    """OUT.csv and OUT.ch2.csv of the two-head machine: both channels' symbols; without the
+    sibling, channel 2's are null and channel 1 still plays."""
+    config = str(REPO / "config" / "liftd-2ch.toml")
+    head1 = str(REPO / "config" / "programs" / "two-head" / "head1.nc")
+    trace = tmp_path / "t.csv"
+    subprocess.run([sys.executable, "-m", "liftd", "simulate", head1, "-c", config, "--trace",
+                    str(trace)], check=True, capture_output=True, timeout=120)  # fmt: skip
+    for sibling in (True, False):
+        if not sibling:
+            (tmp_path / "t.ch2.csv").unlink()
+        proc = subprocess.Popen([sys.executable, "-m", "liftd", "view", str(trace), "-c", config,
+                                 "--port", "0"], stdout=subprocess.PIPE, text=True)  # fmt: skip
+        try:
+            assert proc.stdout is not None
+            found = re.search(r"http://\S+/", proc.stdout.readline())
+            assert found is not None
+
+            async def go(url: str, sibling: bool = sibling) -> None:
+                page = await open_page(url)
+                assert [c["id"] for c in page.hello["channels"]] == [1, 2]
+                await page.send({"op": "seek", "t": 6.0})
+                await page.reply("trace")
+                while page.values.get("GEO.cycle") != 6000:
+                    await page.receive()
+                assert isinstance(page.values["GEO.ch1.X.command_position"], int)
+                w = page.values["GEO.ch2.W.command_position"]
+                assert isinstance(w, int) if sibling else w is None
+                await page.close()
+
+            run(go(found.group(0)))
+        finally:
+            proc.terminate()
+            proc.wait(10)

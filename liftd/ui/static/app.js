@@ -211,13 +211,17 @@
     let m;
     try { m = JSON.parse(ev.data); } catch (e) { return; }
     if (m.op === "hello") {
+      // again after a seek or when this page fell behind: the same page, new values
+      const same = hello && hello.mode === m.mode &&
+        JSON.stringify([hello.objects, hello.channels, hello.control]) === JSON.stringify([m.objects, m.channels, m.control]);
       hello = m; mode = m.mode; missing = new Set(m.missing || []);
       $("#mode").textContent = mode === "trace" ? "trace replay" : "GEO task, live";
       const c = m.control || {};
       $("#control-state").textContent = c.enabled ? "control: token" : `read only`;
       $("#control-state").title = c.detail || "";
       values = {}; history = m.state.history || []; extras = {};
-      build();
+      if (!same) build();
+      $("#events").textContent = "";
       applyValues(m.state.values);
       for (const sym in objects) if (!(sym in m.state.values)) show(sym);
       applyExtras(m.state.x);
