@@ -288,13 +288,17 @@ class UiServer:
             session.detach(page.wake)
 
     async def _send(self, ws: web.WebSocketResponse, request: web.Request, text: str) -> None:
+        """Send, or end this page's sender: a page gone (closed) quietly, a page that does not
+        take what it is sent within SEND_TIMEOUT_S with a reset and a log line."""
         try:
             await asyncio.wait_for(ws.send_str(text), SEND_TIMEOUT_S)
-        except (TimeoutError, ConnectionError, RuntimeError):
+        except TimeoutError:
             self.log.warning("ui.page_dropped", peer=page_peer(request),
                              detail="the page does not take its updates")  # fmt: skip
             if request.transport is not None:
                 request.transport.abort()
+            raise asyncio.CancelledError from None
+        except (ConnectionError, RuntimeError):  # closed meanwhile
             raise asyncio.CancelledError from None
 
     # -- messages ---------------------------------------------------------------------------------
@@ -378,4 +382,6 @@ class UiServer:
 
 
 def page_peer(request: web.Request) -> str:
-    return request.remote or "?"
+    """The page's address and port (its connection, as the ADS log names a peer)."""
+    peer = request.transport.get_extra_info("peername") if request.transport else None
+    return f"{peer[0]}:{peer[1]}" if peer else request.remote or "?"
