@@ -3,7 +3,7 @@
 #   docker build --build-arg EXTRAS=cluster -t liftd-worker .
 #   docker run --rm --network host --entrypoint dask liftd-worker worker tcp://SCHEDULER:8786 --nthreads 1
 # Run (README "Docker"):
-#   docker run --rm --init -p 127.0.0.1:48898:48898 \
+#   docker run --rm --init -p 127.0.0.1:48898:48898 -p 127.0.0.1:8551:8551 \
 #     --ulimit rtprio=80 --ulimit memlock=-1 --cap-drop=ALL --security-opt no-new-privileges \
 #     --read-only --tmpfs /tmp -v "$PWD/myconfig:/etc/liftd:ro" liftd
 # The host kernel decides real-time latency; the flags above only let the GEO loop ask for
@@ -65,7 +65,7 @@ RUN useradd --system --uid 10001 --no-create-home --shell /usr/sbin/nologin lift
  && mkdir -p /var/lib/liftd && chown liftd:liftd /var/lib/liftd
 USER 10001
 WORKDIR /var/lib/liftd
-EXPOSE 48898
+EXPOSE 48898 8551
 STOPSIGNAL SIGTERM
 # The daemon renews $LIFTD_HEARTBEAT every second while its GEO loop cycles (the condition of
 # systemd's WATCHDOG=1); healthy = renewed within 5 s. No Python start-up every 10 s;

@@ -93,6 +93,11 @@ class AdsConnection(asyncio.Protocol):
         self.identified = False  # has sent a valid frame (or registered a port)
         self.opened_at = time.monotonic()
         self.ip = "?"
+        # read-only figures for the live view (AdsServer.peers): requests answered,
+        # notifications sent, the source NetId of its last request
+        self.requests = 0
+        self.notifications = 0
+        self.source = b""
 
     # -- asyncio.Protocol -------------------------------------------------------------------------
     def connection_made(self, base: asyncio.BaseTransport) -> None:
@@ -316,6 +321,8 @@ class AdsConnection(asyncio.Protocol):
         if no_reply:
             return  # a stray response or a notification: nothing to answer
         srv.counters.requests += 1
+        self.requests += 1
+        self.source = header.source_net_id
         if header.target_net_id not in cfg.net_ids:
             self.reply(header, b"", AmsError.TARGET_MACHINE_NOT_FOUND)
         elif header.target_port == SYSTEM_SERVICE_PORT and cfg.system_service:
@@ -375,6 +382,7 @@ class AdsConnection(asyncio.Protocol):
                                 0, 0, 0)  # fmt: skip
         self.send(wire.encode_frame(header, out.payload))
         self.server.counters.notifications_sent += 1
+        self.notifications += 1
 
 
 @dataclass
@@ -464,6 +472,11 @@ class AdsServer:
             self.counters.over_budget += 1
             worst.close_for("ads.over_budget", f"{held[worst]} bytes held of "
                             f"{sum(held.values())} (budget_bytes {limit})")  # fmt: skip
+
+    def peers(self) -> list[tuple[str, str, int, int]]:
+        """(peer, source NetId, requests, notifications) of each open connection (read only)."""
+        return sorted((c.peer, wire.net_id_text(c.source) if c.source else "", c.requests,
+                       c.notifications) for c in self.connections)  # fmt: skip
 
     def ip_allowed(self, host: str) -> bool:
         if not self.config.allow_ips:

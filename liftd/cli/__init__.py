@@ -17,6 +17,7 @@ from liftd.cli.common import EXIT_CONFIG, EXIT_SIGPIPE, EXIT_UNHEALTHY
 from liftd.cli.service import cmd_healthcheck, cmd_objects, cmd_plc, cmd_reload, cmd_run
 from liftd.cli.simulate import cmd_simulate
 from liftd.cli.study import cmd_study
+from liftd.cli.view import cmd_view
 from liftd.runtime.core import core_build
 from liftd.settings import ConfigError
 
@@ -125,6 +126,11 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--plot", metavar="OUT.png", help="write a figure of the run")
     sim.add_argument("--json", action="store_true", help="print the JSON summary on stdout")
     sim.add_argument(
+        "--view", action="store_true",
+        help="then serve the run's trace in the browser (liftd view; a temporary trace "
+        "without --trace)",
+    )  # fmt: skip
+    sim.add_argument(
         "--compare",
         action="store_true",
         help="run Advanced Lifting and path-based Lifting on the same program and schedule; "
@@ -139,6 +145,17 @@ def build_parser() -> argparse.ArgumentParser:
         help="stop after S simulated seconds (default 3600)",
     )
     sim.set_defaults(func=cmd_simulate)
+
+    view = sub.add_parser(
+        "view", help="the live view's page over a recorded trace (simulate/run --trace)"
+    )
+    view.add_argument("trace", metavar="TRACE.csv", help="trace; OUT.chN.csv siblings too")
+    view.add_argument("-c", "--config", help="liftd.toml (the channels, axes and programs)")
+    view.add_argument("--program", help="NC program drawn (default: the configured one)")
+    view.add_argument("--host", help="listen address (default: [ui] host, 127.0.0.1)")
+    view.add_argument("--port", type=int, help="TCP port (default: [ui] port, 8551; 0 = any)")
+    view.add_argument("--duration", type=float, metavar="S", help=argparse.SUPPRESS)
+    view.set_defaults(func=cmd_view)
 
     st = sub.add_parser(
         "study",

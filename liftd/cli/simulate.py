@@ -6,6 +6,8 @@ import argparse
 import contextlib
 import json
 import sys
+import tempfile
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, TextIO
 
@@ -26,6 +28,28 @@ from liftd.cli.common import (
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
+    """simulate, then with --view its trace in the browser (a temporary one without --trace)."""
+    if not getattr(args, "view", False):
+        return _cmd_simulate(args)
+    if args.compare:
+        print("liftd simulate: --view shows one run; drop --compare", file=sys.stderr)
+        return EXIT_CONFIG
+    from liftd.cli.view import serve_trace  # noqa: PLC0415
+
+    with tempfile.TemporaryDirectory(prefix="liftd-view-") as tmp:
+        if not args.trace:
+            args.trace = str(Path(tmp) / "trace.csv")
+        code = _cmd_simulate(args)
+        if code not in (EXIT_OK, EXIT_PROGRAM):
+            return code
+        settings = load_config(args)
+        program = Path(args.program)
+        text = program.read_text(encoding="utf-8", errors="replace")
+        view = serve_trace(with_program(settings, program, text), args.trace, None, None)
+        return code if view == EXIT_OK else view
+
+
+def _cmd_simulate(args: argparse.Namespace) -> int:
     from liftd.sim import plot  # noqa: PLC0415
 
     schedule = schedule_of(args)

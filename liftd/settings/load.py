@@ -14,6 +14,7 @@ from liftd.settings.cnc_lists import ChannelLists, read_channel_lists, startup_c
 from liftd.settings.config_file import ConfigError, find_config, parse_config_text, toml_line
 from liftd.settings.isg_list import Problem, Severity
 from liftd.settings.model import AdsSection, ChannelSection, LiftdConfig
+from liftd.settings.ui import ui_token
 
 
 @dataclass(frozen=True, slots=True)
@@ -43,6 +44,10 @@ class Settings:
     subroutine_dirs: tuple[Path, ...] = ()  # [nc] subroutine_dirs, resolved
     channels: tuple[ChannelSettings, ...] = ()  # empty: only `channel`
     primary: int = 0  # index of `channel` in `channels`
+    ui_token: str | None = None  # [ui] token or the content of [ui] token_file
+
+    def __repr__(self) -> str:  # the token stays out of tracebacks and logs
+        return f"Settings(path={self.path!r})"
 
     @property
     def machine(self) -> tuple[ChannelSettings, ...]:
@@ -107,6 +112,7 @@ def load_settings(explicit: str | None = None, program: str | None = None) -> Se
     problems += more
     where = _Where(str(path), text, problems)
     _ads_budgets(config.ads, where)
+    token = ui_token(config.ui, base, str(path), text, problems)
     if lists is not None:
         names = [ax.name for ax in lists.axes]
         if config.cnc.lift_axis not in names:
@@ -161,6 +167,7 @@ def load_settings(explicit: str | None = None, program: str | None = None) -> Se
         subroutine_dirs=tuple(base / d for d in nc.subroutine_dirs),
         channels=tuple(machine),
         primary=[c.params.channel_id for c in machine].index(channel.channel_id),
+        ui_token=token,
     )
 
 

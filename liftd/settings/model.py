@@ -165,6 +165,26 @@ class LogSection(_Section):
     queue_lines: int = Field(10_000, ge=100, le=1_000_000)
 
 
+class UiSection(_Section):
+    """The live view in the browser (liftd/ui/, README "Watching liftd live"): off unless asked
+    (the shipped liftd.toml asks, on loopback). Control from the page needs `control = true`,
+    a token (`token`, or `token_file` relative to liftd.toml: one of them) and a peer that
+    `[ads] allow_ips` admits."""
+
+    enabled: StrictBool = False
+    host: str = "127.0.0.1"
+    port: int = Field(8551, ge=0, le=65535)  # 0 = any free port (the real one is logged)
+    control: StrictBool = False
+    token: str | None = Field(None, min_length=16, max_length=256, pattern=r"^[!-~]+$")
+    token_file: str | None = Field(None, min_length=1)
+    # Host header names the page answers to besides IP literals and localhost (a name that
+    # resolves to this machine only through an attacker's DNS, "DNS rebinding", is refused)
+    hosts: tuple[str, ...] = ()
+    max_connections: int = Field(16, ge=1, le=1000)  # open WebSockets; beyond: HTTP 503
+    max_message_bytes: int = Field(4096, ge=256, le=1 << 20)  # a page's message; beyond: close
+    rate_hz: int = Field(50, ge=1, le=50)  # updates a second to each page
+
+
 class MetricsSection(_Section):
     prometheus_port: int = Field(0, ge=0, le=65535)  # 0 = off
     prometheus_host: str = "127.0.0.1"
@@ -203,5 +223,6 @@ class LiftdConfig(_Section):
     rt: RtSection = RtSection()
     log: LogSection = LogSection()
     metrics: MetricsSection = MetricsSection()
+    ui: UiSection = UiSection()
     nc: NcSection = NcSection()
     channel: tuple[ChannelSection, ...] = ()  # [[channel]] tables
