@@ -315,7 +315,7 @@ class UiServer:
     def _message(self, page: _Page, session: Session, text: str) -> dict[str, Any] | None:
         try:
             msg = json.loads(text)
-        except ValueError:
+        except (ValueError, RecursionError):  # RecursionError: ~1 000 brackets fit in 4 KiB
             msg = None
         if not isinstance(msg, dict) or not isinstance(msg.get("op"), str):
             return self._bad(page, "a message is a JSON object with an op")
