@@ -1,7 +1,7 @@
 """Sum commands (ReadWrite to 0xF080…0xF086, IO = number of sub-commands n): split the
 container, run each sub-command through the callables the service passes, join the answers.
 Pure. A malformed container raises AdsError(0x705); a failing sub-command only sets its own
-result (reference/ads.md §3).
+result (docs/reference/ads.md §3).
 
 Layouts (write data → read data), sources in brackets:
 

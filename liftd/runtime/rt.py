@@ -1,7 +1,7 @@
 """Best-effort real-time settings of the GEO loop process, and its absolute-deadline sleep.
 
 Each setting is tried once at start-up and reported (ok or why not); none is required, so the
-loop also runs on a laptop or in CI (reference/rt-python.md §0, §3): SCHED_FIFO, CPU affinity,
+loop also runs on a laptop or in CI (docs/reference/rt-python.md §0, §3): SCHED_FIFO, CPU affinity,
 mlockall (after the heap is trimmed), timer slack 1 ns, /dev/cpu_dma_latency held at 0 (the
 largest single gain measured on this VM); and PR_SET_PDEATHSIG so a dead daemon never leaves a
 FIFO process spinning.

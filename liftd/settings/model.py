@@ -1,7 +1,7 @@
 """liftd.toml as frozen pydantic models (`extra="forbid"`, bounded fields).
 
-The keys of DESIGN.md §3.4 are a contract; every other key has a default. Units that are not
-SI are in the key name (`cycle_time_us`, `m_ack_delay_ms`).
+The keys of docs/reference/design.md §3.4 are a contract; every other key has a default. Units that
+are not SI are in the key name (`cycle_time_us`, `m_ack_delay_ms`).
 """
 
 from __future__ import annotations

@@ -4,7 +4,8 @@ of Advanced Lifting. Path-based Lifting plugs in through the same interface: a r
 z(s) plan from path preparation is *coupled* (Z follows the path position, `couple()`), every
 other range runs the time-based generator (`step()`).
 
-Rules (vendor text §2.1, §2.5, §2.6; DESIGN.md §4), with liftd's choices where it is silent:
+Rules (vendor text §2.1, §2.5, §2.6; docs/reference/design.md §4), with liftd's choices where it is
+silent:
 
 * lift_active is TRUE from the LIFT_START point until Z is at POS at LIFT_END; a suppressed lift
   (path shorter than lift_min_dist) sets lift_suppressed, and also lift_active when POS differs
