@@ -59,11 +59,13 @@ def _citations() -> list[tuple[str, int, str, bool]]:
         text = path.read_text(encoding="utf-8", errors="replace")
         for lineno, line in enumerate(text.splitlines(), 1):
             for m in OUTSIDE.finditer(line):
-                # the notes in docs/reference/ cite each other by name: a sibling file
-                sibling = "/" not in m.group(0) and (path.parent / m.group(0)).is_file()
-                found.append(
-                    (rel, lineno, m.group(0), sibling and rel.startswith("docs/reference/"))
-                )
+                # the manual's pages name each other relative to themselves (mkdocs.yml: to
+                # docs/), as the notes in docs/reference/ do by name: held when that file is
+                base = REPO / "docs" if rel == "mkdocs.yml" else path.parent
+                relative = rel == "mkdocs.yml" or rel.startswith("docs/")
+                target = (base / m.group(0)).resolve()
+                held = relative and target.is_file() and target.is_relative_to(REPO)
+                found.append((rel, lineno, m.group(0), held))
             for m in DOCS_PATH.finditer(line):
                 ok = _exists(m.group(0)) or (rel, m.group(0)) in FOREIGN
                 found.append((rel, lineno, m.group(0), ok))
