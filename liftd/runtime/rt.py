@@ -42,7 +42,7 @@ def spin_until(deadline_ns: int) -> None:
     """Busy-wait until the deadline (perf_counter_ns is CLOCK_MONOTONIC): the CPU never goes
     idle between cycles. On this VM an idle vCPU comes back with cold caches: a compiled
     GEO step took 16.6 µs p50 / 67 µs p99 after a 1 ms sleep, 6.3 / 46 µs after a 1 ms spin
-    and 4.7 / 18.5 µs back to back (README "Running it as a service")."""
+    and 4.7 / 18.5 µs back to back (docs/service.md, "Running it as a service")."""
     now = time.perf_counter_ns
     while now() < deadline_ns:
         pass

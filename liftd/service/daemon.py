@@ -189,7 +189,7 @@ class Daemon:
 
     def _keep_off_geo_cpu(self) -> None:
         """A loop that spins on its cpu owns it: the daemon's threads go to the others (the GEO
-        process has pinned itself already; README "Running it as a service")."""
+        process has pinned itself already; docs/service.md)."""
         rt = self.settings.config.rt
         if rt.idle != "spin" or rt.cpu < 0:
             return
