@@ -12,7 +12,7 @@ NODE_STAMP := $(NODE_DIR)/node_modules/.installed
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[dev,plot,cluster]'
+	$(BIN)/python -m pip install --quiet -e '.[dev,plot,cluster,docs]'
 	touch $(STAMP)
 
 # The GEO cycle's modules, simulate's per-cycle part and the GEO loop compiled with mypyc
@@ -56,6 +56,7 @@ test: $(STAMP) $(CORE_STAMP) tools
 	$(BIN)/ruff check liftd tests bench
 	$(BIN)/ruff format --check liftd tests bench
 	$(BIN)/mypy liftd
+	$(BIN)/mkdocs build --strict --quiet --site-dir build/site
 	$(BIN)/python -m pytest -q
 
 bench: $(STAMP)
