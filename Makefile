@@ -57,7 +57,8 @@ test: $(STAMP) $(CORE_STAMP) tools
 	$(BIN)/ruff format --check liftd tests bench
 	$(BIN)/mypy liftd
 	$(BIN)/mkdocs build --strict --quiet --site-dir build/site
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n 2 --dist loadfile -m 'not timing'
+	$(BIN)/python -m pytest -q -m timing
 
 bench: $(STAMP)
 	for f in bench/bench_*.py; do $(BIN)/python $$f || exit 1; done

@@ -18,7 +18,8 @@ from liftd.ads.wire import net_id_bytes
 from tests.support.ads_harness import Harness
 from tests.support.channel import make_channel
 
-pytestmark = pytest.mark.integration
+# wall-clock latencies asserted: run alone, after the parallel part of `make test`
+pytestmark = [pytest.mark.integration, pytest.mark.timing]
 LIFT = struct.pack("<III", 0x121301, 0x30095, 1)
 
 

@@ -15,7 +15,8 @@ from liftd.runtime.geo_process import rss_mb
 from tests.support.attacks import ATTACK_ADS, CASES, Case, probe_ms
 from tests.support.daemon import Daemon, write_config
 
-pytestmark = pytest.mark.integration
+# wall-clock latencies asserted: run alone, after the parallel part of `make test`
+pytestmark = [pytest.mark.integration, pytest.mark.timing]
 
 
 @pytest.fixture(scope="module")

@@ -20,7 +20,8 @@ import pytest
 from tests.support.daemon import Notify, write_config
 from tests.support.paths import REPO
 
-pytestmark = pytest.mark.integration
+# wall-clock latencies asserted: run alone, after the parallel part of `make test`
+pytestmark = [pytest.mark.integration, pytest.mark.timing]
 
 
 def free_port() -> int:

@@ -18,7 +18,8 @@ import pytest
 from tests.support.daemon import Daemon, write_config
 from tests.support.wait import wait_for
 
-pytestmark = pytest.mark.integration
+# wall-clock latencies asserted: run alone, after the parallel part of `make test`
+pytestmark = [pytest.mark.integration, pytest.mark.timing]
 
 TWO_LIFTS = """%two
 N10 G90 G17 G94

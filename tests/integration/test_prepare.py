@@ -21,7 +21,8 @@ from liftd.runtime.geo_loop import INPUTS_PER_CYCLE
 from tests.support.daemon import Daemon, write_config
 from tests.support.wait import wait_for
 
-pytestmark = pytest.mark.integration
+# wall-clock latencies asserted: run alone, after the parallel part of `make test`
+pytestmark = [pytest.mark.integration, pytest.mark.timing]
 
 
 def cpu_us(rec: dict[str, object]) -> int:

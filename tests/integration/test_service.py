@@ -26,7 +26,8 @@ from tests.support.daemon import Daemon, Notify, free_port, runtime_env, write_c
 from tests.support.paths import REPO
 from tests.support.wait import wait_for
 
-pytestmark = pytest.mark.integration
+# wall-clock latencies asserted: run alone, after the parallel part of `make test`
+pytestmark = [pytest.mark.integration, pytest.mark.timing]
 SHIPPED = REPO / "config"
 OPTIONAL_SECTIONS = ("program", "ads", "plc", "rt", "log", "metrics")
 

@@ -23,7 +23,8 @@ from tests.support.daemon import Daemon
 from tests.support.paths import REPO
 from tests.support.ui import ui_daemon, ui_url
 
-pytestmark = pytest.mark.integration
+# wall-clock latencies asserted: run alone, after the parallel part of `make test`
+pytestmark = [pytest.mark.integration, pytest.mark.timing]
 TOKEN = "browser-test-token-0123"
 LIFT = "GEO.ch1.Z.lift_active"
 
