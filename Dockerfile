@@ -55,7 +55,7 @@ ENV PATH=/opt/liftd/bin:$PATH \
     LIFTD_HEARTBEAT=/tmp/liftd.heartbeat
 COPY --from=build /opt/liftd /opt/liftd
 COPY README.md /usr/share/doc/liftd/README.md
-COPY docs/architecture.md /usr/share/doc/liftd/architecture.md
+COPY docs/*.md /usr/share/doc/liftd/
 # The shipped lists and demo, with a configuration that listens on the container's addresses
 # and accepts private peer ranges (docker/liftd.toml). No VOLUME: mount your own /etc/liftd
 # (read-only) to replace it; an anonymous volume would hide the shipped one on every run.
