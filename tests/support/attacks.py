@@ -18,7 +18,7 @@ from liftd.ads.client import RawClient
 from liftd.ads.wire import net_id_bytes
 from tests.support.daemon import Daemon
 
-ATTACK_ADS = {
+ATTACK_ADS: dict[str, float] = {
     "max_connections": 64,
     "max_connections_per_ip": 64,
     "max_frame_bytes": 65536,
@@ -134,7 +134,7 @@ def notifications_beyond_cap(d: Daemon) -> str:
     spec = struct.pack("<IIIIII16s", 0x121301, 0x30095, 1, 4, 0, 100_000, bytes(16))
     codes = [
         wire.decode_add_notification_response(c.request(6, spec).payload)[0]
-        for _ in range(ATTACK_ADS["max_notifications_per_connection"] + 1)
+        for _ in range(int(ATTACK_ADS["max_notifications_per_connection"]) + 1)
     ]
     c.close()
     return f"{codes.count(0)} ok, then ADS 0x{codes[-1]:X}"
@@ -142,7 +142,7 @@ def notifications_beyond_cap(d: Daemon) -> str:
 
 def sum_beyond_cap(d: Daemon) -> str:
     c = client(d)
-    n = ATTACK_ADS["max_sum_subcommands"] + 1
+    n = int(ATTACK_ADS["max_sum_subcommands"]) + 1
     body = LIFT * n
     req = struct.pack("<IIII", 0xF080, n, 5 * n, len(body)) + body
     outcome = error_of(c.request(9, req))
@@ -189,7 +189,7 @@ def upload_notifications_unread(d: Daemon) -> str:
     c = client(d, rcvbuf=4096)
     _, info = c.read(0xF00C, 0, 8)
     size = struct.unpack("<II", info)[1]
-    n = ATTACK_ADS["max_notifications_per_connection"]
+    n = int(ATTACK_ADS["max_notifications_per_connection"])
     entry = struct.pack("<IIIIII16s", 0xF00B, 0, 0xFFFFFFFF, 3, 0, 10_000, bytes(16))
     reply = c.request(9, struct.pack("<IIII", 0xF085, n, 8 * n, 40 * n) + entry * n)
     code, data = wire.decode_read_response(reply.payload)

@@ -1,4 +1,4 @@
-"""Headless Chromium for the live view's tests: Debian's `chromium` (make tools installs it)
+"""Headless Chromium for the live view's tests: Debian's `chromium` (`.ci/run` installs it)
 driven by Playwright with `executable_path`; no browser is downloaded. Skips with the reason
 where either is missing."""
 
@@ -28,7 +28,7 @@ def chromium_version() -> str:
 def browser() -> Iterator[Any]:
     """A Playwright Chromium browser on a fresh user-data dir."""
     if shutil.which(CHROMIUM) is None:
-        pytest.skip(f"no {CHROMIUM}: `make tools` installs Debian's chromium as root")
+        pytest.skip(f"no {CHROMIUM}: `.ci/run` installs Debian's chromium (as root)")
     sync_api = pytest.importorskip("playwright.sync_api", reason="pip install playwright")
     with tempfile.TemporaryDirectory(prefix="liftd-chromium-") as profile, \
             sync_api.sync_playwright() as p:  # fmt: skip
