@@ -138,9 +138,18 @@ def main() -> None:
             runs += 1
             if problems:
                 failures.append({"seed": seed, **problems})
-        print(json.dumps({"bench": "nc_error_in_a_range", "method": method.value, "runs": runs,
-                          "failed_runs": len(failures), "first_failures": failures[:5],
-                          "seconds": round(time.perf_counter() - t0, 1)}))  # fmt: skip
+        print(
+            json.dumps(
+                {
+                    "bench": "nc_error_in_a_range",
+                    "method": method.value,
+                    "runs": runs,
+                    "failed_runs": len(failures),
+                    "first_failures": failures[:5],
+                    "seconds": round(time.perf_counter() - t0, 1),
+                }
+            )
+        )
         return
     runs, failures, waits = 0, [], []
     for seed in range(args.first_seed, args.first_seed + args.runs):
@@ -149,16 +158,31 @@ def main() -> None:
             continue
         runs += 1
         t_reset, t_ready, last, ratio = got
-        if (t_ready is None or last.lift_active or last.lift_suppressed or last.lift_phase != 0
-                or ratio > 1.0 + 1e-6):  # fmt: skip
-            failures.append({"seed": seed, "t_reset": t_reset, "state": last.state.name,
-                             "z_limit_ratio": ratio})  # fmt: skip
+        if (
+            t_ready is None
+            or last.lift_active
+            or last.lift_suppressed
+            or last.lift_phase != 0
+            or ratio > 1.0 + 1e-6
+        ):
+            failures.append(
+                {"seed": seed, "t_reset": t_reset, "state": last.state.name, "z_limit_ratio": ratio}
+            )
         else:
             waits.append(t_ready - t_reset)
-    print(json.dumps({"bench": "reset_in_a_range", "method": method.value, "runs": runs,
-                      "failed_runs": len(failures), "first_failures": failures[:5],
-                      "max_wait_s": round(max(waits, default=0.0), 4),
-                      "seconds": round(time.perf_counter() - t0, 1)}))  # fmt: skip
+    print(
+        json.dumps(
+            {
+                "bench": "reset_in_a_range",
+                "method": method.value,
+                "runs": runs,
+                "failed_runs": len(failures),
+                "first_failures": failures[:5],
+                "max_wait_s": round(max(waits, default=0.0), 4),
+                "seconds": round(time.perf_counter() - t0, 1),
+            }
+        )
+    )
 
 
 if __name__ == "__main__":

@@ -87,10 +87,31 @@ class GeoSnapshot(NamedTuple):
 
 # GeoSnapshot's fields in order, for `new_snapshot`
 SnapshotFields = tuple[
-    int, float, ChannelState, int, int, tuple[float, ...], float, float, float, float, bool,
-    bool, bool, LiftPhase, float, float, int, int, int, tuple[Event, ...], float, float, int,
+    int,
+    float,
+    ChannelState,
+    int,
+    int,
+    tuple[float, ...],
+    float,
+    float,
+    float,
+    float,
+    bool,
+    bool,
+    bool,
+    LiftPhase,
+    float,
+    float,
+    int,
+    int,
+    int,
+    tuple[Event, ...],
+    float,
+    float,
+    int,
     tuple[int, ...],
-]  # fmt: skip
+]
 
 # The cycle's constructors: tuple.__new__ in C. Calling the NamedTuple class runs its __new__,
 # a Python frame (~0.3 µs of every cycle in the compiled core).

@@ -28,8 +28,11 @@ from liftd.cnc.snapshot import (
     new_inputs,
 )
 
-_COMMANDS = {PlcSignal.START: Command.START, PlcSignal.STOP: Command.STOP,
-             PlcSignal.RESET: Command.RESET}  # fmt: skip
+_COMMANDS = {
+    PlcSignal.START: Command.START,
+    PlcSignal.STOP: Command.STOP,
+    PlcSignal.RESET: Command.RESET,
+}
 _NO_SCHEDULE = Schedule()
 _IDLE = GeoInputs()
 

@@ -88,10 +88,31 @@ class SnapshotCodec:
         pos = tuple(v[5 : 5 + n])
         r = v[5 + n :]
         snap = GeoSnapshot(
-            v[0], v[1], ChannelState(v[2]), v[3], v[4], pos, r[0], r[1], r[2], r[3], r[4],
-            r[5], r[6], LiftPhase(r[7]), r[8], r[9], r[10], r[11], r[12], (), r[13], r[14],
-            r[15], tuple(r[16 : 16 + n]),
-        )  # fmt: skip
+            v[0],
+            v[1],
+            ChannelState(v[2]),
+            v[3],
+            v[4],
+            pos,
+            r[0],
+            r[1],
+            r[2],
+            r[3],
+            r[4],
+            r[5],
+            r[6],
+            LiftPhase(r[7]),
+            r[8],
+            r[9],
+            r[10],
+            r[11],
+            r[12],
+            (),
+            r[13],
+            r[14],
+            r[15],
+            tuple(r[16 : 16 + n]),
+        )
         return snap
 
 

@@ -63,8 +63,11 @@ def test_a_start_after_reset_waits_for_its_run_built_off_the_cycle(tmp_path: Pat
         assert prepared < restart  # the START waited for its run
         rec = logs[prepared]
         assert rec["value"] > 0.0 and str(rec["text"]).startswith("run from ")
-        start = next(r for r in logs[reset:] if r.get("event") == "geo.plc_input"
-                     and r.get("text") == "start")  # fmt: skip
+        start = next(
+            r
+            for r in logs[reset:]
+            if r.get("event") == "geo.plc_input" and r.get("text") == "start"
+        )
         assert start["t"] < rec["t"]  # read while the run was still being built: held
         slow = [r for r in logs[reset:] if r.get("event") == "geo.compute_over"]
         starts = [r for r in slow if "geo.program_start" in kinds(r) or "reload" in kinds(r)]
@@ -103,8 +106,11 @@ def test_a_burst_of_plc_writes_is_read_a_bounded_number_a_cycle(tmp_path: Path) 
             plc.close()
 
         def writes_logged() -> list[dict[str, object]]:
-            return [r for r in list(d.logs) if r.get("event") == "geo.plc_input"
-                    and r.get("text") == "override"]  # fmt: skip
+            return [
+                r
+                for r in list(d.logs)
+                if r.get("event") == "geo.plc_input" and r.get("text") == "override"
+            ]
 
         assert wait_for(lambda: len(writes_logged()) >= n, 10)  # the log trails the objects
         writes = writes_logged()

@@ -237,8 +237,9 @@ def plc_command_flood(d: Daemon) -> str:
         heads += struct.pack("<III", *_address(c, name), 1)
         data += b"\x01"
     for _ in range(200):
-        reply = c.request(9, struct.pack("<IIII", 0xF081, 256, 4 * 256, len(heads + data))
-                          + heads + data)  # fmt: skip
+        reply = c.request(
+            9, struct.pack("<IIII", 0xF081, 256, 4 * 256, len(heads + data)) + heads + data
+        )
         code, results = wire.decode_read_response(reply.payload)
         codes.add(code)
         codes.update(struct.unpack("<256I", results))
@@ -291,16 +292,26 @@ CASES = [
         foreign_addresses,
         "NetId AMS 0x7, port AMS 0x6, command AMS 0x8",
     ),
-    Case("sum read of one sub-command asking 2 GiB", sum_read_gigabytes(0xF080, 2 << 30),
-         "ADS 0x70A"),
-    Case("sum read-ex of one sub-command asking 4 GiB",
-         sum_read_gigabytes(0xF083, 0xFFFFFFF0), "ADS 0x70A"),
-    Case("notification sum on the symbol upload, client stops reading",
-         upload_notifications_unread, "closed"),
-    Case("60 kB frames routed to a registered port that does not read",
-         routed_to_a_reader_that_stalls, "receiver closed, sender served: ok"),
+    Case(
+        "sum read of one sub-command asking 2 GiB", sum_read_gigabytes(0xF080, 2 << 30), "ADS 0x70A"
+    ),
+    Case(
+        "sum read-ex of one sub-command asking 4 GiB",
+        sum_read_gigabytes(0xF083, 0xFFFFFFF0),
+        "ADS 0x70A",
+    ),
+    Case(
+        "notification sum on the symbol upload, client stops reading",
+        upload_notifications_unread,
+        "closed",
+    ),
+    Case(
+        "60 kB frames routed to a registered port that does not read",
+        routed_to_a_reader_that_stalls,
+        "receiver closed, sender served: ok",
+    ),
     Case("200 sum writes of 128 × (RESET, START)", plc_command_flood, "answered ok, 0x708"),
-]  # fmt: skip
+]
 
 
 def probe_ms(d: Daemon, n: int = 200) -> float:

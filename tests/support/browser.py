@@ -14,13 +14,22 @@ from typing import Any
 import pytest
 
 CHROMIUM = "/usr/bin/chromium"
-FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-         "--disable-background-networking", "--disable-component-update", "--disable-sync"]  # fmt: skip
+FLAGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+]
 
 
 def chromium_version() -> str:
-    out = subprocess.run([CHROMIUM, "--version"], capture_output=True, text=True, timeout=30,
-                         check=False)  # fmt: skip
+    out = subprocess.run(
+        [CHROMIUM, "--version"], capture_output=True, text=True, timeout=30, check=False
+    )
     return out.stdout.strip()
 
 
@@ -30,12 +39,17 @@ def browser() -> Iterator[Any]:
     if shutil.which(CHROMIUM) is None:
         pytest.skip(f"no {CHROMIUM}: `.ci/run` installs Debian's chromium (as root)")
     sync_api = pytest.importorskip("playwright.sync_api", reason="pip install playwright")
-    with tempfile.TemporaryDirectory(prefix="liftd-chromium-") as profile, \
-            sync_api.sync_playwright() as p:  # fmt: skip
+    with (
+        tempfile.TemporaryDirectory(prefix="liftd-chromium-") as profile,
+        sync_api.sync_playwright() as p,
+    ):
         ctx = p.chromium.launch_persistent_context(
-            profile, executable_path=CHROMIUM, headless=True, args=FLAGS,
+            profile,
+            executable_path=CHROMIUM,
+            headless=True,
+            args=FLAGS,
             viewport={"width": 1400, "height": 1000},
-        )  # fmt: skip
+        )
         try:
             yield ctx
         finally:

@@ -98,9 +98,15 @@ class LiftMotion:
         raise NotImplementedError
 
     def step(
-        self, t_new: float, s: float, v: float, a: float, t_rem: float, override: float,
+        self,
+        t_new: float,
+        s: float,
+        v: float,
+        a: float,
+        t_rem: float,
+        override: float,
         refine: Refine | None = None,
-    ) -> None:  # fmt: skip
+    ) -> None:
         """Move to t_new (`t_rem`: the path's remaining time to the horizon, time-based, or a
         lower bound of it that `refine()` makes exact when the decision needs it; s, v, a:
         the path's state, coupled; `override`: in effect)."""
@@ -152,9 +158,17 @@ def _run_on(u: float, push: float, a: float, j: float) -> float:
 class TimeBasedLift(LiftMotion):
     """Advanced Lifting's generator for one range (DESIGN.md §4, lift-algorithm.md §3)."""
 
-    def __init__(self, gen: AdvancedLift, guard: LiftGuard, rng: LiftRange,
-                 t: float, z: float, vz: float, az: float,
-                 rise: FirstRise | None = None) -> None:  # fmt: skip
+    def __init__(
+        self,
+        gen: AdvancedLift,
+        guard: LiftGuard,
+        rng: LiftRange,
+        t: float,
+        z: float,
+        vz: float,
+        az: float,
+        rise: FirstRise | None = None,
+    ) -> None:
         self.gen = gen
         self.guard = guard
         self.rng = rng
@@ -201,9 +215,15 @@ class TimeBasedLift(LiftMotion):
         return _PHASES[self.gen.phase]  # an enum call per cycle costs more than the step
 
     def step(
-        self, t_new: float, s: float, v: float, a: float, t_rem: float, override: float,
+        self,
+        t_new: float,
+        s: float,
+        v: float,
+        a: float,
+        t_rem: float,
+        override: float,
         refine: Refine | None = None,
-    ) -> None:  # fmt: skip
+    ) -> None:
         gen = self.gen
         was_down = gen.phase is DOWN
         gen.step(t_new, t_rem, refine)
@@ -324,8 +344,16 @@ class TimeBasedLift(LiftMotion):
 class CoupledLift(LiftMotion):
     """Path-based Lifting for one range: Z at z(s) of the path position."""
 
-    def __init__(self, plan: RangePlan, guard: LiftGuard, rng: LiftRange,
-                 t: float, z: float, vz: float, az: float) -> None:  # fmt: skip
+    def __init__(
+        self,
+        plan: RangePlan,
+        guard: LiftGuard,
+        rng: LiftRange,
+        t: float,
+        z: float,
+        vz: float,
+        az: float,
+    ) -> None:
         self.plan = plan
         self.guard = guard
         self.rng = rng
@@ -368,9 +396,15 @@ class CoupledLift(LiftMotion):
         return abs(self._z - self.rng.start.target) <= 1e-12 and self._vz == 0.0
 
     def step(
-        self, t_new: float, s: float, v: float, a: float, t_rem: float, override: float,
+        self,
+        t_new: float,
+        s: float,
+        v: float,
+        a: float,
+        t_rem: float,
+        override: float,
         refine: Refine | None = None,
-    ) -> None:  # fmt: skip
+    ) -> None:
         z, dz, ddz = self.plan.state(s)
         self._t, self._vz, self._az = t_new, dz * v, ddz * v * v + dz * a
         self._z, findings = self.guard.check(z, 0)

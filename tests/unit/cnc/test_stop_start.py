@@ -32,8 +32,9 @@ def _at(t: float | tuple[float, float], method: LiftMethod) -> float:
 
 @pytest.mark.parametrize("method", [LiftMethod.ADVANCED, LiftMethod.LIFTING])
 @pytest.mark.parametrize("held", [0.001, 0.27, 3.0])
-@pytest.mark.parametrize(("t_stop", "in_lift"), [(0.45, False), (5.6, True), (6.1, True),
-                                                 (LIFT_3, True)])  # fmt: skip
+@pytest.mark.parametrize(
+    ("t_stop", "in_lift"), [(0.45, False), (5.6, True), (6.1, True), (LIFT_3, True)]
+)
 def test_start_after_a_stop_goes_on_from_where_the_path_stopped(
     method: LiftMethod, held: float, t_stop: float | tuple[float, float], in_lift: bool
 ) -> None:
@@ -187,9 +188,10 @@ def test_a_reset_at_a_random_moment_of_a_wide_scenario_leaves_z_within_its_limit
     assert ratio <= 1.0 + 1e-6
 
 
-@pytest.mark.parametrize(("seed", "method"), [(591, LiftMethod.ADVANCED),
-                                              (15, LiftMethod.ADVANCED),
-                                              (844, LiftMethod.LIFTING)])  # fmt: skip
+@pytest.mark.parametrize(
+    ("seed", "method"),
+    [(591, LiftMethod.ADVANCED), (15, LiftMethod.ADVANCED), (844, LiftMethod.LIFTING)],
+)
 def test_an_nc_error_at_a_random_block_of_a_range_holds_z_at_its_limit_smoothly(
     seed: int, method: LiftMethod
 ) -> None:

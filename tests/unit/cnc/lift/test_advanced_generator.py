@@ -153,11 +153,14 @@ print(json.dumps({"calls": calls["n"], "fallbacks": gen.fallbacks, "z_max": floa
     assert res["fd_max"] <= 1 + 1e-9
 
 
-@pytest.mark.parametrize(("z0", "target", "limit", "down"), [
-    (0.001, 0.001, 0.05, False),  # rise and land where it started
-    (0.0, 0.02, 0.05, False),  # POS above the start
-    (0.04, 0.01, 0.0, True),  # a downward lift (mirrored coordinates)
-])  # fmt: skip
+@pytest.mark.parametrize(
+    ("z0", "target", "limit", "down"),
+    [
+        (0.001, 0.001, 0.05, False),  # rise and land where it started
+        (0.0, 0.02, 0.05, False),  # POS above the start
+        (0.04, 0.01, 0.0, True),  # a downward lift (mirrored coordinates)
+    ],
+)
 def test_a_prepared_first_rise_gives_the_cycle_the_same_set_points(
     z0: float, target: float, limit: float, down: bool
 ) -> None:
