@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from typing import Final
 
+from liftd.cnc import events
 from liftd.cnc.geo_program import GeoProgram
 from liftd.cnc.lift.controller import LiftController, LiftRecord
 from liftd.cnc.lift.ranges import LiftRange
@@ -93,7 +94,7 @@ class BoundaryActions:
         elif kind is ActionKind.LIFT_END:
             return self._lift_end(action, t_at, crossing, now)
         elif kind is ActionKind.M_OUTPUT:
-            self._emit("geo.m_output", t_at, action.line, float(action.m_number))
+            self._emit(events.M_OUTPUT, t_at, action.line, float(action.m_number))
             if action.sync in ACK_SYNCS:
                 self.m_pending = action.m_number
                 self.m_acked.discard(action.m_number)
@@ -104,7 +105,7 @@ class BoundaryActions:
             if crossing is None:
                 self.wait_since = max(self.wait_since, self.ack_time)
         elif kind is ActionKind.M00:
-            self._emit("geo.m00", t_at, action.line)
+            self._emit(events.M00, t_at, action.line)
             self.state = HOLD
             return False
         elif kind is ActionKind.DWELL:
@@ -161,7 +162,7 @@ class BoundaryActions:
         if rec is not None and crossing is not None:  # passing: the path leaves at once
             self._departure(rec, t_at, crossing)
         self._emit(
-            "lift.start",
+            events.LIFT_START,
             t_at,
             rng.start.line,
             rng.start.target,
@@ -225,7 +226,7 @@ class BoundaryActions:
             if rec is not None:
                 rec.arrival_error, rec.late = error, True
             text = f"Z {error * 1e3:.6f} mm from POS when the path passed LIFT_END"
-            self._emit("lift.late", t_at, action.line, error, text)
+            self._emit(events.LIFT_LATE, t_at, action.line, error, text)
             lift.ending = True
             return True
         self._close_lift(t_at, action.line)
@@ -258,4 +259,4 @@ class BoundaryActions:
             else:  # no path motion: all the time is the path waiting for Z
                 rec.path_delay = max(0.0, rec.t_end - rec.t_start - rec.waits)
             self.interp.nominal_stop()
-            self._emit("lift.end", rec.t_end, line, rec.peak)
+            self._emit(events.LIFT_END, rec.t_end, line, rec.peak)

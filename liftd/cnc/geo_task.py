@@ -17,13 +17,14 @@ from __future__ import annotations
 
 from typing import Final
 
+from liftd.cnc import events
 from liftd.cnc.geo_program import PreparedPrograms, same_start
 from liftd.cnc.lift.monitor import AccelMonitor
 from liftd.cnc.lift.profile import LiftProfiles, ProfileError
 from liftd.cnc.nc.blocks import ErrorId
 from liftd.cnc.params import ChannelParams
 from liftd.cnc.path.program import PathProgram
-from liftd.cnc.plc import MAX_OVERRIDE
+from liftd.cnc.plc import MAX_OVERRIDE, clamp_override
 from liftd.cnc.plc_commands import PlcCommands
 from liftd.cnc.runs import Runs, RunState
 from liftd.cnc.snapshot import (
@@ -162,10 +163,10 @@ class GeoTask(PlcCommands):
                 self.lift.error_in_range(t)  # Z rises to POS_LIMIT and stays (vendor §2.4)
             self.state = ERROR
             self.error_id, self.error_line = err.id, err.line
-            self._emit("geo.error", t, err.line, float(err.id), err.message)
+            self._emit(events.ERROR, t, err.line, float(err.id), err.message)
         else:
             self.state = READY
-            self._emit("geo.program_end", t, line)
+            self._emit(events.PROGRAM_END, t, line)
         self.waiting = []
 
     # -- helpers ----------------------------------------------------------------------------------
@@ -204,9 +205,9 @@ class GeoTask(PlcCommands):
         t0 = self.interp.t_state
         if verdict.path_waits:
             self.interp.add_lift_stop(k)
-            self._emit("lift.path_waits", t0, self.line, float(k))
+            self._emit(events.LIFT_PATH_WAITS, t0, self.line, float(k))
         elif verdict.limited and verdict.override != self.ov_eff:  # a new grant, not each cycle
-            self._emit("lift.override_limited", t0, self.line, verdict.override)
+            self._emit(events.LIFT_OVERRIDE_LIMITED, t0, self.line, verdict.override)
         return verdict.override
 
     # -- cycle ------------------------------------------------------------------------------------
@@ -224,7 +225,7 @@ class GeoTask(PlcCommands):
         self._command(inputs.command, t_in)
         if inputs.m_ack and self.m_pending >= 0:
             self._acknowledge(self.m_pending, t_in)
-        self.ov_req = min(max(inputs.override, 0.0), MAX_OVERRIDE)
+        self.ov_req = clamp_override(inputs.override)
         holding = inputs.feed_hold or self.stop_requested or self.state is not ACTIVE
         self.ov_eff = self._limit_override(self.ov_req, holding)
         self.was_holding = holding
@@ -279,9 +280,9 @@ class GeoTask(PlcCommands):
             if axis == lifting and mon.ratio > rec.z_a_max_ratio:  # type: ignore[union-attr]
                 rec.z_a_max_ratio = mon.ratio  # type: ignore[union-attr]
             if entered == mon.ERROR:
-                self._emit("lift.z_acc_error", t, self.line, mon.ratio)
+                self._emit(events.LIFT_Z_ACC_ERROR, t, self.line, mon.ratio)
             elif entered == mon.WARNING:
-                self._emit("lift.z_acc_warning", t, self.line, mon.ratio)
+                self._emit(events.LIFT_Z_ACC_WARNING, t, self.line, mon.ratio)
 
     def _run_path(self, t: float) -> None:
         for _ in range(100000):  # bounded: every pass ends a wait or passes a boundary

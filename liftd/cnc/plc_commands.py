@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from typing import Final
 
+from liftd.cnc import events
 from liftd.cnc.lift_ahead import LiftAhead
 from liftd.cnc.path.program import ActionKind, PathProgram
 from liftd.cnc.snapshot import ChannelState, Command, LiftPhase
@@ -50,7 +51,7 @@ class PlcCommands(LiftAhead):
             self.interp.start(t)
             self.waiting = list(self.prog.path.boundaries[0].actions)
             self.wait_since = t
-            self._emit("geo.program_start", t, self.prog.first_line)
+            self._emit(events.PROGRAM_START, t, self.prog.first_line)
         elif self.state is HOLD:
             if self.waiting and self.waiting[0].kind is ActionKind.M00:
                 self.waiting.pop(0)
@@ -60,7 +61,7 @@ class PlcCommands(LiftAhead):
             # starts again)
             self.wait_since = max(self.wait_since, t)
             self.state = ACTIVE
-            self._emit("geo.resume", t, self.line)
+            self._emit(events.RESUME, t, self.line)
         self.stop_requested = False
 
     def _command(self, cmd: Command, t: float) -> None:
@@ -83,7 +84,7 @@ class PlcCommands(LiftAhead):
         if self.stop_requested and at_rest and self.state is ACTIVE and not self.reset_requested:
             self.stop_requested = False
             self.state = HOLD
-            self._emit("geo.stopped", t, self.line)
+            self._emit(events.STOPPED, t, self.line)
         lift = self.lift
         if (
             self.reset_requested
@@ -112,15 +113,15 @@ class PlcCommands(LiftAhead):
                 # loads the program from the current positions
                 self.z_hold = (lift.axis_index, lift.z)
                 lift.abort()
-                self._emit("lift.aborted", t, line, self.z_hold[1])
+                self._emit(events.LIFT_ABORTED, t, line, self.z_hold[1])
             lift.active = lift.suppressed = False
-            self._emit("geo.reset", t, line)
+            self._emit(events.RESET, t, line)
 
     def _acknowledge(self, number: int, t: float) -> None:
         self.m_pending = -1
         self.m_acked.add(number)
         self.ack_time = t
-        self._emit("geo.m_ack", t, self.line, float(number))
+        self._emit(events.M_ACK, t, self.line, float(number))
         # the dict, not GeoProgram.conditional_for: a Python frame in an M acknowledge's cycle
         for k in self.prog.conditional.get(number, ()):
             self.interp.acknowledge_conditional(k)

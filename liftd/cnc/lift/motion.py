@@ -20,7 +20,6 @@ from liftd.cnc.lift.advanced import (
     UP,
     AdvancedLift,
     FirstRise,
-    Phase,
     Refine,
 )
 from liftd.cnc.lift.guard import GuardFinding, LiftGuard
@@ -40,7 +39,6 @@ OVERRIDE_TRIALS = 6  # lower-bound evaluations to find the highest override Z st
 # 145.5 → 148.9 %, then a `lift.override_limited` event in each of the next 100 cycles; with
 # 1 % steps 7 re-plans for 145.8 → 152.7 %, with 5 % steps 2 for 145.8 → 150.8 %)
 OVERRIDE_STEP = 0.05
-_PHASES = tuple(LiftPhase(int(p)) for p in Phase)  # the generator's phase as reported
 
 
 class OverrideVerdict:
@@ -212,7 +210,7 @@ class TimeBasedLift(LiftMotion):
 
     @property
     def phase(self) -> LiftPhase:
-        return _PHASES[self.gen.phase]  # an enum call per cycle costs more than the step
+        return self.gen.phase
 
     def step(
         self,

@@ -11,8 +11,9 @@ import math
 import numpy as np
 import pytest
 
-from liftd.cnc.lift.advanced import AdvancedLift, Phase
+from liftd.cnc.lift.advanced import AdvancedLift
 from liftd.cnc.lift.profile import LiftProfiles
+from liftd.cnc.snapshot import LiftPhase
 from tests.support.pure_core import PureCore
 
 DT = 1e-3
@@ -101,7 +102,7 @@ def test_infinite_remaining_time_rises_to_the_limit_and_holds() -> None:
     gen.start(0.0, 0.0, 0.0, 0.0, 0.0, 0.05, False, direct=False)
     for k in range(1, 600):
         gen.step(k * DT, math.inf)
-    assert gen.z == pytest.approx(0.05, abs=1e-9) and gen.phase is Phase.UP
+    assert gen.z == pytest.approx(0.05, abs=1e-9) and gen.phase is LiftPhase.UP
 
 
 def test_override_lowered_while_descending_rises_again_and_still_lands() -> None:
