@@ -1,5 +1,5 @@
 """GEO step CPU time of a machine of 1, 2 and 4 channels at 1 ms (issue 18 item 1): the same
-generated nesting job (bench/gen.py, Advanced Lifting) in every channel, each channel its own
+generated nesting job (tests/support/programs.py, Advanced Lifting) in every channel, each channel its own
 logical axes (X Y Z, as on the demo machine's lists, logical axes 3c+1 … 3c+3), stepped on a
 virtual clock by `Machine.step` as the GEO loop steps it (every channel, channel order, its
 own automatic PLC), timed with time.perf_counter_ns around the whole machine step, with the
@@ -32,12 +32,12 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from bench.gen import count_blocks, nesting_program  # noqa: E402
 from liftd.cnc.machine import ChannelProgram, Machine  # noqa: E402
 from liftd.cnc.params import ChannelParams  # noqa: E402
 from liftd.cnc.plc import Schedule, SimPlc  # noqa: E402
 from liftd.cnc.snapshot import ChannelState, GeoSnapshot  # noqa: E402
 from liftd.settings import load_settings  # noqa: E402
+from tests.support.programs import count_blocks, nesting_program  # noqa: E402
 
 
 def channels(base: ChannelParams, n: int) -> list[ChannelParams]:

@@ -26,10 +26,15 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from bench.cli import parser
-from bench.gen import count_blocks, nesting_program, repeated_program, subroutine_program
 from liftd.cnc.nc import DecoderContext, decode
 from liftd.cnc.nc.decoder import iter_decode
 from liftd.settings import load_settings
+from tests.support.programs import (
+    count_blocks,
+    nesting_program,
+    repeated_program,
+    subroutine_program,
+)
 
 
 def best_of(n: int, fn: object) -> float:

@@ -35,9 +35,10 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from bench.cli import parser
-from bench.stress_cases import describe, scenario, violations, wide_scenario
 from liftd.cnc.params import LiftMethod
 from tests.support.closed_loop import run_task
+from tests.support.cycle_check import violations
+from tests.support.scenarios import describe, scenario, wide_scenario
 from tests.support.stops import stop_and_start
 
 

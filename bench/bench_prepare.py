@@ -26,7 +26,6 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from bench.gen import count_blocks, nesting_program  # noqa: E402
 from liftd.cnc import pause as pause_points  # noqa: E402
 from liftd.cnc.geo_task import GeoTask  # noqa: E402
 from liftd.cnc.params import ChannelParams  # noqa: E402
@@ -36,6 +35,7 @@ from liftd.cnc.plc import (  # noqa: E402
 )
 from liftd.cnc.snapshot import ChannelState, Command, GeoInputs, GeoSnapshot, PlcSignal  # noqa: E402
 from liftd.settings import load_settings  # noqa: E402
+from tests.support.programs import count_blocks, nesting_program  # noqa: E402
 
 
 def channel() -> ChannelParams:

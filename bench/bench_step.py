@@ -54,12 +54,12 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from bench.cli import parser  # noqa: E402
-from bench.gen import count_blocks, nesting_program  # noqa: E402
 from liftd.cnc.params import ChannelParams  # noqa: E402
 from liftd.cnc.plc import Schedule  # noqa: E402
 from liftd.settings import load_settings  # noqa: E402
 from liftd.sim.simulate import StepTimer, simulate  # noqa: E402
 from liftd.sim.summary import SimSummary  # noqa: E402
+from tests.support.programs import count_blocks, nesting_program  # noqa: E402
 
 REPEAT = 2
 TARGET = {"p99": 40.0, "p999": 100.0, "max": 250.0}  # µs

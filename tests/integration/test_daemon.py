@@ -18,8 +18,8 @@ from typing import Any
 import pyads
 import pytest
 
-from bench.gen import nesting_program
 from tests.support.daemon import Daemon, Notify, write_config
+from tests.support.programs import nesting_program
 from tests.support.replay import WRITES, first_difference, simulate_logged_writes
 from tests.support.wait import wait_for
 

@@ -13,12 +13,12 @@ from pathlib import Path
 import pyads
 import pytest
 
-from bench.gen import nesting_program
 from liftd.ads import wire
 from liftd.ads.client import RawClient
 from liftd.ads.wire import net_id_bytes
 from liftd.runtime.geo_loop import INPUTS_PER_CYCLE
 from tests.support.daemon import Daemon, write_config
+from tests.support.programs import nesting_program
 from tests.support.wait import wait_for
 
 pytestmark = pytest.mark.integration

@@ -10,11 +10,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from bench.gen import count_blocks, nesting_program
 from liftd.cnc import pause
 from liftd.cnc.geo_program import load_program
 from liftd.cnc.nc import sources
 from tests.support.channel import make_channel
+from tests.support.programs import count_blocks, nesting_program
 
 
 @pytest.fixture

@@ -6,13 +6,13 @@ from __future__ import annotations
 
 import itertools
 
-from bench.gen import nesting_program
 from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.params import LiftMethod
 from liftd.cnc.plc import Schedule, SimPlc
 from liftd.cnc.snapshot import ChannelState, Command, GeoInputs, GeoSnapshot
 from tests.support.channel import make_channel
 from tests.support.paths import REPO
+from tests.support.programs import nesting_program
 
 DEMO = (REPO / "config" / "programs" / "demo.nc").read_text()
 START = GeoInputs(command=Command.START)

@@ -9,15 +9,16 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from bench.bench_reset import nc_error_in_a_range, reset_in_a_range
-from bench.stress_cases import describe, violations, wide_scenario
 from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.params import LiftMethod
 from liftd.cnc.plc import Schedule, SimPlc
 from liftd.cnc.snapshot import ChannelState, Command, GeoInputs, GeoSnapshot
 from tests.support.channel import make_channel
 from tests.support.closed_loop import events, fd_ratios, run_task
+from tests.support.cycle_check import violations
 from tests.support.paths import REPO
+from tests.support.reset_runs import nc_error_in_a_range, reset_in_a_range
+from tests.support.scenarios import describe, wide_scenario
 from tests.support.stops import StopThenStart, stop_and_start
 
 DEMO = (REPO / "config" / "programs" / "demo.nc").read_text()

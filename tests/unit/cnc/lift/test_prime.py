@@ -6,12 +6,12 @@ discard the committed future the memos were computed on."""
 
 from __future__ import annotations
 
-from bench.gen import nesting_program
 from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.plc import Schedule, SimPlc
 from liftd.cnc.snapshot import ChannelState, GeoSnapshot
 from liftd.settings import load_settings
 from tests.support.paths import REPO
+from tests.support.programs import nesting_program
 
 DEMO = (REPO / "config" / "programs" / "demo.nc").read_text()
 CH = load_settings(str(REPO / "config" / "liftd.toml")).channel

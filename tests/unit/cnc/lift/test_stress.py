@@ -11,12 +11,13 @@ import dataclasses
 import pytest
 
 import liftd.cnc.geo_program as geo_program
-from bench.gen import nesting_program
-from bench.stress_cases import describe, scenario, violations, wide_scenario
 from liftd.cnc.params import LiftMethod
 from liftd.cnc.plc import Schedule
 from tests.support.channel import make_channel
 from tests.support.closed_loop import run_task
+from tests.support.cycle_check import violations
+from tests.support.programs import nesting_program
+from tests.support.scenarios import describe, scenario, wide_scenario
 
 # 2306: ruckig's time for a position 1e-7 m ahead at 0.65 mm/s was 1.8 ms late, so a step cut
 # at a boundary held the path back by a micrometre (X at 4.1 × j_max); checked on the profile;

@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-from bench.gen import nesting_program
 from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.path.tracker import Tracker
 from liftd.settings import load_settings
 from tests.support.paths import REPO
+from tests.support.programs import nesting_program
 
 
 def test_a_brake_whose_projected_velocity_rounds_below_zero_targets_rest_without_a_refusal() -> (

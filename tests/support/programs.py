@@ -1,4 +1,5 @@
-"""Generated NC programs for benchmarks and tests: nesting jobs of many small parts."""
+"""Generated NC programs for the tests and the benchmarks: nesting jobs of many small parts
+(bench/ imports them from here; moved from bench/gen.py, issue 40)."""
 
 from __future__ import annotations
 
