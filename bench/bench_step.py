@@ -25,7 +25,7 @@ producer re-plan).
 write every S seconds, 0.5 by default, through 60/80/100/150/200 %: a write inside a lift
 range whose nominal run re-plans, and the cycle after it, are kinds of their own; lift starts
 and ends, M functions, …; the two cycles before each lift start, which prime it:
-`LiftAhead._prime_lift`; the cycle of a wait that chooses the profile the path will leave
+`LiftAhead.prime`; the cycle of a wait that chooses the profile the path will leave
 with: `Interpolator.prime_leaving`) and every 50th plain cycle
 with the caches cold: 64 MiB written just before the step, as the GEO process finds them after
 its 1 ms sleep beside the daemon and its clients (its plain cycles take 10–20× the hot step).

@@ -1,11 +1,13 @@
 """The names of the events a GEO task and its loop emit (`snapshot.Event.name`), one constant
-each: the core emits them, the runtime numbers them in its event records (`RECORDED`), the
-daemon logs them and the GEO loop reacts to some. A name is part of the log and trace contract
+each, and the cycle's `EventLog`. The core emits them, the runtime numbers them in its event
+records (`RECORDED`), the daemon logs them. A name is part of the log and trace contract
 (docs/architecture.md): change none, add new ones at the end of `RECORDED`."""
 
 from __future__ import annotations
 
 from typing import Final
+
+from liftd.cnc.snapshot import Event, new_event
 
 # the channel (cnc/channel_state.py, cnc/actions.py)
 PROGRAM_START: Final = "geo.program_start"
@@ -69,3 +71,17 @@ RECORDED: Final[tuple[str, ...]] = (
     PLC_INPUT,
     LIFT_ABORTED,
 )
+
+
+class EventLog:
+    """The events of the current cycle, which every part of a GEO task adds to; the snapshot
+    takes them (`items`), the next cycle starts empty (`clear`)."""
+
+    def __init__(self) -> None:
+        self.items: list[Event] = []
+
+    def emit(self, name: str, t: float, line: int, value: float = 0.0, text: str = "") -> None:
+        self.items.append(new_event((name, t, line, value, text, 0)))
+
+    def clear(self) -> None:
+        self.items.clear()

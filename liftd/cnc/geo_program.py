@@ -42,7 +42,7 @@ class GeoProgram:
     first_line: int
     stops: tuple[tuple[int, ...], ...]  # per range: waiting points strictly inside it
     # per range: boundaries strictly inside it where the path stops only for a #FLUSH / #FLUSH
-    # WAIT (not waiting points of the lift: vendor §2.1.3 case 3, `LiftAhead._horizon`)
+    # WAIT (not waiting points of the lift: vendor §2.1.3 case 3, `LiftAhead.horizon`)
     flushes: tuple[tuple[int, ...], ...]
     z_index: int
     plans: tuple[RangePlan | None, ...]  # per range: z(s) of path-based Lifting, else None

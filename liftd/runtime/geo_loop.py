@@ -72,10 +72,7 @@ OVERRUN_EVENT_EVERY_NS = 1_000_000_000  # at most one geo.overrun event per seco
 # COMPUTE_OVER_BURST events refilled at one per COMPUTE_OVER_EVENT_EVERY_NS
 COMPUTE_OVER_EVENT_EVERY_NS = 100_000_000
 COMPUTE_OVER_BURST = 10
-# a program's end (a repeat starts it again); a START ran the program: a RESET's READY is over
-PROGRAM_END: Final = event_names.PROGRAM_END
-PROGRAM_START: Final = event_names.PROGRAM_START
-RESET_DONE: Final = event_names.RESET  # a RESET completed: READY stands until the PLC starts
+PROGRAM_END: Final = event_names.PROGRAM_END  # a program's end (a repeat starts it again)
 # PLC writes read off the input ring in one cycle (~2 µs each with their event): 256 written at
 # once (one sum write) cost a cycle ~0.5 ms before; now they take 16 cycles
 INPUTS_PER_CYCLE: Final = 16
@@ -234,6 +231,7 @@ class GeoLoop:
             self.built[i] = None
             took = True
             self.current[i] = pending
+            task.channel.carry_over(self.machine.tasks[i].channel)  # a RESET's READY stands
             self.machine.replace(i, task)
             common = self.pending_cfg
             plc = PlcInputs(common.m_ack_auto, common.m_ack_delay_s)
@@ -326,14 +324,14 @@ class GeoLoop:
             for i in channels:
                 for ev in snaps[i].events:
                     send(ev, tags[i])
-                    name = ev.name
-                    if name == PROGRAM_END:  # not any way into READY: a RESET is not one
+                    if ev.name == PROGRAM_END:  # not any way into READY: a RESET is not one
                         ends = [i] if ends is None else [*ends, i]
-                    elif name == RESET_DONE:
-                        self.reset_ready[i] = True
+                # READY after a RESET, until a START: the channel's state machine says so
+                ready = self.machine.tasks[i].ready_after_reset
+                if ready is not self.reset_ready[i]:
+                    self.reset_ready[i] = ready
+                    if ready:
                         self._prepare_run(i)  # ahead of the PLC's START
-                    elif name == PROGRAM_START:
-                        self.reset_ready[i] = False
             reloaded = self._check_reload(snaps)
             if ends is not None:  # `repeat` as the configuration in effect now has it
                 for i in ends:

@@ -115,7 +115,7 @@ class LiftMotion:
 
     def landing_time(self) -> float:
         """Time Z needs from its state now to be at POS: the descent in hand, or, while it
-        rises, the time-optimal one from here (`LiftAhead._flush_may_go`)."""
+        rises, the time-optimal one from here (`BoundaryActions.flush_may_go`)."""
         raise NotImplementedError
 
     def resume_in_range(self, t: float) -> None:

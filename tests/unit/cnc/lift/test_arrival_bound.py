@@ -41,7 +41,7 @@ def bound_problems(seed: int) -> tuple[int, list[str]]:
                     lb = ip.lower_bound(k, task.ov_eff)
                     if lb > ip.arrival(k) + TOL:
                         problems.append(f"t={t:.4f} k={k}: lower bound {lb} > {ip.arrival(k)}")
-        k = task._horizon() if task.lift.current is not None else -1
+        k = task.ahead.horizon() if task.lift.current is not None else -1
         if k > ip.segment and ip.stopped_at is None:
             key = (k, ip.restarts)
             if ip.exact(k):

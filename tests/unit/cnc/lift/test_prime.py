@@ -1,5 +1,5 @@
 """A lift start's cycle takes the work the GEO task did for it in the two cycles before
-(`LiftAhead._prime_lift`): the first rising cycle's ruckig solve and the lower bound of the path's
+(`LiftAhead.prime`): the first rising cycle's ruckig solve and the lower bound of the path's
 arrival at the lift's horizon. Both are memos of pure functions, so a run that throws them away
 before every cycle is the same run, cycle for cycle, also where override steps and feed holds
 discard the committed future the memos were computed on."""
