@@ -32,27 +32,44 @@ def _flush(fl: random.Random | None, lines: list[str], share: float = 0.15) -> N
         lines.append(fl.choice(["#FLUSH", "#FLUSH WAIT"]))
 
 
-def scenario(seed: int, method: LiftMethod = LiftMethod.ADVANCED, flush: bool = False) -> Scenario:
-    """`flush`: #FLUSH / #FLUSH WAIT after some motion blocks inside ranges."""
-    rng = random.Random(seed)
-    fl = _flusher(seed, flush)
+Z_LIMITS = (-0.05, 0.2)  # the lift axis's software limits (m)
+
+
+def _channel(rng: random.Random, method: LiftMethod, *, wide: bool) -> ChannelParams:
+    """X, Y and a lift axis Z of random v, a, j, a random cycle time and lift_min_dist (the
+    order of the draws is the scenarios'); `wide`: a random look-ahead and an M8 MNS_SNS."""
     zv, za = rng.uniform(0.3, 1.5), rng.uniform(3.0, 20.0)
     zj = rng.uniform(100.0, 2000.0)
-    z_neg, z_pos = -0.05, 0.2
+    cycle_time = rng.choice([1e-3, 1e-3, 1e-3, 5e-4, 2e-3])
+    lift_min_dist = rng.choice([0.0, 0.0, 0.003])
+    m_synch: tuple[tuple[int, MSync], ...] = ((4, MSync.MVS_SVS), (5, MSync.MOS))
     ch = ChannelParams(
         channel_id=1,
         axes=(
             AxisParams("X", 1, 1.5, 10.0, 500.0, -0.001, 3.01),
             AxisParams("Y", 2, 1.5, 8.0, 400.0, -0.001, 1.51),
-            AxisParams("Z", 3, zv, za, zj, z_neg, z_pos),
+            AxisParams("Z", 3, zv, za, zj, *Z_LIMITS),
         ),
         lift_axis="Z",
         lift_method=method,
-        cycle_time=rng.choice([1e-3, 1e-3, 1e-3, 5e-4, 2e-3]),
-        lift_min_dist=rng.choice([0.0, 0.0, 0.003]),
+        cycle_time=cycle_time,
+        lift_min_dist=lift_min_dist,
         slope=SlopeType.TRAPEZ,
-        m_synch=((4, MSync.MVS_SVS), (5, MSync.MOS)),
+        m_synch=m_synch,
     )
+    if not wide:
+        return ch
+    look = rng.choice([1, 3, 8, 30, 30, 120, 120, 190, 200])
+    m_synch += ((8, MSync.MNS_SNS),)
+    return dataclasses.replace(ch, look_ahead_blocks=look, m_synch=m_synch)
+
+
+def scenario(seed: int, method: LiftMethod = LiftMethod.ADVANCED, flush: bool = False) -> Scenario:
+    """`flush`: #FLUSH / #FLUSH WAIT after some motion blocks inside ranges."""
+    rng = random.Random(seed)
+    fl = _flusher(seed, flush)
+    z_neg, z_pos = Z_LIMITS
+    ch = _channel(rng, method, wide=False)
     z = rng.uniform(0.0, 0.03)
     x, y = 10.0, 10.0
     lines = [f"G01 X{x} Y{y} Z{z * 1e3:.3f} F6000"]
@@ -100,24 +117,8 @@ def wide_scenario(
     #FLUSH / #FLUSH WAIT inside ranges too."""
     rng = random.Random(seed)
     fl = _flusher(seed, flush)
-    zv, za = rng.uniform(0.3, 1.5), rng.uniform(3.0, 20.0)
-    zj = rng.uniform(100.0, 2000.0)
-    z_neg, z_pos = -0.05, 0.2
-    ch = ChannelParams(
-        channel_id=1,
-        axes=(
-            AxisParams("X", 1, 1.5, 10.0, 500.0, -0.001, 3.01),
-            AxisParams("Y", 2, 1.5, 8.0, 400.0, -0.001, 1.51),
-            AxisParams("Z", 3, zv, za, zj, z_neg, z_pos),
-        ),
-        lift_axis="Z",
-        lift_method=method,
-        cycle_time=rng.choice([1e-3, 1e-3, 1e-3, 5e-4, 2e-3]),
-        lift_min_dist=rng.choice([0.0, 0.0, 0.003]),
-        slope=SlopeType.TRAPEZ,
-        look_ahead_blocks=rng.choice([1, 3, 8, 30, 30, 120, 120, 190, 200]),
-        m_synch=((4, MSync.MVS_SVS), (5, MSync.MOS), (8, MSync.MNS_SNS)),
-    )
+    z_neg, z_pos = Z_LIMITS
+    ch = _channel(rng, method, wide=True)
     z = rng.uniform(0.0, 0.03)
     x, y = 10.0, 10.0 + rng.uniform(0.0, 400.0)
     lines = [f"G01 X{x} Y{y:.3f} Z{z * 1e3:.3f} F6000"]
