@@ -1,13 +1,13 @@
 # liftd in a container. Build: docker build -t liftd .
-# A worker for `liftd study --scheduler` (README "A study on a Dask cluster"):
+# A worker for `liftd study --scheduler` (docs/study.md, "A study on a Dask cluster"):
 #   docker build --build-arg EXTRAS=cluster -t liftd-worker .
 #   docker run --rm --network host --entrypoint dask liftd-worker worker tcp://SCHEDULER:8786 --nthreads 1
-# Run (README "Docker"):
+# Run (docs/service.md, "Docker"):
 #   docker run --rm --init -p 127.0.0.1:48898:48898 -p 127.0.0.1:8551:8551 \
 #     --ulimit rtprio=80 --ulimit memlock=-1 --cap-drop=ALL --security-opt no-new-privileges \
 #     --read-only --tmpfs /tmp -v "$PWD/myconfig:/etc/liftd:ro" liftd
 # The host kernel decides real-time latency; the flags above only let the GEO loop ask for
-# SCHED_FIFO and mlockall as the non-root user (see README "Running it as a service").
+# SCHED_FIFO and mlockall as the non-root user (see docs/service.md).
 #
 # Reproducible: every Python package (and the build backend) is pinned in
 # docker/constraints.txt; pip is the base image's own, not upgraded. Pin the base image by

@@ -6,12 +6,12 @@ STAMP  := $(VENV)/.installed
 
 NODE_DIR := tests/interop/node
 
-.PHONY: run test lint typecheck unit bench clean tools core
+.PHONY: run test lint typecheck unit docs bench clean tools core
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[dev,plot,cluster]'
+	$(BIN)/python -m pip install --quiet -e '.[dev,plot,cluster,docs]'
 	touch $(STAMP)
 
 # The GEO cycle's modules, simulate's per-cycle part and the GEO loop compiled with mypyc
@@ -53,7 +53,11 @@ typecheck: $(STAMP)
 unit: $(STAMP) $(CORE_STAMP)
 	$(BIN)/python -m pytest -q tests/unit
 
-test: lint typecheck $(CORE_STAMP) tools
+# the manual (MkDocs): --strict fails on a broken link
+docs: $(STAMP)
+	$(BIN)/mkdocs build --strict --quiet --site-dir build/site
+
+test: lint typecheck docs $(CORE_STAMP) tools
 	$(BIN)/python -m pytest -q
 
 bench: $(STAMP)

@@ -1,6 +1,6 @@
 """The attack cases of tests/support/attacks.py against a running daemon, one JSON line per case with
 its outcome, the p99 latency of a normal client right after it, the GEO exceed count it caused
-and the daemon's RSS growth (the README table). Run: .venv/bin/python bench/attack_table.py
+and the daemon's RSS growth (the table of docs/figures.md, "Hardening"). Run: .venv/bin/python bench/attack_table.py
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 
 Oracle: a linear program over a piecewise-constant jerk sequence on a grid h (exact
 integration), with |j| ≤ J, |a| ≤ A, |v| ≤ V and p ≤ POS_LIMIT at the nodes, start at rest at
-z0, end at rest at POS after T (reference/lift-algorithm.md §4). Maximising p_k for the best k
+z0, end at rest at POS after T (docs/reference/lift-algorithm.md §4). Maximising p_k for the best k
 gives the highest possible peak; maximising the integral gives the highest mean clearance.
 The generator runs against a path of constant feed (T_rem = T − t). Ratios as in the
 reference: peak (peak − max(z0, POS)) / (oracle − max(z0, POS)), mean (mean − min) /

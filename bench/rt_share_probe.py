@@ -1,6 +1,6 @@
 """How long the kernel keeps a spinning SCHED_FIFO loop off its cpu: the facts behind liftd's
 refusal of `[rt] idle = "spin"` at a limited real-time share and behind the daemon keeping its
-threads off a spinning loop's cpu (README "Running it as a service", `runtime.rt.keep_off_cpu`).
+threads off a spinning loop's cpu (docs/service.md, `runtime.rt.keep_off_cpu`).
 
 A SCHED_FIFO loop pinned to --cpu reads the monotonic clock back to back for --seconds; every
 gap between two reads is time it was kept off its cpu. With --neighbour a busy SCHED_OTHER

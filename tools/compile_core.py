@@ -4,7 +4,7 @@ with mypyc, in place.
 
 `make` runs it before `run` and `test`; the extension (`*.so`) sits next to its source and
 Python imports it first. Same source, same results bit for bit (tests/unit/cnc/
-test_compiled.py), about 3× less CPU per GEO cycle (README "Figures"). Needs a C compiler and
+test_compiled.py), about 3× less CPU per GEO cycle (docs/figures.md). Needs a C compiler and
 the Python headers; without them it says so and exits 0: liftd then runs the core as Python
 (slower, same results), and `liftd check` says which one runs.
 

@@ -1,5 +1,5 @@
-"""docs/ui.png: the live view on the demo, in headless Chromium, while Z lifts (README
-"Watching liftd live"). Starts its own daemon on free ports (never 48898 / 8551).
+"""docs/ui.png: the live view on the demo, in headless Chromium, while Z lifts (docs/live-view.md,
+the manual's "The live view"). Starts its own daemon on free ports (never 48898 / 8551).
 
 Run: .venv/bin/python tools/ui_screenshot.py [OUT.png]
 """

@@ -1,5 +1,5 @@
-"""ADS/AMS wire constants (reference/ads.md §1–§3; AdsLib AdsDef.h; Beckhoff Infosys "ADS Return
-Codes" https://infosys.beckhoff.com/content/1033/te132x_tc3_bodeplot/374277003.html)."""
+"""ADS/AMS wire constants (docs/reference/ads.md §1–§3; AdsLib AdsDef.h; Beckhoff Infosys "ADS
+Return Codes" https://infosys.beckhoff.com/content/1033/te132x_tc3_bodeplot/374277003.html)."""
 
 from __future__ import annotations
 
@@ -33,7 +33,8 @@ class StateFlag(enum.IntFlag):
     BROADCAST = 0x8000
 
 
-REQUEST_FLAGS = StateFlag.ADS_COMMAND  # 0x0004, also for DeviceNotification (ads.md §1.4)
+# 0x0004, also for DeviceNotification (docs/reference/ads.md §1.4)
+REQUEST_FLAGS = StateFlag.ADS_COMMAND
 RESPONSE_FLAGS = StateFlag.ADS_COMMAND | StateFlag.RESPONSE  # 0x0005
 
 
@@ -58,7 +59,8 @@ class AdsState(enum.IntEnum):
 
 
 class TransMode(enum.IntEnum):
-    """AdsLib ADSTRANSMODE (pyads' constants call 2 "CLIENT1REQ", wrongly: ads.md §1.5)."""
+    """AdsLib ADSTRANSMODE (pyads' constants call 2 "CLIENT1REQ", wrongly: docs/reference/ads.md
+    §1.5)."""
 
     NONE = 0
     CLIENT_CYCLE = 1
@@ -77,7 +79,7 @@ ON_CHANGE_MODES = frozenset(
 
 
 class IndexGroup(enum.IntEnum):
-    """Reserved index groups of every ADS device (ads.md §3)."""
+    """Reserved index groups of every ADS device (docs/reference/ads.md §3)."""
 
     SYM_HNDBYNAME = 0xF003
     SYM_VALBYNAME = 0xF004
@@ -117,13 +119,13 @@ class AmsError(enum.IntEnum):
     TARGET_MACHINE_NOT_FOUND = 0x7
     UNKNOWN_CMD_ID = 0x8
     INVALID_AMS_LENGTH = 0xE
-    PORT_ALREADY_IN_USE = 0x506  # router errors (ads.md §2)
+    PORT_ALREADY_IN_USE = 0x506  # router errors (docs/reference/ads.md §2)
     NO_MORE_QUEUES = 0x508
 
 
 class AmsTcpCommand(enum.IntEnum):
     """The reserved field of the AMS/TCP header: 0 carries an AMS frame, the others talk to the
-    router (ads-client `AMS_HEADER_FLAG`; jisotalo/ads-server; ads.md §1.2)."""
+    router (ads-client `AMS_HEADER_FLAG`; jisotalo/ads-server; docs/reference/ads.md §1.2)."""
 
     AMS_CMD = 0x0000
     PORT_CLOSE = 0x0001

@@ -16,7 +16,7 @@ from liftd.ads.notifications import NotificationTable
 from liftd.ads.symbols import DataType
 
 STATIC_HANDLE_BIT = 0x8000_0000  # 0xF005 offsets with this bit: a symbol's fixed address
-ENCODING = "cp1252"  # CNC strings (TF5200 "ADS access to CNC", isg-cnc.md §1.1)
+ENCODING = "cp1252"  # CNC strings (TF5200 "ADS access to CNC", docs/reference/isg-cnc.md §1.1)
 
 
 @dataclass(frozen=True, slots=True)

@@ -1,9 +1,9 @@
 """The UDP 48899 protocol of TwinCAT routers (broadcast search and "add route"), as a pure
 codec: datagram in, typed request out, and the replies.
 
-Layout (little-endian; reference/ads.md §4.4): u32 cookie 0x71146603, u32 invoke id, u32 service
-(1 = discovery, 6 = add route; a reply has 0x80000000 set), AmsAddr (NetId 6 + port u16), u32
-tag count, then tags {u16 id, u16 length, data}; strings NUL-terminated, the length counting the
+Layout (little-endian; docs/reference/ads.md §4.4): u32 cookie 0x71146603, u32 invoke id, u32
+service (1 = discovery, 6 = add route; a reply has 0x80000000 set), AmsAddr (NetId 6 + port u16),
+u32 tag count, then tags {u16 id, u16 length, data}; strings NUL-terminated, the length counting the
 NUL. Sources: birkenfeld/ads-rs `src/udp.rs` (Message, Tag, add_route, get_info), pyads 3.6
 `pyads_ex.py` adsAddRouteToPLC / adsGetNetIdForPLC (it reads the reply's NetId at bytes 12..18
 after checking that byte 11 is 0x80, and an add-route reply of 32 bytes), AdsLib `AdsLib.cpp`.

@@ -1,9 +1,9 @@
 """Sans-IO incremental AMS/TCP framer: bytes as they arrive in, whole frames out.
 
-Frames may be split across reads or coalesced (pyads' test server gets this wrong, ads.md
-§1.1). The AMS/TCP length decides where a frame ends; a length above the cap, or one too short
-to hold an AMS header, breaks the stream for good: FramingError, and the server closes.
-Frames are cut one at a time as the server handles them (`next`).
+Frames may be split across reads or coalesced (pyads' test server gets this wrong,
+docs/reference/ads.md §1.1). The AMS/TCP length decides where a frame ends; a length above the cap,
+or one too short to hold an AMS header, breaks the stream for good: FramingError, and the server
+closes. Frames are cut one at a time as the server handles them (`next`).
 """
 
 from __future__ import annotations

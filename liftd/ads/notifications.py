@@ -1,7 +1,7 @@
 """Device notifications of one connection: subscriptions and what is due. Pure: the server
 passes the clocks and a reader, and writes what `poll` returns.
 
-Rules (reference/ads.md §1.5–§1.6, Beckhoff "ADS Add Device Notification"):
+Rules (docs/reference/ads.md §1.5–§1.6, Beckhoff "ADS Add Device Notification"):
 
 * cycle time and max delay arrive in 100 ns units; the cycle is clamped to a configured minimum
   (pyads sends 1 = 100 ns by default);

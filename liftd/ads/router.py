@@ -9,7 +9,7 @@ frames for that NetId:port are then routed to the connection that holds it. 0x00
 close" gives the port back (TwinCAT then drops the TCP connection, and ads-client waits for
 that), 0x1002 answers the router's NetId. Sources: ads-client 2.1.0 `src/ads-client.ts`
 registerAdsPort / unregisterAdsPort / onAmsTcpPacketReceived, `src/ads-commons.ts`
-AMS_HEADER_FLAG; reference/ads.md §1.2.
+AMS_HEADER_FLAG; docs/reference/ads.md §1.2.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """The ADS/AMS TCP server: the only TCP module of liftd.ads (udp.py is the UDP one).
 
-Per connection (reference/ads.md §4.5, §8): an incremental framer; every request answered on
+Per connection (docs/reference/ads.md §4.5, §8): an incremental framer; every request answered on
 the connection it came on (addresses swapped, same invoke id); AMS errors 0x7 (foreign NetId),
 0x6 (port not hosted), 0x8 (unknown command), 0xE (AMS length ≠ TCP length); the access policy
 (peer IP ranges and source NetIds: close, or answer 0x723; writes only from write NetIds, else

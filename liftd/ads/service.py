@@ -1,7 +1,7 @@
 """ADS services over an `ObjectProvider`: one dispatch table per command and per reserved index
 group, sum commands, symbol handles and notifications per connection. Pure (no IO, no clock:
 `now_ns` is passed in); the one place where an exception becomes an ADS result code, so every
-request gets an answer (reference/ads.md §0.4, style-anchors rule 3).
+request gets an answer (docs/reference/ads.md §0.4, docs/reference/style-anchors.md rule 3).
 """
 
 from __future__ import annotations
@@ -337,8 +337,9 @@ class AdsService:
         )
 
     def _device_data(self, s: Session, io: int, length: int) -> bytes:
-        """0xF100: IO 0 → ADS state u16 + device state u16, IO 2 → device state (ads.md §3;
-        ads-client subscribes to (0xF100, 0, 4) to follow the runtime state)."""
+        """0xF100: IO 0 → ADS state u16 + device state u16, IO 2 → device state
+        (docs/reference/ads.md §3; ads-client subscribes to (0xF100, 0, 4) to follow the runtime
+        state)."""
         state = wire.U16X2.pack(*self.provider.ads_state())
         if io not in (0, 2):
             raise AdsError(AdsErr.INVALIDOFFSET, f"device data offset {io}")

@@ -1,7 +1,7 @@
 """Sum commands (ReadWrite to 0xF080…0xF086, IO = number of sub-commands n): split the
 container, run each sub-command through the callables the service passes, join the answers.
 Pure. A malformed container raises AdsError(0x705); a failing sub-command only sets its own
-result (reference/ads.md §3).
+result (docs/reference/ads.md §3).
 
 Layouts (write data → read data), sources in brackets:
 
@@ -27,7 +27,7 @@ lengths asked for, or the objects' sizes, which are small); a reply that would e
 without allocating it. Beckhoff's ISumCommand notes say a sum response must pass the AMS router,
 whose memory is bounded (2048 kB by default in TwinCAT 2), so the caller has to limit it
 (infosys.beckhoff.com/content/1033/tc3_adsnetref/7313686667.html); which code a TwinCAT
-router answers then was not found in any source: 0x70A is liftd's choice (README).
+router answers then was not found in any source: 0x70A is liftd's choice (docs/plc.md).
 """
 
 from __future__ import annotations

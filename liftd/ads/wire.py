@@ -1,6 +1,6 @@
 """Sans-IO AMS/ADS codec: bytes in, typed values out, and back. Pure: no sockets, no clock.
 
-Layouts (little-endian, reference/ads.md §1): AMS/TCP header (reserved u16, length u32), AMS
+Layouts (little-endian, docs/reference/ads.md §1): AMS/TCP header (reserved u16, length u32), AMS
 header (target NetId 6 B + port u16, source NetId + port, command u16, state flags u16, data
 length u32, error u32, invoke id u32), then the ADS payload of the command. Every decoder checks
 the sizes its layout implies and raises AdsError(INVALIDSIZE, 0x705) otherwise; every message
@@ -50,7 +50,7 @@ def net_id_text(raw: bytes) -> str:
 
 
 def filetime(unix_ns: int) -> int:
-    """Unix time in ns → FILETIME (100 ns since 1601-01-01, UTC; ads.md §0.6)."""
+    """Unix time in ns → FILETIME (100 ns since 1601-01-01, UTC; docs/reference/ads.md §0.6)."""
     return unix_ns // 100 + FILETIME_UNIX_OFFSET_S * 10_000_000
 
 
@@ -138,7 +138,7 @@ class AddNotificationRequest(NamedTuple):
     index_offset: int
     length: int
     mode: int
-    max_delay_100ns: int  # 100 ns units on the wire, not ms (ads.md §0.6)
+    max_delay_100ns: int  # 100 ns units on the wire, not ms (docs/reference/ads.md §0.6)
     cycle_time_100ns: int
     reserved: bytes = bytes(16)
 
@@ -228,7 +228,8 @@ def state_response(result: int, ads_state: int, device_state: int) -> bytes:
 
 
 def device_info_response(result: int, major: int, minor: int, build: int, name: bytes) -> bytes:
-    """The full 24 bytes: the name NUL-padded to 16 (pyads' test server sends 19, ads.md §1.5)."""
+    """The full 24 bytes: the name NUL-padded to 16 (pyads' test server sends 19,
+    docs/reference/ads.md §1.5)."""
     return DEVICE_INFO.pack(result, major, minor, build, name[:16].ljust(16, b"\0"))
 
 
@@ -280,7 +281,8 @@ class Stamp(NamedTuple):
 
 def encode_notification(stamps: Sequence[Stamp]) -> bytes:
     """DeviceNotification payload: u32 length (bytes after this field), u32 stamps, then per
-    stamp FILETIME u64, u32 samples, per sample handle u32, size u32, data (ads.md §1.6)."""
+    stamp FILETIME u64, u32 samples, per sample handle u32, size u32, data (docs/reference/ads.md
+    §1.6)."""
     parts: list[bytes] = [b"", U32.pack(len(stamps))]
     for stamp in stamps:
         parts.append(STAMP.pack(stamp.filetime, len(stamp.samples)))
@@ -335,7 +337,7 @@ class SymbolEntry(NamedTuple):
 
 def encode_symbol_entry(e: SymbolEntry) -> bytes:
     """Head, then name, type and comment each NUL-terminated; entryLength counts it all (pyads
-    checks that the reply is exactly entryLength bytes, ads.md §3)."""
+    checks that the reply is exactly entryLength bytes, docs/reference/ads.md §3)."""
     strings = e.name + b"\0" + e.type_name + b"\0" + e.comment + b"\0"
     total = SYMBOL_HEAD.size + len(strings)
     head = SYMBOL_HEAD.pack(

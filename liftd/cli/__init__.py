@@ -1,5 +1,5 @@
-"""Command line (DESIGN.md §3.1): the parser and the dispatch here, one module per group of
-commands (`check`; `simulate`; `study`; the service commands; `common`: what they share).
+"""Command line (docs/reference/design.md §3.1): the parser and the dispatch here, one module per
+group of commands (`check`; `simulate`; `study`; the service commands; `common`: what they share).
 The only place that maps outcomes to exit codes: 0 ok, 1 NC program error, 2 configuration
 error, 3 runtime failure (`healthcheck`: 1 unhealthy). A configuration or schedule error
 raised by any command is printed once, in `main`."""

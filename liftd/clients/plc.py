@@ -30,7 +30,7 @@ from liftd.cnc.plc import Schedule
 STATE_NAMES = {0: "-", 1: "INIT", 2: "IDLE", 3: "READY", 4: "ACTIVE", 5: "HOLD", 6: "ERROR"}
 ADS_RUN = 5
 # AdsLib/pyads error codes that mean "nobody answers" rather than "the daemon refused"
-# (reference/ads.md §5; 0x274C/0x274D are the WSA codes AdsLib reports on Linux too).
+# (docs/reference/ads.md §5; 0x274C/0x274D are the WSA codes AdsLib reports on Linux too).
 _UNREACHABLE = {0x6, 0x7, 0x745, 0x746, 0x748, 0x274C, 0x274D}
 
 

@@ -4,7 +4,7 @@ No IO, no clock, no logging, no threads; SI units inside (`units` is the only pl
 factors). Imports nothing of liftd outside `liftd.cnc`.
 
 `COMPILED` names the modules of the GEO cycle that `make` compiles to C extensions with mypyc
-(`tools/compile_core.py`, docs/architecture.md "The compiled core"): the same source, 3× less
+(`tools/compile_core.py`, docs/geo-core.md "The compiled core"): the same source, 3× less
 CPU per cycle, bit-identical results. Without a C compiler they run as Python.
 """
 

@@ -4,7 +4,8 @@
 (ascending logical channel id, the order of `sda_mds[i]` in the start-up list), each with its
 own PLC inputs and its own program. Channels share nothing but the cycle: a lift, an error or
 a feed hold in one channel does not touch another (the real CNC runs its channels in one
-interpolator cycle the same way, isg-cnc.md §1.2). Pure: time is passed in, no IO, no logging.
+interpolator cycle the same way, docs/reference/isg-cnc.md §1.2). Pure: time is passed in, no IO, no
+logging.
 
 The rules a machine keeps (the configuration reports them with file and line first; here
 they are a ValueError, a bug of the caller):

@@ -15,7 +15,7 @@ PLANNING_MARGIN = 1e-6
 
 
 class LiftMethod(enum.Enum):
-    """Resulting lift method of a channel (activation rules, DESIGN.md §3.4)."""
+    """Resulting lift method of a channel (activation rules, docs/reference/design.md §3.4)."""
 
     ADVANCED = "advanced"  # time-based, FCT_LIFT_UP_TIME + P-CHAN-00345 = 1
     LIFTING = "lifting"  # path-based, FCT_LIFT_UP + P-CHAN-00345 = 0

@@ -46,7 +46,8 @@ def _pairs(spec: str, what: str, example: str) -> list[tuple[str, float, float]]
 
 
 def parse_override_spec(spec: str) -> list[tuple[float, float]]:
-    """ "T:PERCENT,T:PERCENT" → [(t_s, fraction)], steps in time order (DESIGN.md §3.1)."""
+    """ "T:PERCENT,T:PERCENT" → [(t_s, fraction)], steps in time order (docs/reference/design.md
+    §3.1)."""
     steps = []
     for item, t, pct in _pairs(spec, "override step", "T:PERCENT, e.g. 0.4:150"):
         if not (math.isfinite(t) and t >= 0.0 and 0.0 <= pct <= MAX_OVERRIDE * 100.0):

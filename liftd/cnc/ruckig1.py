@@ -1,9 +1,9 @@
 """The one wrapper around ruckig (community edition) for 1-D jerk-limited profiles.
 
 Path motion and the lift axis both use it. Every call is wrapped: ruckig's Python binding
-raises `RuckigError` for invalid or infeasible input (reference/lift-algorithm.md §1.1); callers
-get `ProfileError` and fall back to a safe move. Community ruckig ignores position limits, so
-callers check `position_range` where a bound matters.
+raises `RuckigError` for invalid or infeasible input (docs/reference/lift-algorithm.md §1.1);
+callers get `ProfileError` and fall back to a safe move. Community ruckig ignores position limits,
+so callers check `position_range` where a bound matters.
 """
 
 from __future__ import annotations

@@ -9,7 +9,7 @@ from typing import Annotated, NamedTuple, cast, get_args, get_origin, get_type_h
 
 
 class ChannelState(enum.IntEnum):
-    """Channel state, numbered as the KERNELV API enumerates it (isg-cnc.md §2.2)."""
+    """Channel state, numbered as the KERNELV API enumerates it (docs/reference/isg-cnc.md §2.2)."""
 
     READY = 3  # no program running
     ACTIVE = 4  # program running

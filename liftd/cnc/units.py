@@ -2,7 +2,7 @@
 
 Inside liftd everything is SI (m, s, m/s, m/s², m/s³, fractions). ISG lists use 0.1 µm for
 positions, µm/s for axis velocities, mm/s² for accelerations, µs for ramp times and 0.1 % for
-percentages (reference/isg-cnc.md §3); NC programs use mm and mm/min (G94).
+percentages (docs/reference/isg-cnc.md §3); NC programs use mm and mm/min (G94).
 """
 
 from __future__ import annotations

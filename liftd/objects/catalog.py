@@ -1,12 +1,13 @@
 """The CNC objects liftd serves on the GEO port, declared as data, compiled once per channel.
 
-Addressing (reference/isg-cnc.md §1; DESIGN.md §3.5): interpolator objects of channel <CID> at
-index group 0x121300 + CID (logical; bit 0x100000) and 0x21300 + channel index (index based);
-axis objects at index offset AID × 0x10000 + element, AID the logical axis number under logical
-addressing and the 1-based position in the channel otherwise (the isg-cnc.md §1.3 inference);
-element attributes at index group + 0x100 (name) … + 0x600 (object address). Data the real CNC
-offers only over the HLI shared memory gets a symbol and no invented IG/IO: its symbol entry
-points at 0xF005 with a fixed handle (STATIC_HANDLE_BIT | n), valid on every connection.
+Addressing (docs/reference/isg-cnc.md §1; docs/reference/design.md §3.5): interpolator objects of
+channel <CID> at index group 0x121300 + CID (logical; bit 0x100000) and 0x21300 + channel index
+(index based); axis objects at index offset AID × 0x10000 + element, AID the logical axis number
+under logical addressing and the 1-based position in the channel otherwise (the
+docs/reference/isg-cnc.md §1.3 inference); element attributes at index group + 0x100 (name) … +
+0x600 (object address). Data the real CNC offers only over the HLI shared memory gets a symbol and
+no invented IG/IO: its symbol entry points at 0xF005 with a fixed handle (STATIC_HANDLE_BIT | n),
+valid on every connection.
 """
 
 # `# fmt: skip` where it stays: ruff's one-item-per-line layout of those statements would
@@ -25,11 +26,11 @@ from liftd.cnc.params import ChannelParams
 from liftd.cnc.snapshot import GeoSnapshot, LoopStats, PlcSignal
 from liftd.objects.types import BOOLEAN, REAL64, SGN32, UNS16, UNS32, UNS64, CncType
 
-IPO_LOGICAL = 0x121300  # interpolator class, logical addressing (isg-cnc.md §1.2)
+IPO_LOGICAL = 0x121300  # interpolator class, logical addressing (docs/reference/isg-cnc.md §1.2)
 IPO_INDEX = 0x021300  # interpolator class, index-based addressing
 ATTRIBUTE_FIELD = 0xF00  # 0x300 data, 0x400 name, 0x500 type, 0x600 length, 0x700 unit, …
 DATA, NAME, TYPE, LENGTH, UNIT, WRITE_FLAG, ADDRESS = range(0x300, 0xA00, 0x100)
-ELEMENT_LIFT_SUPPRESSED = 0x0094  # isg-cnc.md §2.1 [S5]
+ELEMENT_LIFT_SUPPRESSED = 0x0094  # docs/reference/isg-cnc.md §2.1 [S5]
 ELEMENT_LIFT_ACTIVE = 0x0095
 
 

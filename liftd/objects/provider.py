@@ -2,10 +2,10 @@
 cycle; PLC inputs handed to the GEO loop. Pure: the snapshot source and the input sink are
 injected (the runtime's shared memory and queue, or a test's).
 
-Error codes (isg-cnc.md §1.5, the inference liftd follows): unknown class or channel → 0x702,
-unknown element or axis → 0x703, buffer shorter than the object → 0x705, write to a read-only
-object → 0x704, value out of range → 0x706, GEO task not running → 0x707 (ReadState then says
-STOP or ERROR), input queue full → 0x708 (from the sink).
+Error codes (docs/reference/isg-cnc.md §1.5, the inference liftd follows): unknown class or channel
+→ 0x702, unknown element or axis → 0x703, buffer shorter than the object → 0x705, write to a
+read-only object → 0x704, value out of range → 0x706, GEO task not running → 0x707 (ReadState then
+says STOP or ERROR), input queue full → 0x708 (from the sink).
 """
 
 from __future__ import annotations

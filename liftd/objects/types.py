@@ -12,7 +12,8 @@ from liftd.ads.symbols import DataType
 
 @dataclass(frozen=True, slots=True)
 class CncType:
-    isg: str  # type string of the +0x200 attribute (isg-cnc.md §1.4): BOOLEAN, UNS32, …
+    # type string of the +0x200 attribute (docs/reference/isg-cnc.md §1.4): BOOLEAN, UNS32, …
+    isg: str
     plc: str  # IEC type of the symbol entry, mapped to a ctype by pyads: BOOL, UDINT, …
     adst: Adst
     fmt: struct.Struct

@@ -1,7 +1,7 @@
 """The GEO loop's timing policy and statistics. Pure: times are passed in (integer ns).
 
-Missed-cycle policy (DESIGN.md §5, TwinCAT's model): every GEO cycle is computed and the GEO
-timeline advances by exactly one cycle per step (t = k·dt, so a run reproduces `simulate`
+Missed-cycle policy (docs/reference/design.md §5, TwinCAT's model): every GEO cycle is computed and
+the GEO timeline advances by exactly one cycle per step (t = k·dt, so a run reproduces `simulate`
 bit for bit). A cycle that starts late runs late, and the following ones run back to back
 until the loop is on its wall-clock grid t0 + k·P again; a cycle that finishes after the start
 of the next one counts as *exceeded*. Only when the loop is more than `max_behind` periods

@@ -1,7 +1,7 @@
 """Best-effort real-time settings of the GEO loop process, and its absolute-deadline sleep.
 
 Each setting is tried once at start-up and reported (ok or why not); none is required, so the
-loop also runs on a laptop or in CI (reference/rt-python.md §0, §3): SCHED_FIFO, CPU affinity,
+loop also runs on a laptop or in CI (docs/reference/rt-python.md §0, §3): SCHED_FIFO, CPU affinity,
 mlockall (after the heap is trimmed), timer slack 1 ns, /dev/cpu_dma_latency held at 0 (the
 largest single gain measured on this VM); and PR_SET_PDEATHSIG so a dead daemon never leaves a
 FIFO process spinning.
@@ -42,7 +42,7 @@ def spin_until(deadline_ns: int) -> None:
     """Busy-wait until the deadline (perf_counter_ns is CLOCK_MONOTONIC): the CPU never goes
     idle between cycles. On this VM an idle vCPU comes back with cold caches: a compiled
     GEO step took 16.6 µs p50 / 67 µs p99 after a 1 ms sleep, 6.3 / 46 µs after a 1 ms spin
-    and 4.7 / 18.5 µs back to back (README "Running it as a service")."""
+    and 4.7 / 18.5 µs back to back (docs/service.md, "Running it as a service")."""
     now = time.perf_counter_ns
     while now() < deadline_ns:
         pass

@@ -2,7 +2,7 @@
 
 * `Seqlock`: one writer (the loop) publishes a fixed-size record every cycle; readers copy it
   and retry while the sequence is odd or changed, at most `MAX_RETRIES` times, then keep the
-  last good copy — the writer never waits (reference/rt-python.md §2.6: 0 torn reads in
+  last good copy — the writer never waits (docs/reference/rt-python.md §2.6: 0 torn reads in
   millions, a plain copy tears 0.08–5 %).
 * `Ring`: single-producer single-consumer queue of fixed-size records (PLC inputs daemon →
   loop, trace records loop → daemon). The producer writes the record, then advances `head`;
@@ -11,7 +11,8 @@
   (the GEO loop's events → the daemon, which reassembles them as it did from a pipe).
 
 Both rely on stores becoming visible in program order, which x86-64 (TSO) guarantees for the
-interpreter's byte copies; an ARM target needs a helper with barriers (rt-python.md §5).
+interpreter's byte copies; an ARM target needs a helper with barriers (docs/reference/rt-python.md
+§5).
 
 The u64 indices (sequence, head, tail) are read and written through the block's one `cast("Q")`
 view: a single aligned 8-byte load or store each (memoryview's pack/unpack is a `memcpy` of the

@@ -1,5 +1,6 @@
 """`liftd run`: the composition root. Builds the parts from the settings, starts them in
-dependency order and stops them in reverse (rt-python.md §5, style-anchors rule 9).
+dependency order and stops them in reverse (docs/reference/rt-python.md §5,
+docs/reference/style-anchors.md rule 9).
 
 The daemon process runs asyncio: the ADS server, logs, sd_notify, metrics, the reload control
 socket and the trace writer thread. The GEO loop runs in its own process behind `GeoProcess`
@@ -212,7 +213,7 @@ class Daemon:
 
     def _keep_off_geo_cpu(self) -> None:
         """A loop that spins on its cpu owns it: the daemon's threads go to the others (the GEO
-        process has pinned itself already; README "Running it as a service")."""
+        process has pinned itself already; docs/service.md)."""
         rt = self.settings.config.rt
         if rt.idle != "spin" or rt.cpu < 0:
             return

@@ -3,9 +3,9 @@ the text exposition format of prometheus_client, GET /healthz 200 while the GEO 
 
 A custom collector asks for one `Sample` per scrape (a callable the daemon passes in: the GEO
 loop's counters and histograms, read from shared memory at that moment, and the ADS server's
-counters); nothing is touched per cycle (rt-python.md §8). The histograms are served on a fixed
-bucket set with `_sum` and `_count`; the daemon's and the GEO process's process metrics (CPU,
-memory, descriptors) come from prometheus_client's process collector.
+counters); nothing is touched per cycle (docs/reference/rt-python.md §8). The histograms are served
+on a fixed bucket set with `_sum` and `_count`; the daemon's and the GEO process's process metrics
+(CPU, memory, descriptors) come from prometheus_client's process collector.
 """
 
 from __future__ import annotations

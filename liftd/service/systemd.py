@@ -1,6 +1,7 @@
 """sd_notify(3) in a few lines: READY, RELOADING, STATUS, WATCHDOG, STOPPING to $NOTIFY_SOCKET
 (a leading "@" is an abstract socket), and the keep-alive task behind WATCHDOG=1 and the
-container heartbeat file. Outside systemd every notification is a no-op (rt-python.md §6)."""
+container heartbeat file. Outside systemd every notification is a no-op (docs/reference/rt-python.md
+§6)."""
 
 from __future__ import annotations
 

@@ -28,7 +28,7 @@ def lift_method_of(
     ipo_ref: Value | None,
     enable_time: Value | None,
 ) -> LiftMethod:
-    """Activation rules (vendor text §1, §2.1.2, §2.2.2, §4.2; DESIGN.md §3.4)."""
+    """Activation rules (vendor text §1, §2.1.2, §2.2.2, §4.2; docs/reference/design.md §3.4)."""
     time_based = bool(enable_time.value) if enable_time is not None else False
     where = pp_ref or ipo_ref or enable_time
     if LIFT_FLAG_TIME in pp and LIFT_FLAG_PATH in pp:
@@ -85,7 +85,7 @@ def look_ahead_of(
         return DEFAULT_LOOK_AHEAD
     if custom:
         # P-CHAN-00653, else P-STUP-00071 under its key, else under its older key `.parameter`
-        # (tf5200_startup_list/1238935151133070859: reference/isg-cnc.md §3.2 [S42])
+        # (tf5200_startup_list/1238935151133070859: docs/reference/isg-cnc.md §3.2 [S42])
         value = (
             chan.get("configuration.interpolator.number_blocks_lah")
             or stup.get(f"configuration.channel[{idx}].interpolator.number_blocks_lah")

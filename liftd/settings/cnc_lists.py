@@ -2,8 +2,8 @@
 and map them to core parameters in SI units, applying the lift activation rules.
 
 Interpretation order: internal defaults, then `default_sda_mds`, then `sda_mds[i]`; missing
-entries keep the earlier value (P-STUP-00034, isg-cnc.md §3.3). File names in the start-up list
-are relative to the start-up list's directory (isg-cnc.md §3.2).
+entries keep the earlier value (P-STUP-00034, docs/reference/isg-cnc.md §3.3). File names in the
+start-up list are relative to the start-up list's directory (docs/reference/isg-cnc.md §3.2).
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""liftd.toml as a file: where it is (DESIGN.md §3.1: `-c CONFIG`, `$LIFTD_CONFIG`,
+"""liftd.toml as a file: where it is (docs/reference/design.md §3.1: `-c CONFIG`, `$LIFTD_CONFIG`,
 `./config/liftd.toml`, the default configuration shipped inside the package), its text
 validated against the model with every problem located (file, line, key, value), and the
 error any configuration problem raises."""

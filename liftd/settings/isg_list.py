@@ -1,6 +1,6 @@
 """Syntax of ISG ASCII parameter lists (start-up, channel and axis lists).
 
-Rules (reference/isg-cnc.md §3.1, Beckhoff TF5200 "comments in ASCII list files",
+Rules (docs/reference/isg-cnc.md §3.1, Beckhoff TF5200 "comments in ASCII list files",
 https://infosys.beckhoff.com/content/1033/tf5200_external_variables/103714955.html):
 
 * one entry per line, ``<key> <value>``; keys are dotted paths with ``[i]`` indices;
@@ -127,9 +127,10 @@ UTF8_BOM = b"\xef\xbb\xbf"
 
 def read_list(path: Path) -> ParsedList:
     """Read and split one list file. Raises OSError for unreadable files."""
-    # ISG lists are plain ASCII; CP1252 is the CNC's code page for strings (isg-cnc.md §1.1).
-    # A file an editor on Windows saved as UTF-8 starts with a byte order mark: it is not
-    # part of the first key (read as CP1252 it was "ï»¿# ..."), and the rest is UTF-8.
+    # ISG lists are plain ASCII; CP1252 is the CNC's code page for strings
+    # (docs/reference/isg-cnc.md §1.1). A file an editor on Windows saved as UTF-8 starts with a
+    # byte order mark: it is not part of the first key (read as CP1252 it was "ï»¿# ..."), and the
+    # rest is UTF-8.
     data = path.read_bytes()
     if data.startswith(UTF8_BOM):
         text = data[len(UTF8_BOM) :].decode("utf-8", errors="replace")

@@ -1,9 +1,9 @@
 """Which ISG list keys liftd knows, their types and ranges, and typing of raw entries.
 
 Key names, types and ranges follow the Beckhoff TF5200 parameter pages cited in
-reference/isg-cnc.md §3 (P-STUP-*, P-CHAN-*, P-AXIS-*). Keys that liftd recognises but does not
+docs/reference/isg-cnc.md §3 (P-STUP-*, P-CHAN-*, P-AXIS-*). Keys that liftd recognises but does not
 use are accepted silently (`Kind.KNOWN`); keys nobody knows are warnings, as the CNC does
-("unknown entries are ignored with a warning", isg-cnc.md §3.1).
+("unknown entries are ignored with a warning", docs/reference/isg-cnc.md §3.1).
 """
 
 from __future__ import annotations
@@ -127,7 +127,7 @@ STARTUP_KEYS = (
     # list page give it (https://infosys.beckhoff.com/content/1033/tccncstartuplist/
     # 15280831883.html); later builds allow more (500, 10000 with STEP slopes), not liftd
     _spec("configuration.channel[i].interpolator.number_blocks_lah", Kind.INT, (0, 200)),
-    # P-STUP-00071's older key (reference/isg-cnc.md §3.2 [S42]): the same size, the same range
+    # P-STUP-00071's older key (docs/reference/isg-cnc.md §3.2 [S42]): the same size, the same range
     _spec("configuration.channel[i].interpolator.parameter", Kind.INT, (0, 200)),
 )
 

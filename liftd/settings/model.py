@@ -1,7 +1,7 @@
 """liftd.toml as frozen pydantic models (`extra="forbid"`, bounded fields).
 
-The keys of DESIGN.md §3.4 are a contract; every other key has a default. Units that are not
-SI are in the key name (`cycle_time_us`, `m_ack_delay_ms`).
+The keys of docs/reference/design.md §3.4 are a contract; every other key has a default. Units that
+are not SI are in the key name (`cycle_time_us`, `m_ack_delay_ms`).
 """
 
 from __future__ import annotations
@@ -150,7 +150,7 @@ class RtSection(_Section):
     # the CPU never idles, so each cycle starts with warm caches; costs that CPU entirely, pin
     # it with `cpu`; refused with SCHED_FIFO while the kernel limits real-time tasks'
     # share, sched_rt_runtime_us ≠ -1, which would stop the loop 50 ms a second; with a cpu,
-    # the daemon's threads keep off it; README "Running it as a service")
+    # the daemon's threads keep off it; docs/service.md)
     idle: Literal["sleep", "spin"] = "sleep"
     # the daemon stops serving and exits 3 when the GEO cycle counter stands still this long
     # (a stopped or hung loop; with no systemd watchdog, e.g. in Docker, this is the restart)
@@ -166,7 +166,7 @@ class LogSection(_Section):
 
 
 class UiSection(_Section):
-    """The live view in the browser (liftd/ui/, README "Watching liftd live"): off unless asked
+    """The live view in the browser (liftd/ui/, docs/live-view.md): off unless asked
     (the shipped liftd.toml asks, on loopback). Control from the page needs `control = true`,
     a token (`token`, or `token_file` relative to liftd.toml: one of them) and a peer that
     `[ads] allow_ips` admits."""

@@ -1,8 +1,8 @@
 """`liftd simulate PROGRAM --compare`: the same program and PLC schedule run with Advanced
 Lifting and with path-based Lifting, paired lift by lift.
 
-The summary (ComparisonSummary, its JSON) holds both full summaries (DESIGN.md §3.3) and, per
-lift, both lift entries with the ratios advanced / lifting of mean clearance and peak. The
+The summary (ComparisonSummary, its JSON) holds both full summaries (docs/reference/design.md §3.3)
+and, per lift, both lift entries with the ratios advanced / lifting of mean clearance and peak. The
 figure (plot.plot_compare) overlays each lift's Z over time and over path distance, needing
 per-lift samples: `LiftSampler` keeps them for the first MAX_PLOTTED lifts only, so memory
 stays bounded on any program.

@@ -2,8 +2,8 @@
 
 Drives GeoTask.step with t = k × cycle time, applies the override / feed-hold schedules, plays a
 simple PLC that acknowledges M functions (and continues after M00) after `plc.m_ack_delay_ms`,
-streams the trace CSV, keeps a decimated copy for the plot, and builds the summary of DESIGN.md
-§3.3 (summary.SimSummary).
+streams the trace CSV, keeps a decimated copy for the plot, and builds the summary of
+docs/reference/design.md §3.3 (summary.SimSummary).
 """
 
 from __future__ import annotations

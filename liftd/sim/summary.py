@@ -1,4 +1,4 @@
-"""The summary of a simulated run (DESIGN.md §3.3) as frozen values, and its JSON.
+"""The summary of a simulated run (docs/reference/design.md §3.3) as frozen values, and its JSON.
 
 The fields hold what the JSON reports, in its units (mm where the name says so, else s or a
 ratio) and already rounded as the JSON has them, so every reader (compare, plot, study, the
@@ -243,7 +243,7 @@ class ErrorEntry:
 
 @dataclass(frozen=True, slots=True)
 class SimSummary:
-    """The JSON summary of one run (DESIGN.md §3.3 and its extensions)."""
+    """The JSON summary of one run (docs/reference/design.md §3.3 and its extensions)."""
 
     cycle_time_s: float
     duration_s: float
@@ -298,8 +298,8 @@ class ChannelSummary:
 
 def machine_json(primary: SimSummary, channels: tuple[ChannelSummary, ...]) -> JsonObject:
     """simulate's JSON for several channels: the [cnc] channel's summary where a single
-    channel's is (DESIGN.md §3.3), and every channel's, that one included, under "channels"
-    in channel order. One channel: exactly the single-channel JSON."""
+    channel's is (docs/reference/design.md §3.3), and every channel's, that one included, under
+    "channels" in channel order. One channel: exactly the single-channel JSON."""
     out = primary.to_json()
     if len(channels) > 1:
         out["channels"] = [c.to_json() for c in channels]

@@ -1,4 +1,4 @@
-"""Trace CSV (DESIGN.md §3.2) and the running finite-difference limit check.
+"""Trace CSV (docs/reference/design.md §3.2) and the running finite-difference limit check.
 
 One row per GEO cycle, streamed: t [s], line, one column per channel axis [mm] (named after the
 axis, lower case), v_path [mm/s], override [fraction], lift_active, lift_suppressed (0/1), then

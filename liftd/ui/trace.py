@@ -1,7 +1,7 @@
-"""A recorded run as views: the trace CSV of `simulate --trace` / `run --trace` (DESIGN.md §3.2,
-one per channel: OUT.csv and its OUT.chN.csv siblings) read into columns, and the `GeoView` of
-any instant rebuilt from its row, so the page shows a trace through the same catalogue getters
-as a live run.
+"""A recorded run as views: the trace CSV of `simulate --trace` / `run --trace`
+(docs/reference/design.md §3.2, one per channel: OUT.csv and its OUT.chN.csv siblings) read into
+columns, and the `GeoView` of any instant rebuilt from its row, so the page shows a trace through
+the same catalogue getters as a live run.
 
 What a trace does not record is `missing` (null on the page): the PLC's inputs beyond the
 override in effect, errors, the M function pending, the block, the loop's timing and the ADS

@@ -22,6 +22,7 @@ import contextlib
 import hmac
 import ipaddress
 import json
+import logging
 import socket
 import time
 from collections import deque
@@ -142,6 +143,48 @@ def origin_allowed(origin: str | None, host_header: str) -> bool:
     return parts.scheme == "http" and parts.netloc.lower() == host_header.strip().lower()
 
 
+class HttpLog(logging.Handler):
+    """aiohttp's server log as liftd's: a request it cannot parse (a header line over 8 KiB,
+    a broken request line …) is answered 400 and logged by aiohttp at ERROR with a traceback;
+    here it is one `ui.bad_request` event per peer address and second, with the error on one
+    line and how many were held back (a peer sends what it likes, the log must not grow with it,
+    as the ADS server's `warn`)."""
+
+    def __init__(self, log: Any, clock: Callable[[], float] = time.monotonic) -> None:
+        super().__init__(logging.INFO)  # aiohttp's DEBUG (a non-HTTP first line) is dropped
+        self.log = log
+        self.clock = clock
+        self.last: dict[str, float] = {}
+        self.held: dict[str, int] = {}
+
+    def emit(self, record: logging.LogRecord) -> None:
+        args = record.args if isinstance(record.args, tuple) else ()
+        peer = str(args[0]) if args else "?"
+        exc = record.exc_info[1] if record.exc_info else None
+        now = self.clock()
+        if now - self.last.get(peer, -2.0) < 1.0:
+            self.held[peer] = self.held.get(peer, 0) + 1
+            return
+        if len(self.last) > 1024:  # peers seen: bounded
+            self.last.clear()
+            self.held.clear()
+        self.last[peer] = now
+        error = (
+            f"{type(exc).__name__}: {' '.join(str(exc).split())}" if exc else record.getMessage()
+        )
+        self.log.warning("ui.bad_request", peer=peer, error=error[:200],
+                         suppressed=self.held.pop(peer, 0))  # fmt: skip
+
+
+def http_logger(log: Any) -> logging.Logger:
+    """A logger of its own for one server's aiohttp (not propagated to the root's stderr)."""
+    logger = logging.getLogger(f"liftd.ui.http.{id(log):x}")
+    logger.propagate = False
+    logger.setLevel(logging.INFO)
+    logger.handlers[:] = [HttpLog(log)]
+    return logger
+
+
 class UiServer:
     def __init__(
         self,
@@ -169,7 +212,8 @@ class UiServer:
         app.router.add_get("/static/{name}", self._static)
         app.router.add_get("/ws", self._ws)
         app.router.add_get("/favicon.ico", self._no_icon)
-        self._runner = web.AppRunner(app, access_log=None, handle_signals=False)
+        self._runner = web.AppRunner(app, access_log=None, handle_signals=False,
+                                     logger=http_logger(self.log))  # fmt: skip
         await self._runner.setup()
         site = web.TCPSite(
             self._runner, self.cfg.host, self.cfg.port, backlog=64, shutdown_timeout=0.5
@@ -336,7 +380,7 @@ class UiServer:
     def _message(self, page: _Page, session: Session, text: str) -> dict[str, Any] | None:
         try:
             msg = json.loads(text)
-        except ValueError:
+        except (ValueError, RecursionError):  # RecursionError: ~1 000 brackets fit in 4 KiB
             msg = None
         if not isinstance(msg, dict) or not isinstance(msg.get("op"), str):
             return self._bad(page, "a message is a JSON object with an op")

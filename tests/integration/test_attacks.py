@@ -39,7 +39,7 @@ def test_attack(daemon: Daemon, case: Case) -> None:
     assert daemon.proc.poll() is None
     assert probe_ms(daemon) < 20.0  # p99 of a normal client right after (≈ 0.2 ms normally)
     # The loop is another process: an attack can only reach it through the CPU, so whether it
-    # missed deadlines is a figure of the machine (bench/attack_table.py, README), not asserted
+    # missed deadlines is a figure of the machine (bench/attack_table.py, docs/figures.md), not asserted
     # here; what must hold is that it kept cycling on its 1 ms grid throughout.
     cycles = daemon.read_symbol("GEO.cycle", "<Q") - cycle0
     assert cycles >= 0.5 * (time.monotonic() - t0) * 1000

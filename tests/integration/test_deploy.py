@@ -128,8 +128,8 @@ def test_the_syscall_filter_keeps_what_the_loop_needs() -> None:
 
 
 def test_documentation_exists_after_the_install_steps() -> None:
-    readme = (REPO / "README.md").read_text()
-    steps = readme[readme.index("sudo useradd --system") :].split("```")[0]
+    manual = (REPO / "docs" / "service.md").read_text()  # the install steps, once the README's
+    steps = manual[manual.index("sudo useradd --system") :].split("```")[0]
     for url in unit()["Unit"]["Documentation"].split():
         assert url.startswith("file://")
         path = url.removeprefix("file://")

@@ -1,7 +1,7 @@
-"""The README's ADS examples, as a user copies them, against a running `liftd run`: the pyads
-snippet executed verbatim (only the daemon's address and NetId substituted, since tests never
-use the fixed port 48898), and the TwinCAT ADSREAD snippet's NETID/PORT/IDXGRP/IDXOFFS/LEN
-replayed as the same ADS read."""
+"""The manual's ADS examples (docs/plc.md, once the README's), as a user copies them, against a
+running `liftd run`: the pyads snippet executed verbatim (only the daemon's address and NetId
+substituted, since tests never use the fixed port 48898), and the TwinCAT ADSREAD snippet's
+NETID/PORT/IDXGRP/IDXOFFS/LEN replayed as the same ADS read."""
 
 from __future__ import annotations
 
@@ -19,14 +19,14 @@ from tests.support.paths import REPO
 
 pytestmark = pytest.mark.integration
 
-README = (REPO / "README.md").read_text()
+PAGE = (REPO / "docs" / "plc.md").read_text()  # "Connecting a PLC"
 SHIPPED_ADDRESS, SHIPPED_NET_ID = "127.0.0.1:48898", "127.0.0.1.1.1"
 
 
 def block(lang: str, after: str) -> str:
     """The first fenced block of `lang` after the text `after`."""
-    start = README.index(after)
-    match = re.search(rf"```{lang}\n(.*?)```", README[start:], re.S)
+    start = PAGE.index(after)
+    match = re.search(rf"```{lang}\n(.*?)```", PAGE[start:], re.S)
     assert match is not None, f"no ```{lang} block after {after!r}"
     return match.group(1)
 

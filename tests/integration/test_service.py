@@ -488,7 +488,7 @@ runpy.run_module("liftd", run_name="__main__")
 
 def test_a_geo_process_that_cannot_be_started_is_a_start_failure_exit_3(tmp_path: Path) -> None:
     """Popen's OSError (EACCES here; EAGAIN at TasksMax, ENOMEM) went up as a traceback and
-    exit 1: now `daemon.start_failed` naming the cause and exit 3, what README says for a
+    exit 1: now `daemon.start_failed` naming the cause and exit 3, what docs/user-guide.md says for a
     runtime failure (systemd restarts it; exit 1 is a program error elsewhere in liftd)."""
     barred = tmp_path / "python"
     barred.write_text("")  # not executable: exec gives EACCES

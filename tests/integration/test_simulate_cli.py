@@ -1,4 +1,4 @@
-"""`liftd simulate` as users and other tools rely on it (DESIGN.md §3.1–3.3)."""
+"""`liftd simulate` as users and other tools rely on it (docs/reference/design.md §3.1–3.3)."""
 
 from __future__ import annotations
 
@@ -42,7 +42,7 @@ LIFT_KEYS = {
     "t_end",
     "arrival_error",
     "path_delay_s",
-    # compatible extensions of DESIGN.md §3.3
+    # compatible extensions of docs/reference/design.md §3.3
     "duration_s",
     "z_a_max_ratio",
     "premature",

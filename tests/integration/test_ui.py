@@ -195,6 +195,25 @@ def test_fuzz_malformed_oversized_and_many(daemon: Daemon) -> None:
     run(go())
 
 
+def test_requests_aiohttp_cannot_parse_are_400_and_one_log_line(daemon: Daemon) -> None:
+    """A header over 8 KiB, a broken request line: 400, and one `ui.bad_request` per peer and
+    second instead of aiohttp's traceback for each (the fuzz of bench/fuzz_ui.py found 30
+    tracebacks in 20 s)."""
+    port = int(ui_url(daemon).rstrip("/").rsplit(":", 1)[1])
+    before = daemon.count("ui.bad_request")
+    for request in [b"GET / HTTP/1.1\r\nHost: 127.0.0.1\r\nX-Big: " + b"b" * 9000 + b"\r\n\r\n",
+                    b"GET /\x00 HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n"] * 3:  # fmt: skip
+        with socket.create_connection(("127.0.0.1", port), timeout=5) as s:
+            s.sendall(request)
+            assert s.recv(64).split(b" ")[1] == b"400"
+    end = time.monotonic() + 5
+    while daemon.count("ui.bad_request") == before and time.monotonic() < end:
+        time.sleep(0.05)
+    logged = [r for r in daemon.logs if r.get("event") == "ui.bad_request"][before:]
+    assert 1 <= len(logged) <= 2 and "LineTooLong" in str(logged[0]["error"])  # within a second
+    assert not any("Traceback" in line or "Error handling request" in line for line in daemon.raw)
+
+
 def test_a_flood_or_a_stream_of_bad_messages_closes_the_page(daemon: Daemon) -> None:
     async def go() -> None:
         page = await open_page(ui_url(daemon))

@@ -1,6 +1,6 @@
 """The raw-socket attack cases against a running `liftd run` (issue 8), as data: each case does
 its thing to the daemon and returns the observed outcome, which the test compares with the
-expected one and bench/attack_table.py prints for the README.
+expected one and bench/attack_table.py prints for docs/figures.md.
 
 Daemon settings the cases assume: ATTACK_ADS below.
 """

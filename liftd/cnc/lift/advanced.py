@@ -1,6 +1,6 @@
 """Advanced Lifting (time-based, in the GEO cycle): the highest lift that still lands on time.
 
-Design and measurements: reference/lift-algorithm.md §3. Each cycle, with the remaining path
+Design and measurements: docs/reference/lift-algorithm.md §3. Each cycle, with the remaining path
 time T_rem until LIFT_END:
 
 * UP: rise time-optimally toward POS_LIMIT as long as the time-optimal descent from the *next*

@@ -1,10 +1,12 @@
 """Runs the lift ranges of a program in the GEO cycle: starts and ends lifts, the status flags
 `lift_active` / `lift_suppressed`, waiting conditions inside a range, and the override limits
 of Advanced Lifting. Path-based Lifting plugs in through the same interface: a range with a
-z(s) plan from path preparation is *coupled* (Z follows the path position, `couple()`), every
-other range runs the time-based generator (`step()`).
+z(s) plan from path preparation is *coupled* (Z follows the path position: `CoupledLift` in
+motion.py), every other range runs the time-based generator (`TimeBasedLift`); `step()` drives
+either.
 
-Rules (vendor text §2.1, §2.5, §2.6; DESIGN.md §4), with liftd's choices where it is silent:
+Rules (vendor text §2.1, §2.5, §2.6; docs/reference/design.md §4), with liftd's choices where it is
+silent:
 
 * lift_active is TRUE from the LIFT_START point until Z is at POS at LIFT_END; a suppressed lift
   (path shorter than lift_min_dist) sets lift_suppressed, and also lift_active when POS differs

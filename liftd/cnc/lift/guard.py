@@ -1,6 +1,6 @@
 """Guard on every lift-axis set-point: software limits and the lift's position bounds.
 
-Community ruckig ignores position limits (reference/lift-algorithm.md §1.1), so POS_LIMIT and
+Community ruckig ignores position limits (docs/reference/lift-algorithm.md §1.1), so POS_LIMIT and
 the software limits are enforced by construction in the generator; the guard checks each
 set-point anyway and reports what it finds: a set-point outside the bounds (clamped into them,
 never expected), and every ruckig refusal that made the generator fall back to a safe move.

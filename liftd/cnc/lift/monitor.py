@@ -3,7 +3,7 @@
 
 The levels are a_max·(1 + P-AXIS-00441/1000) and a_max·(1 + P-AXIS-00442/1000) (the parameters
 are "percentage exceedance of the maximum axis acceleration" in 0.1 %; both 0 switch the
-monitor off; reference/isg-cnc.md §3.4, https://infosys.beckhoff.com/content/1033/
+monitor off; docs/reference/isg-cnc.md §3.4, https://infosys.beckhoff.com/content/1033/
 tf5200_axis_parameter/117563787.html and …/117565323.html). The acceleration is measured the
 way a drive sees the command positions: the second finite difference over the GEO cycle.
 

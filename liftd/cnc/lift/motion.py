@@ -154,7 +154,8 @@ def _run_on(u: float, push: float, a: float, j: float) -> float:
 
 
 class TimeBasedLift(LiftMotion):
-    """Advanced Lifting's generator for one range (DESIGN.md §4, lift-algorithm.md §3)."""
+    """Advanced Lifting's generator for one range (docs/reference/design.md §4,
+    docs/reference/lift-algorithm.md §3)."""
 
     def __init__(
         self,
@@ -279,11 +280,11 @@ class TimeBasedLift(LiftMotion):
     def limit_override(
         self, ov_req: float, ov_eff: float, was_holding: bool, k: int, path: Interpolator
     ) -> OverrideVerdict:
-        """Advanced Lifting's override rules (vendor §2.5, DESIGN.md §4): while Z descends the
-        override is clamped to its value at descent start; while Z rises (or goes straight to
-        POS) an increase, or a restart after feed hold, is accepted only as far as Z still lands
-        on time; a decrease is always accepted. "Lands on time" is decided against a lower bound
-        of the path's arrival at the horizon k at the candidate override (bounded work):
+        """Advanced Lifting's override rules (vendor §2.5, docs/reference/design.md §4): while Z
+        descends the override is clamped to its value at descent start; while Z rises (or goes
+        straight to POS) an increase, or a restart after feed hold, is accepted only as far as Z
+        still lands on time; a decrease is always accepted. "Lands on time" is decided against a
+        lower bound of the path's arrival at the horizon k at the candidate override (bounded work):
         granting an override that passes it can never make Z late. While a request that was
         cut stands, the verdict is re-examined every cycle but granted higher only in steps of
         OVERRIDE_STEP, one bound evaluation a cycle while the next step does not fit."""

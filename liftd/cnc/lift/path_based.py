@@ -1,9 +1,10 @@
 """Path-based Lifting (the conventional method): z = f(s), planned in path preparation.
 
-Vendor text §2.2 (DE authoritative, DESIGN.md §4): the lift motion is planned as an independent
-motion in path preparation and coupled to the path, so the same path position always gives the
-same Z; at constant path velocity Z rises and lowers jerk-limited at its planning acceleration
-a_max × P-AXIS-00442/1000; feed hold stops Z, override scales it (acceleration × override²).
+Vendor text §2.2 (DE authoritative, docs/reference/design.md §4): the lift motion is planned as an
+independent motion in path preparation and coupled to the path, so the same path position always
+gives the same Z; at constant path velocity Z rises and lowers jerk-limited at its planning
+acceleration a_max × P-AXIS-00442/1000; feed hold stops Z, override scales it (acceleration ×
+override²).
 
 liftd's model (choices where the text is silent):
 

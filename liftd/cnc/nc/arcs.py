@@ -3,8 +3,8 @@
 Centre by I/J (relative to the start under G162, absolute under G161) or by radius R (G163:
 R > 0 shorter arc, R < 0 longer arc; a full circle with R is error 20034). The difference of
 start and end radius must not exceed P-CHAN-00171 (error 21758); an accepted difference is
-removed by moving the centre onto the perpendicular bisector (liftd's choice, documented in the
-README), so the arc is an exact circle through both points.
+removed by moving the centre onto the perpendicular bisector (liftd's choice, documented in
+docs/behaviour.md), so the arc is an exact circle through both points.
 """
 
 from __future__ import annotations

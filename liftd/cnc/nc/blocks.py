@@ -17,7 +17,7 @@ from liftd.cnc.params import SlopeType
 class ErrorId(enum.IntEnum):
     """NC error ids: ISG ids where the vendor documents one, liftd's own (99xxxx) otherwise."""
 
-    # ISG ids (vendor text §2.1.1, §2.3; reference/isg-cnc.md §4.8; TF5200 diagnosis pages)
+    # ISG ids (vendor text §2.1.1, §2.3; docs/reference/isg-cnc.md §4.8; TF5200 diagnosis pages)
     LIFT_ALREADY_ACTIVE = 21558  # LIFT already active, LIFT_END expected
     LIFT_NOT_ACTIVE = 21559  # LIFT already deactivated, LIFT_START expected
     LIFT_SECOND_START = 120604  # second lift start while a lift is active

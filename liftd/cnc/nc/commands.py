@@ -1,4 +1,4 @@
-"""`#` commands of the ISG dialect that liftd understands (isg-cnc.md §4.9, §5).
+"""`#` commands of the ISG dialect that liftd understands (docs/reference/isg-cnc.md §4.9, §5).
 
 #FLUSH, #FLUSH WAIT, #FLUSH CONTINUE; #SLOPE [TYPE=STEP|TRAPEZ|SIN2|HSC [NO_OPT=0|1]] and
 #SLOPE DEFAULT; #TIME <s>. #ROTATION, #TRAFO and #CS are recognised so that the lift-specific

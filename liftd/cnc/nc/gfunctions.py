@@ -104,7 +104,7 @@ class GFunctions:
             elif code in (161, 162):
                 self.center_absolute = code == 161
             elif code in (70, 71):
-                # G70 inch / G71 metric (TF5200 G-code list, isg-cnc.md §5 [S98])
+                # G70 inch / G71 metric (TF5200 G-code list, docs/reference/isg-cnc.md §5 [S98])
                 self.unit = units.program_length_factor(code == 70)
             elif code in ZERO_OFFSET_G:
                 self.zero_group = ZERO_OFFSET_G[code]

@@ -1,4 +1,4 @@
-"""Split one NC line into words (DIN 66025 subset of the ISG dialect, isg-cnc.md §5).
+"""Split one NC line into words (DIN 66025 subset of the ISG dialect, docs/reference/isg-cnc.md §5).
 
 Comments: ``( ... )`` may nest, ``(`` without ``)`` runs to the end of the line, ``;`` runs to
 the end of the line (TF5200 programming manual, comments). A ``#`` command takes the rest of

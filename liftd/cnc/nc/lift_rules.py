@@ -1,6 +1,6 @@
 """What a lift command means in its program and when it is refused (vendor text §2–§4,
-isg-cnc.md §4): LIFT_START / single-block LIFT and LIFT_END checked against the lift method,
-the lift axis, the open range, the slope and the software limits; POS and POS_LIMIT made
+docs/reference/isg-cnc.md §4): LIFT_START / single-block LIFT and LIFT_END checked against the lift
+method, the lift axis, the open range, the slope and the software limits; POS and POS_LIMIT made
 absolute (G91: relative to the lift axis at LIFT_START). The syntax of the words is in
 lift_words.py; the decoder keeps the state and calls these."""
 

@@ -33,8 +33,8 @@ from liftd.cnc.nc.trc import Trc
 from liftd.cnc.nc.words import Words
 
 # M functions the ISG kernel handles internally when m_synch does not configure them
-# (P-CHAN-00041 default NO_SYNCH for M0/1/2/17/29/30/3/4/19, isg-cnc.md §3.3); any other
-# unconfigured M function is an error.
+# (P-CHAN-00041 default NO_SYNCH for M0/1/2/17/29/30/3/4/19, docs/reference/isg-cnc.md §3.3); any
+# other unconfigured M function is an error.
 INTERNAL_M = frozenset({0, 1, 2, 3, 4, 17, 19, 29, 30})
 INF = float("inf")
 REFUSED_FEED = 0.1  # m/s: stands in after a refused F (those blocks never run)
@@ -191,7 +191,8 @@ class ModalDecoder(GFunctions):
         return self.tag
 
     def _dwell(self, lineno: int, w: Words) -> float:
-        """G04 X<s> (first main axis), G04 <s>, lenient G04 F<s> (isg-cnc.md §4.9)."""
+        """G04 X<s> (first main axis), G04 <s>, lenient G04 F<s> (docs/reference/isg-cnc.md
+        §4.9)."""
         first_axis = self.ctx.axis_names[0]
         direct = w.bare[0] if w.bare else None
         by_axis = w.values.get(first_axis) or w.values.get("F")

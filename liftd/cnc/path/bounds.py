@@ -1,5 +1,5 @@
 """A lower bound of the time the path needs to reach a boundary: the relaxation of
-reference/path-planning.md fact 5.
+docs/reference/path-planning.md fact 5.
 
 Drop the jerk limit, drop every constraint beyond the target (the look-ahead window's end
 included) and solve the rest exactly: acceleration-limited (each run's limit), with the

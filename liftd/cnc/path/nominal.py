@@ -1,7 +1,7 @@
 """The nominal run of a lift range (path_delay_s): the same path without any lift's limits,
 under the override the PLC requests, waits at stops counting as zero. `NominalRun` is the
 base of `Interpolator` (`interpolator.py`), whose state it reads: it changes with how the
-path delay is measured, the interpolator with how the path moves (docs/architecture.md,
+path delay is measured, the interpolator with how the path moves (docs/geo-core.md,
 "The lift")."""
 
 from __future__ import annotations

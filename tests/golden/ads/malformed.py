@@ -1,5 +1,5 @@
 """Writes malformed.hex: frames no well-behaved client sends, each with the outcome liftd must
-produce (reviewed against reference/ads.md; tests/unit/ads/test_malformed_corpus.py checks
+produce (reviewed against docs/reference/ads.md; tests/unit/ads/test_malformed_corpus.py checks
 them whole and byte by byte). Run from the repo root: python tests/golden/ads/malformed.py"""
 
 from __future__ import annotations

@@ -59,7 +59,7 @@ def test_frame_decodes_and_reencodes_byte_exactly(tag: str, raw: bytes) -> None:
     is_response = bool(frame.header.flags & StateFlag.RESPONSE)
     assert is_response == (tag == "S" and cmd != Command.NOTIFICATION)
     if cmd == Command.NOTIFICATION:
-        assert frame.header.flags == 0x0004  # sent as a request (ads.md §1.4)
+        assert frame.header.flags == 0x0004  # sent as a request (docs/reference/ads.md §1.4)
         stamps = wire.decode_notification(frame.payload)
         assert wire.encode_notification(stamps) == frame.payload
         return

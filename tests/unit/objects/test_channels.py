@@ -1,6 +1,6 @@
 """The objects of a machine of several channels (issue 18 item 1): channel N at index group
 0x12130‖N (logical, AID = logical axis number) and 0x21300 + n (index based, the n-th channel,
-AID = position in the channel), isg-cnc.md §1.2/§1.3; its own PLC inputs; the loop's objects
+AID = position in the channel), docs/reference/isg-cnc.md §1.2/§1.3; its own PLC inputs; the loop's objects
 once. The machine drives the view on a virtual clock."""
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
 """The GEO port's CNC objects: real addresses, attributes, symbols and aliases, PLC inputs, and
-the error codes of isg-cnc.md §1.5."""
+the error codes of docs/reference/isg-cnc.md §1.5."""
 
 from __future__ import annotations
 

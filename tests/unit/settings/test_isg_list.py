@@ -1,4 +1,4 @@
-"""ISG ASCII list syntax (reference/isg-cnc.md §3.1) on golden files and edge cases."""
+"""ISG ASCII list syntax (docs/reference/isg-cnc.md §3.1) on golden files and edge cases."""
 
 from __future__ import annotations
 

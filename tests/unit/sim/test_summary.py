@@ -1,4 +1,4 @@
-"""The typed summaries: the JSON they give is DESIGN.md §3.3 (keys, their order, units), and
+"""The typed summaries: the JSON they give is docs/reference/design.md §3.3 (keys, their order, units), and
 the comparison pairs lifts by start line and occurrence."""
 
 from __future__ import annotations

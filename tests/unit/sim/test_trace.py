@@ -1,4 +1,4 @@
-"""The trace CSV's rows (DESIGN.md §3.2): each is its snapshot's fields formatted, whatever the
+"""The trace CSV's rows (docs/reference/design.md §3.2): each is its snapshot's fields formatted, whatever the
 writer caches, and the finite-difference limit monitor gives numpy's exact maxima."""
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ N70 M30
 
 
 def plain_row(s: GeoSnapshot, n_axes: int) -> str:
-    """A row as DESIGN.md §3.2 lists its columns, one %-format per row (the reference)."""
+    """A row as docs/reference/design.md §3.2 lists its columns, one %-format per row (the reference)."""
     fmt = (
         ",".join(
             [

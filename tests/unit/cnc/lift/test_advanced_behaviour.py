@@ -1,5 +1,5 @@
 """Advanced Lifting in the GEO task: every behaviour of the vendor text (§2.1, §2.5, §2.6) and
-the rules of DESIGN.md §4, each on a small program with checkable numbers."""
+the rules of docs/reference/design.md §4, each on a small program with checkable numbers."""
 
 from __future__ import annotations
 
@@ -298,7 +298,7 @@ def test_lift_statuses_appear_in_snapshot_and_summary() -> None:
         "Z[LIFT_START POS=3 POS_LIMIT=40]\nG01 X102\nZ[LIFT_END]\nM30\n"
     )
     res = simulate(ch, text, Schedule(), 0.02)
-    summary = res.summary.to_json()  # the JSON a user reads (DESIGN.md §3.3)
+    summary = res.summary.to_json()  # the JSON a user reads (docs/reference/design.md §3.3)
     l1, l2 = summary["lifts"]
     assert (l1["suppressed"], l2["suppressed"]) == (False, True)
     assert l1["peak"] > 1.0 and l1["mean_clearance"] > 0 and l1["arrival_error"] <= 1e-3

@@ -1,6 +1,6 @@
 """The Advanced-Lifting set-point generator alone, against a path at constant feed.
 
-Reference values: reference/lift-algorithm.md §4 (closed form and LP oracle, limits
+Reference values: docs/reference/lift-algorithm.md §4 (closed form and LP oracle, limits
 v 0.8 m/s, a 10 m/s², j 500 m/s³, POS_LIMIT 50 mm)."""
 
 from __future__ import annotations

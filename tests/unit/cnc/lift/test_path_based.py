@@ -1,4 +1,4 @@
-"""Path-based Lifting (vendor §2.2, DESIGN.md §4): z = f(s) planned in path preparation,
+"""Path-based Lifting (vendor §2.2, docs/reference/design.md §4): z = f(s) planned in path preparation,
 coupled to the path. Small programs with hand-checkable numbers.
 
 Hand figures for the test machine's Z (a = 10 m/s², j = 500 m/s³, v_max 1 m/s): a rest-to-rest
