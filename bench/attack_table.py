@@ -20,8 +20,9 @@ from tests.support.daemon import Daemon, write_config  # noqa: E402
 
 def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
-        cfg = write_config(Path(tmp), program={"repeat": True}, ads=ATTACK_ADS,
-                           rt={"sched_fifo_priority": 80})  # fmt: skip
+        cfg = write_config(
+            Path(tmp), program={"repeat": True}, ads=ATTACK_ADS, rt={"sched_fifo_priority": 80}
+        )
         d = Daemon(cfg)
         try:
             d.ready()
@@ -29,12 +30,20 @@ def main() -> None:
             for case in CASES:
                 rss0, exc0 = rss_mb(d.proc.pid) or 0.0, d.read_exceeded()
                 outcome = case.run(d)
-                print(json.dumps({
-                    "case": case.name, "outcome": outcome, "expected": case.expected,
-                    "probe_p99_ms": round(probe_ms(d), 3), "probe_p99_ms_before": round(base_ms, 3),
-                    "geo_exceeded": d.read_exceeded() - exc0,
-                    "rss_growth_mb": round((rss_mb(d.proc.pid) or 0.0) - rss0, 1),
-                }), flush=True)  # fmt: skip
+                print(
+                    json.dumps(
+                        {
+                            "case": case.name,
+                            "outcome": outcome,
+                            "expected": case.expected,
+                            "probe_p99_ms": round(probe_ms(d), 3),
+                            "probe_p99_ms_before": round(base_ms, 3),
+                            "geo_exceeded": d.read_exceeded() - exc0,
+                            "rss_growth_mb": round((rss_mb(d.proc.pid) or 0.0) - rss0, 1),
+                        }
+                    ),
+                    flush=True,
+                )
         finally:
             d.stop()
 

@@ -49,8 +49,15 @@ def emit(rec: dict[str, object]) -> None:
 def sequential(d: Daemon, seconds: float) -> None:
     procs, out = load.start(d.net_id, d.address, seconds, 1, 0.0, 0, 10)
     (r,) = load.collect(procs, out, seconds + 30)
-    emit({"bench": "ads_sequential_reads", "reads_per_s": round(r["rate"]),
-          "latency_us": r["latency_us"], "errors": r["errors"], "goal": ">= 10000/s, p99 < 1000 us"})  # fmt: skip
+    emit(
+        {
+            "bench": "ads_sequential_reads",
+            "reads_per_s": round(r["rate"]),
+            "latency_us": r["latency_us"],
+            "errors": r["errors"],
+            "goal": ">= 10000/s, p99 < 1000 us",
+        }
+    )
 
 
 def sum_read(d: Daemon, seconds: float) -> None:
@@ -69,8 +76,15 @@ def sum_read(d: Daemon, seconds: float) -> None:
         assert result == b"\0\0\0\0" and data[: 4 * len(subs)] == bytes(4 * len(subs))
     c.close()
     arr = np.array(lat)
-    emit({"bench": "ads_sum_read_100", "objects_per_s": round(100 * len(arr) / (arr.sum() / 1e9)),
-          "requests": len(arr), "latency_us": load.percentiles_us(arr), "goal": ">= 200000 objects/s"})  # fmt: skip
+    emit(
+        {
+            "bench": "ads_sum_read_100",
+            "objects_per_s": round(100 * len(arr) / (arr.sum() / 1e9)),
+            "requests": len(arr),
+            "latency_us": load.percentiles_us(arr),
+            "goal": ">= 200000 objects/s",
+        }
+    )
     plc = pyads.Connection(d.net_id, 551, d.address)
     plc.open()
     names = [s for s in load.NOTIFY_SYMBOLS if s != "GEO.ch1.m_pending"] * 5  # 95 sub-reads
@@ -101,16 +115,26 @@ def under_load(d: Daemon, trace: Path, seconds: float) -> None:
     time.sleep(0.3)  # the trace writer drains its ring every 100 ms
     lost = load.lost_changes(notifiers, trace)
     p99 = [r["latency_us"].get("p99", 0.0) for r in pollers]
-    emit({"bench": "ads_load", "seconds": seconds, "clients": len(results),
-          "pollers": len(pollers), "poll_rate_hz_min": round(min(r["rate"] for r in pollers)),
-          "poll_rate_hz_total": round(sum(r["rate"] for r in pollers)),
-          "poll_latency_p99_us_max": max(p99), "poll_errors": sum(r["errors"] for r in pollers),
-          "notifiers": len(notifiers), "subscriptions": sum(r["subscriptions"] for r in notifiers),
-          "notification_samples": sum(r["samples"] for r in notifiers),
-          "lift_changes_per_client": [len(r["lift_active_changes_at"]) for r in notifiers],
-          "lift_changes_lost": lost,
-          "cycle_gap_ms_max": max(r["cycle_gap_ms"]["max"] for r in notifiers),
-          "geo_exceeded_during_load": after - before, "goal": "0 lost"})  # fmt: skip
+    emit(
+        {
+            "bench": "ads_load",
+            "seconds": seconds,
+            "clients": len(results),
+            "pollers": len(pollers),
+            "poll_rate_hz_min": round(min(r["rate"] for r in pollers)),
+            "poll_rate_hz_total": round(sum(r["rate"] for r in pollers)),
+            "poll_latency_p99_us_max": max(p99),
+            "poll_errors": sum(r["errors"] for r in pollers),
+            "notifiers": len(notifiers),
+            "subscriptions": sum(r["subscriptions"] for r in notifiers),
+            "notification_samples": sum(r["samples"] for r in notifiers),
+            "lift_changes_per_client": [len(r["lift_active_changes_at"]) for r in notifiers],
+            "lift_changes_lost": lost,
+            "cycle_gap_ms_max": max(r["cycle_gap_ms"]["max"] for r in notifiers),
+            "geo_exceeded_during_load": after - before,
+            "goal": "0 lost",
+        }
+    )
 
 
 def main() -> None:
@@ -121,8 +145,7 @@ def main() -> None:
     args = ap.parse_args()
     rt = RT_OFF if args.no_rt else RT_ON
     with tempfile.TemporaryDirectory() as tmp:
-        cfg = write_config(Path(tmp), program={"repeat": True}, ads={"max_connections": 128},
-                           rt=rt)  # fmt: skip
+        cfg = write_config(Path(tmp), program={"repeat": True}, ads={"max_connections": 128}, rt=rt)
         trace = Path(tmp) / "run.csv"
         d = Daemon(cfg, "--trace", str(trace))
         try:
@@ -133,9 +156,16 @@ def main() -> None:
         finally:
             d.stop()
         stopped = d.event("daemon.stopped", 1) or {}
-        emit({"bench": "ads_geo_timing", "cycles": stopped.get("cycles"),
-              "exceeded": stopped.get("exceeded"), "lateness_us": stopped.get("lateness_us"),
-              "compute_us": stopped.get("compute_us"), "rt": not args.no_rt})  # fmt: skip
+        emit(
+            {
+                "bench": "ads_geo_timing",
+                "cycles": stopped.get("cycles"),
+                "exceeded": stopped.get("exceeded"),
+                "lateness_us": stopped.get("lateness_us"),
+                "compute_us": stopped.get("compute_us"),
+                "rt": not args.no_rt,
+            }
+        )
 
 
 if __name__ == "__main__":

@@ -1,5 +1,5 @@
 """GEO step CPU time of a machine of 1, 2 and 4 channels at 1 ms (issue 18 item 1): the same
-generated nesting job (bench/gen.py, Advanced Lifting) in every channel, each channel its own
+generated nesting job (tests/support/programs.py, Advanced Lifting) in every channel, each channel its own
 logical axes (X Y Z, as on the demo machine's lists, logical axes 3c+1 … 3c+3), stepped on a
 virtual clock by `Machine.step` as the GEO loop steps it (every channel, channel order, its
 own automatic PLC), timed with time.perf_counter_ns around the whole machine step, with the
@@ -32,12 +32,12 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from bench.gen import count_blocks, nesting_program  # noqa: E402
 from liftd.cnc.machine import ChannelProgram, Machine  # noqa: E402
 from liftd.cnc.params import ChannelParams  # noqa: E402
 from liftd.cnc.plc import Schedule, SimPlc  # noqa: E402
 from liftd.cnc.snapshot import ChannelState, GeoSnapshot  # noqa: E402
 from liftd.settings import load_settings  # noqa: E402
+from tests.support.programs import count_blocks, nesting_program  # noqa: E402
 
 
 def channels(base: ChannelParams, n: int) -> list[ChannelParams]:
@@ -102,16 +102,20 @@ def main() -> None:
     parser.add_argument("--parts", type=int, default=60, help="parts of the nesting job")
     parser.add_argument("--repeats", type=int, default=3, help="runs per channel count (best)")
     parser.add_argument("--channels", default="1,2,4", help="channel counts")
-    parser.add_argument("--distinct", action="store_true",
-                        help="channel c cuts at F(6000 - 600 c), 6 + c lines per part")  # fmt: skip
+    parser.add_argument(
+        "--distinct",
+        action="store_true",
+        help="channel c cuts at F(6000 - 600 c), 6 + c lines per part",
+    )
     args = parser.parse_args()
     base = load_settings(str(ROOT / "config" / "liftd.toml")).channel
     counts = [int(c) for c in args.channels.split(",")]
     texts = [
         nesting_program(args.parts, lines_per_part=6 + c, cut_feed=6000 - 600 * c)
-        if args.distinct else nesting_program(args.parts)
+        if args.distinct
+        else nesting_program(args.parts)
         for c in range(max(counts))
-    ]  # fmt: skip
+    ]
     for n in counts:
         best: dict[str, float] | None = None
         runs = []
@@ -126,15 +130,24 @@ def main() -> None:
         # this VM's noise (as bench_step.py --breakdown)
         noise_free = figures(np.min(np.vstack(runs), axis=0), base.cycle_time)
         share = {f"per_channel_{k}": round(v / n, 1) for k, v in best.items() if k.endswith("_us")}
-        print(json.dumps({
-            "bench": "channels", "channels": n, "cycle_time_ms": base.cycle_time * 1e3,
-            "program": f"nesting_program({args.parts})", "distinct": args.distinct,
-            "blocks": count_blocks(texts[0]),
-            "blocks_per_channel": [count_blocks(texts[c]) for c in range(n)],
-            **best, **share,
-            "budget_share_p99": round(best["p99_us"] / (base.cycle_time * 1e6), 3),
-            "noise_free": noise_free,
-        }), flush=True)  # fmt: skip
+        print(
+            json.dumps(
+                {
+                    "bench": "channels",
+                    "channels": n,
+                    "cycle_time_ms": base.cycle_time * 1e3,
+                    "program": f"nesting_program({args.parts})",
+                    "distinct": args.distinct,
+                    "blocks": count_blocks(texts[0]),
+                    "blocks_per_channel": [count_blocks(texts[c]) for c in range(n)],
+                    **best,
+                    **share,
+                    "budget_share_p99": round(best["p99_us"] / (base.cycle_time * 1e6), 3),
+                    "noise_free": noise_free,
+                }
+            ),
+            flush=True,
+        )
 
 
 if __name__ == "__main__":

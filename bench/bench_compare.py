@@ -20,7 +20,6 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from bench.cli import parser  # noqa: E402
-from bench.gen import nesting_program  # noqa: E402
 from liftd.cnc.geo_program import _couple_lifts  # noqa: E402
 from liftd.cnc.lift.ranges import find_ranges  # noqa: E402
 from liftd.cnc.nc import DecoderContext, decode  # noqa: E402
@@ -29,6 +28,7 @@ from liftd.cnc.path.program import prepare  # noqa: E402
 from liftd.cnc.plc import Schedule, parse_override_spec  # noqa: E402
 from liftd.settings import load_settings  # noqa: E402
 from liftd.sim.compare import compare  # noqa: E402
+from tests.support.programs import nesting_program  # noqa: E402
 
 START = "G90 G17 G94\n#SLOPE[TYPE=TRAPEZ]\nG00 X20 Y20 Z1\n"
 

@@ -26,10 +26,15 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from bench.cli import parser
-from bench.gen import count_blocks, nesting_program, repeated_program, subroutine_program
 from liftd.cnc.nc import DecoderContext, decode
 from liftd.cnc.nc.decoder import iter_decode
 from liftd.settings import load_settings
+from tests.support.programs import (
+    count_blocks,
+    nesting_program,
+    repeated_program,
+    subroutine_program,
+)
 
 
 def best_of(n: int, fn: object) -> float:
@@ -56,22 +61,38 @@ def main() -> None:
         _, peak = tracemalloc.get_traced_memory()
         tracemalloc.stop()
         assert result.first_error is None, result.first_error
-        print(json.dumps({"bench": "decode", "blocks": blocks,
-                          "decoded_blocks": len(result.blocks), "seconds": round(seconds, 3),
-                          "blocks_per_s": round(blocks / seconds), "peak_bytes": peak,
-                          "bytes_per_block": round(peak / blocks)}))  # fmt: skip
+        print(
+            json.dumps(
+                {
+                    "bench": "decode",
+                    "blocks": blocks,
+                    "decoded_blocks": len(result.blocks),
+                    "seconds": round(seconds, 3),
+                    "blocks_per_s": round(blocks / seconds),
+                    "peak_bytes": peak,
+                    "bytes_per_block": round(peak / blocks),
+                }
+            )
+        )
 
     for kerf in (False, True):  # 6667 placements x 15 blocks = 100 005 executed blocks
         text = subroutine_program(6667, kerf=kerf)
         result = decode(text, ctx)
         assert result.first_error is None, result.first_error
         seconds = best_of(5, lambda t=text: decode(t, ctx))
-        print(json.dumps({"bench": "decode_subroutines", "kerf_compensation": kerf,
-                          "program_lines": text.count("\n"),
-                          "executed_blocks": len(result.blocks),
-                          "executed_lines": result.executed_lines,
-                          "seconds": round(seconds, 3),
-                          "blocks_per_s": round(len(result.blocks) / seconds)}))  # fmt: skip
+        print(
+            json.dumps(
+                {
+                    "bench": "decode_subroutines",
+                    "kerf_compensation": kerf,
+                    "program_lines": text.count("\n"),
+                    "executed_blocks": len(result.blocks),
+                    "executed_lines": result.executed_lines,
+                    "seconds": round(seconds, 3),
+                    "blocks_per_s": round(len(result.blocks) / seconds),
+                }
+            )
+        )
 
     channel = dataclasses.replace(settings.channel, max_executed_blocks=20_000_000)
     stream_ctx = DecoderContext.from_channel(channel)
@@ -85,8 +106,16 @@ def main() -> None:
         tracemalloc.stop()
         errors = decoder.result(()).errors
         assert not errors, errors
-        print(json.dumps({"bench": "decode_stream_memory", "program_bytes": len(text),
-                          "executed_blocks": count, "peak_bytes": peak}))  # fmt: skip
+        print(
+            json.dumps(
+                {
+                    "bench": "decode_stream_memory",
+                    "program_bytes": len(text),
+                    "executed_blocks": count,
+                    "peak_bytes": peak,
+                }
+            )
+        )
 
 
 if __name__ == "__main__":

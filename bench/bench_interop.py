@@ -89,27 +89,44 @@ def pyads_vs_testserver(d: Daemon, seconds: float, rounds: int) -> None:
         server.kill()
         server.wait()
     best = {k: max(v, key=lambda r: r["rate"]) for k, v in runs.items()}
-    emit({"bench": "pyads_vs_testserver", "seconds": seconds, "rounds": rounds,
-          "liftd_reads_per_s": round(best["liftd"]["rate"]),
-          "testserver_reads_per_s": round(best["testserver"]["rate"]),
-          "ratio": round(best["liftd"]["rate"] / best["testserver"]["rate"], 2),
-          "liftd_latency_us": best["liftd"]["latency_us"],
-          "testserver_latency_us": best["testserver"]["latency_us"],
-          "errors": sum(r["errors"] for v in runs.values() for r in v)})  # fmt: skip
+    emit(
+        {
+            "bench": "pyads_vs_testserver",
+            "seconds": seconds,
+            "rounds": rounds,
+            "liftd_reads_per_s": round(best["liftd"]["rate"]),
+            "testserver_reads_per_s": round(best["testserver"]["rate"]),
+            "ratio": round(best["liftd"]["rate"] / best["testserver"]["rate"], 2),
+            "liftd_latency_us": best["liftd"]["latency_us"],
+            "testserver_latency_us": best["testserver"]["latency_us"],
+            "errors": sum(r["errors"] for v in runs.values() for r in v),
+        }
+    )
 
 
 def node(d: Daemon, *args: str) -> dict[str, Any]:
-    run = subprocess.run(["node", "session.mjs", *args[:1], str(d.port), d.net_id, *args[1:]],
-                         cwd=NODE_DIR, capture_output=True, text=True, timeout=120,
-                         check=True)  # fmt: skip
+    run = subprocess.run(
+        ["node", "session.mjs", *args[:1], str(d.port), d.net_id, *args[1:]],
+        cwd=NODE_DIR,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=True,
+    )
     result: dict[str, Any] = json.loads(run.stdout.strip().splitlines()[-1])
     return result
 
 
 def ads_client_read_value(d: Daemon, seconds: float) -> None:
     r = node(d, "bench", str(seconds))
-    emit({"bench": "ads_client_read_value", "ads_client": r["version"],
-          "read_value_per_s": round(r["read_value_per_s"]), "reads": r["reads"]})  # fmt: skip
+    emit(
+        {
+            "bench": "ads_client_read_value",
+            "ads_client": r["version"],
+            "read_value_per_s": round(r["read_value_per_s"]),
+            "reads": r["reads"],
+        }
+    )
 
 
 def upload(d: Daemon, repetitions: int) -> None:
@@ -119,8 +136,10 @@ def upload(d: Daemon, repetitions: int) -> None:
         for _ in range(repetitions):
             t0 = time.perf_counter_ns()
             _, info = c.read(0xF00F, 0, 64)
-            sym_bytes, type_bytes = struct.unpack_from("<I", info, 4)[0], struct.unpack_from(
-                "<I", info, 12)[0]  # fmt: skip
+            sym_bytes, type_bytes = (
+                struct.unpack_from("<I", info, 4)[0],
+                struct.unpack_from("<I", info, 12)[0],
+            )
             code_t, types = c.read(0xF00E, 0, type_bytes)
             code_s, symbols = c.read(0xF00B, 0, sym_bytes)
             times.append(time.perf_counter_ns() - t0)
@@ -130,12 +149,20 @@ def upload(d: Daemon, repetitions: int) -> None:
         c.close()
     ns = np.array(times)
     r = node(d, "upload")
-    emit({"bench": "symbol_and_data_type_upload", "symbol_bytes": sizes[0],
-          "data_type_bytes": sizes[1], "symbols": struct.unpack_from("<I", info)[0],
-          "data_types": struct.unpack_from("<I", info, 8)[0],
-          "raw_ms": {"p50": round(float(np.percentile(ns, 50)) / 1e6, 3),
-                     "p99": round(float(np.percentile(ns, 99)) / 1e6, 3)},
-          "ads_client_get_symbols_and_data_types_ms": r["upload_ms"]})  # fmt: skip
+    emit(
+        {
+            "bench": "symbol_and_data_type_upload",
+            "symbol_bytes": sizes[0],
+            "data_type_bytes": sizes[1],
+            "symbols": struct.unpack_from("<I", info)[0],
+            "data_types": struct.unpack_from("<I", info, 8)[0],
+            "raw_ms": {
+                "p50": round(float(np.percentile(ns, 50)) / 1e6, 3),
+                "p99": round(float(np.percentile(ns, 99)) / 1e6, 3),
+            },
+            "ads_client_get_symbols_and_data_types_ms": r["upload_ms"],
+        }
+    )
 
 
 def timed_pyads_read(net_id: str, address: str) -> tuple[float, float]:
@@ -163,21 +190,35 @@ def crowded(d: Daemon) -> None:
     first, second = timed_pyads_read(d.net_id, d.address)
     for s in idle:
         s.close()
-    emit({"bench": "pyads_with_64_idle_sockets", "open_and_first_read_ms": round(first * 1e3, 2),
-          "next_read_ms": round(second * 1e3, 3), "bound": "< 1 s"})  # fmt: skip
+    emit(
+        {
+            "bench": "pyads_with_64_idle_sockets",
+            "open_and_first_read_ms": round(first * 1e3, 2),
+            "next_read_ms": round(second * 1e3, 3),
+            "bound": "< 1 s",
+        }
+    )
 
 
 def log_pipe(tmp: Path) -> None:
     port = free_port()
-    cfg = write_config(tmp, program={"repeat": True}, ads={"port": port},
-                       log={"format": "json", "queue_lines": 100})  # fmt: skip
+    cfg = write_config(
+        tmp,
+        program={"repeat": True},
+        ads={"port": port},
+        log={"format": "json", "queue_lines": 100},
+    )
     notify = Notify(tmp)
     pipes = [os.pipe() for _ in range(2)]
     for _, w in pipes:
         fcntl.fcntl(w, fcntl.F_SETPIPE_SZ, 4096)
-    proc = subprocess.Popen([sys.executable, "-m", "liftd", "run", "-c", str(cfg)],
-                            stdout=pipes[0][1], stderr=pipes[1][1], cwd=ROOT,
-                            env={**os.environ, "NOTIFY_SOCKET": notify.path})  # fmt: skip
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "liftd", "run", "-c", str(cfg)],
+        stdout=pipes[0][1],
+        stderr=pipes[1][1],
+        cwd=ROOT,
+        env={**os.environ, "NOTIFY_SOCKET": notify.path},
+    )
     for _, w in pipes:
         os.close(w)
     try:
@@ -190,17 +231,24 @@ def log_pipe(tmp: Path) -> None:
                 s.bind((f"127.0.0.{2 + i % 200}", 0))
                 s.connect(("127.0.0.1", port))
         churn = time.perf_counter() - t0
-        net_id = next(line.split('"')[1] for line in cfg.read_text().splitlines()
-                      if line.startswith("net_id"))  # fmt: skip
+        net_id = next(
+            line.split('"')[1] for line in cfg.read_text().splitlines() if line.startswith("net_id")
+        )
         first, second = timed_pyads_read(net_id, f"127.0.0.1:{port}")
         plc = pyads.Connection(net_id, 551, f"127.0.0.1:{port}")
         plc.open()
         dropped = plc.read_by_name("GEO.ads.log_dropped", pyads.PLCTYPE_ULINT)
         plc.close()
-        emit({"bench": "pyads_with_unread_log_pipe_after_3000_connections",
-              "connections_s": round(churn, 2), "open_and_first_read_ms": round(first * 1e3, 2),
-              "next_read_ms": round(second * 1e3, 3), "log_lines_dropped": dropped,
-              "bound": "< 100 ms"})  # fmt: skip
+        emit(
+            {
+                "bench": "pyads_with_unread_log_pipe_after_3000_connections",
+                "connections_s": round(churn, 2),
+                "open_and_first_read_ms": round(first * 1e3, 2),
+                "next_read_ms": round(second * 1e3, 3),
+                "log_lines_dropped": dropped,
+                "bound": "< 100 ms",
+            }
+        )
     finally:
         proc.send_signal(signal.SIGTERM)
         proc.wait(20)

@@ -21,9 +21,13 @@ sys.path.insert(0, str(ROOT))
 
 from bench.cli import parser  # noqa: E402
 from liftd.cnc.geo_task import GeoTask  # noqa: E402
-from liftd.cnc.lift.advanced import AdvancedLift, Phase  # noqa: E402
+from liftd.cnc.lift.advanced import AdvancedLift  # noqa: E402
 from liftd.cnc.lift.profile import LiftProfiles  # noqa: E402
-from liftd.cnc.snapshot import ChannelState, GeoInputs  # noqa: E402
+from liftd.cnc.snapshot import (  # noqa: E402
+    ChannelState,
+    GeoInputs,
+    LiftPhase,
+)
 from liftd.settings import load_settings  # noqa: E402
 
 DT = 1e-3
@@ -61,11 +65,11 @@ def generator(runs: int = 400) -> None:
             gen.step(t + DT, t_rem)
             ns = time.perf_counter_ns() - t0
             every.append(ns)
-            if before_phase is Phase.UP and gen.phase is Phase.DOWN:
+            if before_phase is LiftPhase.UP and gen.phase is LiftPhase.DOWN:
                 kinds["switch"].append(ns)
-            elif before_phase is Phase.UP:
+            elif before_phase is LiftPhase.UP:
                 kinds["up"].append(ns)
-            elif before_phase is Phase.DOWN:
+            elif before_phase is LiftPhase.DOWN:
                 kinds["down_follow" if gen.plan is before_plan else "down_replan"].append(ns)
             t += DT
             left = max(0.0, left - DT * ov)

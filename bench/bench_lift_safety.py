@@ -35,9 +35,10 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from bench.cli import parser
-from bench.stress_cases import describe, scenario, violations, wide_scenario
 from liftd.cnc.params import LiftMethod
 from tests.support.closed_loop import run_task
+from tests.support.cycle_check import violations
+from tests.support.scenarios import describe, scenario, wide_scenario
 from tests.support.stops import stop_and_start
 
 
@@ -45,12 +46,18 @@ def main() -> None:
     ap = parser(__doc__)
     ap.add_argument("--wide", action="store_true", help="the whole input space (issue 14)")
     ap.add_argument("--stops", action="store_true", help="a PLC STOP and START in every run")
-    ap.add_argument("--flush", action="store_true",
-                    help="#FLUSH / #FLUSH WAIT inside ranges (issue 37)")  # fmt: skip
+    ap.add_argument(
+        "--flush", action="store_true", help="#FLUSH / #FLUSH WAIT inside ranges (issue 37)"
+    )
     ap.add_argument("runs", nargs="?", type=int, default=1000, help="seeded runs (1000)")
     ap.add_argument("first_seed", nargs="?", type=int, default=0, help="the first seed (0)")
-    ap.add_argument("method", nargs="?", default="advanced", choices=["advanced", "lifting"],
-                    help="lift method (advanced)")  # fmt: skip
+    ap.add_argument(
+        "method",
+        nargs="?",
+        default="advanced",
+        choices=["advanced", "lifting"],
+        help="lift method (advanced)",
+    )
     args = ap.parse_args()
     wide, runs, first, method = args.wide, args.runs, args.first_seed, LiftMethod(args.method)
     make = wide_scenario if wide else scenario
@@ -61,8 +68,9 @@ def main() -> None:
         sc = make(seed, method, args.flush)
         try:
             if args.stops:
-                task, snaps = run_task(sc.channel, sc.text, inputs=stop_and_start(sc, seed),
-                                       max_time=300)  # fmt: skip
+                task, snaps = run_task(
+                    sc.channel, sc.text, inputs=stop_and_start(sc, seed), max_time=300
+                )
             else:
                 task, snaps = run_task(sc.channel, sc.text, sc.schedule, max_time=300)
         except Exception as exc:  # a crash is a failure to report, not the end of the bench

@@ -50,8 +50,12 @@ def main() -> None:
         d = Daemon(cfg)
         try:
             d.ready()
-            (geo,) = subprocess.run(["pgrep", "-P", str(d.proc.pid), "-f", "liftd.runtime"],
-                                    capture_output=True, text=True, check=True).stdout.split()  # fmt: skip
+            (geo,) = subprocess.run(
+                ["pgrep", "-P", str(d.proc.pid), "-f", "liftd.runtime"],
+                capture_output=True,
+                text=True,
+                check=True,
+            ).stdout.split()
             rt = [r["text"] for r in d.logs if r.get("event") == "geo.rt_setting"]
             procs, out = load.start(d.net_id, d.address, seconds + 5, 1, 100.0, 1, 10, 10)
             t0 = time.monotonic()
@@ -68,13 +72,21 @@ def main() -> None:
         finally:
             d.stop()
         first, last = samples[0], samples[-1]
-        print(json.dumps({
-            "figure": "rss_mib", "minutes": args.minutes, "rt_settings": rt,
-            "daemon_start": first["daemon"]["VmRSS"], "daemon_end": last["daemon"]["VmRSS"],
-            "geo_start": first["geo"]["VmRSS"], "geo_end": last["geo"]["VmRSS"],
-            "geo_locked_end": last["geo"].get("VmLck"),
-            "targets": {"geo": 40, "daemon": 60},
-        }))  # fmt: skip
+        print(
+            json.dumps(
+                {
+                    "figure": "rss_mib",
+                    "minutes": args.minutes,
+                    "rt_settings": rt,
+                    "daemon_start": first["daemon"]["VmRSS"],
+                    "daemon_end": last["daemon"]["VmRSS"],
+                    "geo_start": first["geo"]["VmRSS"],
+                    "geo_end": last["geo"]["VmRSS"],
+                    "geo_locked_end": last["geo"].get("VmLck"),
+                    "targets": {"geo": 40, "daemon": 60},
+                }
+            )
+        )
 
 
 if __name__ == "__main__":

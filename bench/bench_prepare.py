@@ -26,7 +26,6 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from bench.gen import count_blocks, nesting_program  # noqa: E402
 from liftd.cnc import pause as pause_points  # noqa: E402
 from liftd.cnc.geo_task import GeoTask  # noqa: E402
 from liftd.cnc.params import ChannelParams  # noqa: E402
@@ -36,6 +35,7 @@ from liftd.cnc.plc import (  # noqa: E402
 )
 from liftd.cnc.snapshot import ChannelState, Command, GeoInputs, GeoSnapshot, PlcSignal  # noqa: E402
 from liftd.settings import load_settings  # noqa: E402
+from tests.support.programs import count_blocks, nesting_program  # noqa: E402
 
 
 def channel() -> ChannelParams:
@@ -47,8 +47,14 @@ def _stats(values: list[float]) -> dict[str, float]:
     return {"min": round(v[0], 1), "p50": round(statistics.median(v), 1), "max": round(v[-1], 1)}
 
 
-def _run_until(task: GeoTask, plc: SimPlc, k: int, last: GeoSnapshot | None, stop: float,
-               cmd: Command = Command.NONE) -> tuple[int, GeoSnapshot]:  # fmt: skip
+def _run_until(
+    task: GeoTask,
+    plc: SimPlc,
+    k: int,
+    last: GeoSnapshot | None,
+    stop: float,
+    cmd: Command = Command.NONE,
+) -> tuple[int, GeoSnapshot]:
     """Step `task` with the automatic PLC until time `stop` (or READY after a command)."""
     dt = task.dt
     first = True
@@ -74,8 +80,13 @@ def start_after_reset(name: str, text: str, runs: int) -> dict[str, object]:
     ch = channel()
     flush = np.zeros((64 << 20) // 8)
     clock = time.perf_counter_ns
-    times: dict[str, list[float]] = {"in_cycle": [], "prepared": [], "repeat": [],
-                                     "reset": [], "stop": []}  # fmt: skip
+    times: dict[str, list[float]] = {
+        "in_cycle": [],
+        "prepared": [],
+        "repeat": [],
+        "reset": [],
+        "stop": [],
+    }
 
     def timed(task: GeoTask, k: int, cmd: Command, kind: str) -> GeoSnapshot:
         gc.collect()
@@ -132,9 +143,14 @@ def start_after_reset(name: str, text: str, runs: int) -> dict[str, object]:
         task.step(GeoInputs(command=Command.START), k * ch.cycle_time)
         times["repeat"].append((clock() - c0) / 1e3)
         gc.enable()
-    return {"bench": "prepare_start", "program": name, "blocks": count_blocks(text),
-            "runs": runs, "cold": True,
-            **{f"{how}_us": _stats(v) for how, v in times.items()}}  # fmt: skip
+    return {
+        "bench": "prepare_start",
+        "program": name,
+        "blocks": count_blocks(text),
+        "runs": runs,
+        "cold": True,
+        **{f"{how}_us": _stats(v) for how, v in times.items()},
+    }
 
 
 def burst(n: int = 256, rounds: int = 20) -> dict[str, object]:
@@ -174,9 +190,14 @@ def burst(n: int = 256, rounds: int = 20) -> dict[str, object]:
     finally:
         loop.preparer.close()
         shared.close()
-    return {"bench": "prepare_burst", "writes": n, "rounds": rounds,
-            "per_cycle": geo_loop.INPUTS_PER_CYCLE,
-            "cycle_us": _stats(per_cycle), "all_in_one_cycle_us": _stats(all_at_once)}  # fmt: skip
+    return {
+        "bench": "prepare_burst",
+        "writes": n,
+        "rounds": rounds,
+        "per_cycle": geo_loop.INPUTS_PER_CYCLE,
+        "cycle_us": _stats(per_cycle),
+        "all_in_one_cycle_us": _stats(all_at_once),
+    }
 
 
 def gaps(name: str, text: str) -> dict[str, object]:
@@ -207,11 +228,18 @@ def gaps(name: str, text: str) -> dict[str, object]:
         gc.enable()
     del run
     stretches.sort()
-    return {"bench": "prepare_gaps", "program": name, "blocks": count_blocks(text),
-            "cpu_ms": round(total / 1e6, 1), "pauses": len(stretches),
-            "stretch_us": {"p50": round(stretches[len(stretches) // 2] / 1e3, 1),
-                           "p99": round(stretches[int(0.99 * (len(stretches) - 1))] / 1e3, 1),
-                           "max": round(stretches[-1] / 1e3, 1)}}  # fmt: skip
+    return {
+        "bench": "prepare_gaps",
+        "program": name,
+        "blocks": count_blocks(text),
+        "cpu_ms": round(total / 1e6, 1),
+        "pauses": len(stretches),
+        "stretch_us": {
+            "p50": round(stretches[len(stretches) // 2] / 1e3, 1),
+            "p99": round(stretches[int(0.99 * (len(stretches) - 1))] / 1e3, 1),
+            "max": round(stretches[-1] / 1e3, 1),
+        },
+    }
 
 
 def main() -> None:

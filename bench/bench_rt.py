@@ -53,8 +53,12 @@ from tests.support.daemon import Daemon, Notify, write_config  # noqa: E402
 
 
 def geo_pid(daemon_pid: int) -> int | None:
-    out = subprocess.run(["pgrep", "-P", str(daemon_pid), "-f", "liftd.runtime"],
-                         capture_output=True, text=True, check=False).stdout.split()  # fmt: skip
+    out = subprocess.run(
+        ["pgrep", "-P", str(daemon_pid), "-f", "liftd.runtime"],
+        capture_output=True,
+        text=True,
+        check=False,
+    ).stdout.split()
     return int(out[0]) if out else None
 
 
@@ -99,9 +103,16 @@ def baseline_result(proc: subprocess.Popen[str] | None) -> dict[str, object] | N
         return worst
 
     over = sum(counts[251:]) + overflows
-    return {"tool": "cyclictest", "samples": total, "p50": pct(0.5), "p99": pct(0.99),
-            "p99.9": pct(0.999), "max": worst, "over_250us": over,
-            "over_250us_pct": round(100 * over / max(total, 1), 4)}  # fmt: skip
+    return {
+        "tool": "cyclictest",
+        "samples": total,
+        "p50": pct(0.5),
+        "p99": pct(0.99),
+        "p99.9": pct(0.999),
+        "max": worst,
+        "over_250us": over,
+        "over_250us_pct": round(100 * over / max(total, 1), 4),
+    }
 
 
 def probe_start(
@@ -110,8 +121,18 @@ def probe_start(
     """bench/noise_probe.py for `seconds`: a constant workload of `hot_us` (warm) on the same
     1 ms grid with the same RT settings (on the loop's cpu when it is pinned), whose cycles
     above 25 % are this machine's compute stalls."""
-    cmd = [sys.executable, str(ROOT / "bench" / "noise_probe.py"), "--seconds", str(seconds),
-           "--priority", "80" if rt else "0", "--cpu", str(cpu), "--hot-us", str(hot_us)]  # fmt: skip
+    cmd = [
+        sys.executable,
+        str(ROOT / "bench" / "noise_probe.py"),
+        "--seconds",
+        str(seconds),
+        "--priority",
+        "80" if rt else "0",
+        "--cpu",
+        str(cpu),
+        "--hot-us",
+        str(hot_us),
+    ]
     return subprocess.Popen(cmd, stdout=subprocess.PIPE, text=True)
 
 
@@ -121,8 +142,9 @@ def probe_result(proc: subprocess.Popen[str]) -> dict[str, object] | None:
     return json.loads(lines[-1]) if lines else None
 
 
-def exposure(over: int, mean_us: float, cycles: int,
-             probe: dict[str, object] | None) -> dict[str, object] | None:  # fmt: skip
+def exposure(
+    over: int, mean_us: float, cycles: int, probe: dict[str, object] | None
+) -> dict[str, object] | None:
     """The loop's cycles above 25 % set against this machine's rate of them per second of
     compute, measured by the null loop in the same run. A stall of the VM lands in a cycle's
     compute with a probability in proportion to how long it computes, and most are longer than
@@ -144,11 +166,14 @@ def exposure(over: int, mean_us: float, cycles: int,
     rate = n_probe / probe_s
     spread = 1.96 * math.sqrt(max(n_probe, 1)) / probe_s * ours_s
     expected = rate * ours_s
-    return {"compute_s": round(ours_s, 2), "over_per_s_of_compute": round(over / ours_s, 2),
-            "machine_over_per_s_of_compute": round(rate, 2),
-            "expected_from_machine": round(expected, 1),
-            "expected_range": [round(max(expected - spread, 0.0), 1), round(expected + spread, 1)],
-            "excess": round(over - expected, 1)}  # fmt: skip
+    return {
+        "compute_s": round(ours_s, 2),
+        "over_per_s_of_compute": round(over / ours_s, 2),
+        "machine_over_per_s_of_compute": round(rate, 2),
+        "expected_from_machine": round(expected, 1),
+        "expected_range": [round(max(expected - spread, 0.0), 1), round(expected + spread, 1)],
+        "excess": round(over - expected, 1),
+    }
 
 
 def over_events(logs: list[dict[str, object]]) -> list[list[object]]:
@@ -175,10 +200,14 @@ def over_kinds(logs: list[dict[str, object]]) -> dict[str, object]:
         if rec.get("event") == "geo.compute_over":
             value = rec.get("value")
             text = str(rec.get("text") or "")
-            groups.setdefault(text.partition("; cpu ")[0] or "-", []).append((
-                float(value) if isinstance(value, (int, float)) else 0.0,
-                field(text, "cpu"), field(text, "step"), field(text, "before"),
-            ))  # fmt: skip
+            groups.setdefault(text.partition("; cpu ")[0] or "-", []).append(
+                (
+                    float(value) if isinstance(value, (int, float)) else 0.0,
+                    field(text, "cpu"),
+                    field(text, "step"),
+                    field(text, "before"),
+                )
+            )
     out: dict[str, object] = {}
     for kind, v in sorted(groups.items(), key=lambda kv: -len(kv[1])):
         wall, cpu = sorted(r[0] for r in v), sorted(r[1] for r in v)
@@ -214,11 +243,17 @@ def baseline_cpu(spin: dict[str, object] | None) -> int:
     return 0 if spin and spin.get("idle") == "spin" else cpu
 
 
-def one_run(minutes: float, rt: bool, pollers: int = 4, notifiers: int = 1,
-            subscriptions: int = 10, window_s: float = 60.0,
-            override_every_s: float = 1.0,
-            spin: dict[str, object] | None = None,
-            probe_hot_us: float = 10.0) -> dict[str, object]:  # fmt: skip
+def one_run(
+    minutes: float,
+    rt: bool,
+    pollers: int = 4,
+    notifiers: int = 1,
+    subscriptions: int = 10,
+    window_s: float = 60.0,
+    override_every_s: float = 1.0,
+    spin: dict[str, object] | None = None,
+    probe_hot_us: float = 10.0,
+) -> dict[str, object]:
     """One daemon run under client load; exceed counts are also reported per window_s.
     `spin`: [rt] keys of the busy-waiting loop (idle = spin, pinned); `probe_hot_us`: the null
     loop's workload."""
@@ -240,8 +275,17 @@ def one_run(minutes: float, rt: bool, pollers: int = 4, notifiers: int = 1,
             geo = geo_pid(d.proc.pid)
             if base_cpu >= 0 and base_cpu != loop_cpu:  # the loop spins on loop_cpu: keep off
                 keep_off_cpu(loop_cpu)  # (every thread; the clients and the baseline inherit it)
-            procs, out = load.start(d.net_id, d.address, seconds, pollers, 1000.0, notifiers, 10,
-                                    subscriptions, override_every_s)  # fmt: skip
+            procs, out = load.start(
+                d.net_id,
+                d.address,
+                seconds,
+                pollers,
+                1000.0,
+                notifiers,
+                10,
+                subscriptions,
+                override_every_s,
+            )
             baseline = baseline_start(seconds, rt, base_cpu)
             probe = probe_start(seconds, rt, base_cpu, probe_hot_us)
             rss: list[tuple[float | None, float | None]] = []
@@ -270,8 +314,12 @@ def one_run(minutes: float, rt: bool, pollers: int = 4, notifiers: int = 1,
         status = load.mismatches(notifiers, trace)  # one pass over the (hour-long) trace
         rt_settings = [rec["text"] for rec in d.logs if rec.get("event") == "geo.rt_setting"]
         return {
-            "bench": "rt_loop", "rt": rt, "minutes": minutes, "cycles": cycles,
-            "lateness_us": stopped.get("lateness_us"), "compute_us": stopped.get("compute_us"),
+            "bench": "rt_loop",
+            "rt": rt,
+            "minutes": minutes,
+            "cycles": cycles,
+            "lateness_us": stopped.get("lateness_us"),
+            "compute_us": stopped.get("compute_us"),
             "compute_over_25pct": stopped.get("compute_over_25pct"),
             "compute_cpu_over_25pct": stopped.get("compute_cpu_over_25pct"),
             "compute_cpu_max_us": stopped.get("compute_cpu_max_us"),
@@ -299,11 +347,15 @@ def one_run(minutes: float, rt: bool, pollers: int = 4, notifiers: int = 1,
             "lift_changes_seen": [len(r["lift_active_changes_at"]) for r in notifiers],
             "lift_changes_lost": status["lost"] + status["extra"],
             "lift_status_vs_trace": status,
-            "exceeded_per_window": windows(exceeded, window_s), "window_s": window_s,
-            "rt_settings": rt_settings, "stop_s": stopped.get("stop_seconds"),
-            "pollers": len(pollers), "notifiers": len(notifiers), "baseline_cpu": base_cpu,
+            "exceeded_per_window": windows(exceeded, window_s),
+            "window_s": window_s,
+            "rt_settings": rt_settings,
+            "stop_s": stopped.get("stop_seconds"),
+            "pollers": len(pollers),
+            "notifiers": len(notifiers),
+            "baseline_cpu": base_cpu,
             "sched_rt_runtime_us": rt_runtime_us(),
-        }  # fmt: skip
+        }
 
 
 def windows(samples: list[tuple[float, int]], window_s: float) -> list[int]:

@@ -22,11 +22,11 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from bench.cli import parser  # noqa: E402
-from bench.gen import count_blocks, nesting_program  # noqa: E402
 from liftd.cnc.geo_task import GeoTask  # noqa: E402
 from liftd.cnc.plc import Schedule  # noqa: E402
 from liftd.settings import load_settings  # noqa: E402
 from liftd.sim.simulate import simulate  # noqa: E402
+from tests.support.programs import count_blocks, nesting_program  # noqa: E402
 
 
 class Sink(io.TextIOBase):

@@ -25,7 +25,7 @@ producer re-plan).
 write every S seconds, 0.5 by default, through 60/80/100/150/200 %: a write inside a lift
 range whose nominal run re-plans, and the cycle after it, are kinds of their own; lift starts
 and ends, M functions, …; the two cycles before each lift start, which prime it:
-`LiftAhead._prime_lift`; the cycle of a wait that chooses the profile the path will leave
+`LiftAhead.prime`; the cycle of a wait that chooses the profile the path will leave
 with: `Interpolator.prime_leaving`) and every 50th plain cycle
 with the caches cold: 64 MiB written just before the step, as the GEO process finds them after
 its 1 ms sleep beside the daemon and its clients (its plain cycles take 10–20× the hot step).
@@ -39,6 +39,8 @@ named) run as `[program] repeat` runs them: each START's cycle and the largest c
 Run: .venv/bin/python bench/bench_step.py [--breakdown | --cold | --repeat [--cold]] [NAME ...]   (~5 min)
 """
 
+# `# fmt: skip` where it stays: ruff's one-item-per-line layout of those statements would
+# take this file past the house's ~450 lines a file (the others were removed, issue 40)
 from __future__ import annotations
 
 import gc
@@ -52,12 +54,12 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from bench.cli import parser  # noqa: E402
-from bench.gen import count_blocks, nesting_program  # noqa: E402
 from liftd.cnc.params import ChannelParams  # noqa: E402
 from liftd.cnc.plc import Schedule  # noqa: E402
 from liftd.settings import load_settings  # noqa: E402
 from liftd.sim.simulate import StepTimer, simulate  # noqa: E402
 from liftd.sim.summary import SimSummary  # noqa: E402
+from tests.support.programs import count_blocks, nesting_program  # noqa: E402
 
 REPEAT = 2
 TARGET = {"p99": 40.0, "p999": 100.0, "max": 250.0}  # µs
@@ -74,15 +76,21 @@ def _schedule(duration: float) -> Schedule:
 
 def _range(blocks: int, step_mm: float, feed: int = 12000) -> str:
     """One lift range over `blocks` collinear blocks of `step_mm`."""
-    lines = ["G90 G17 G94", "#SLOPE[TYPE=TRAPEZ]", "G01 X10 Y10 Z1 F6000",
-             "Z[LIFT_START POS=1 POS_LIMIT=40]"]  # fmt: skip
+    lines = [
+        "G90 G17 G94",
+        "#SLOPE[TYPE=TRAPEZ]",
+        "G01 X10 Y10 Z1 F6000",
+        "Z[LIFT_START POS=1 POS_LIMIT=40]",
+    ]
     lines += [f"G01 X{10 + (i + 1) * step_mm:.4f} F{feed}" for i in range(blocks)]
     lines += ["Z[LIFT_END]", "G01 Y20 F3000", "M30"]
     return "\n".join(lines) + "\n"
 
 
-HOLD_LATE = ("G01 X10 Y10 Z1 F6000\nZ[LIFT_START POS=1 POS_LIMIT=100]\nG01 X160 F30000\n"
-             "Z[LIFT_END]\nG01 Y20 F3000\nM30\n")  # fmt: skip
+HOLD_LATE = (
+    "G01 X10 Y10 Z1 F6000\nZ[LIFT_START POS=1 POS_LIMIT=100]\nG01 X160 F30000\n"
+    "Z[LIFT_END]\nG01 Y20 F3000\nM30\n"
+)
 
 
 def programs() -> dict[str, tuple[str, Callable[[float], Schedule]]]:
@@ -97,11 +105,12 @@ def programs() -> dict[str, tuple[str, Callable[[float], Schedule]]]:
         "range-10000-blocks": (_range(10000, 0.1), lambda _: Schedule()),
         "blocks-0.001mm": (_range(5000, 0.001), lambda _: Schedule()),
         # the lift of HOLD_LATE ends near 0.7 s: the hold stops the path a few mm before it
-        "hold-released-before-lift-end": (
-            HOLD_LATE, lambda _: Schedule(feed_hold=((0.6, 1.1),))),
+        "hold-released-before-lift-end": (HOLD_LATE, lambda _: Schedule(feed_hold=((0.6, 1.1),))),
         "override-0%-in-lifts": (
-            demo, lambda _: Schedule(override=((0.5, 0.0), (1.5, 1.0), (2.2, 0.0), (3.0, 1.0)))),
-    }  # fmt: skip
+            demo,
+            lambda _: Schedule(override=((0.5, 0.0), (1.5, 1.0), (2.2, 0.0), (3.0, 1.0))),
+        ),
+    }
 
 
 def _best(
@@ -193,9 +202,11 @@ def breakdown(name: str, text: str, schedule: Schedule, runs: int = 3) -> dict[s
                 interp = task.interp  # (a new program run has a new one)
                 entries = interp.k_next - made if interp is before else 1
                 solved = interp.prod.calc.calls - calls if interp is before else 0
-                kinds.append(("lift" if task.lift.motion is not None else "no lift")
-                             + (", refill" if entries > 1 else "")
-                             + (", re-plan" if solved > max(entries, 1) else ""))  # fmt: skip
+                kinds.append(
+                    ("lift" if task.lift.motion is not None else "no lift")
+                    + (", refill" if entries > 1 else "")
+                    + (", re-plan" if solved > max(entries, 1) else "")
+                )
             if last.state.name in ("READY", "ERROR") and task.runs:
                 break
         gc.enable()
@@ -205,19 +216,30 @@ def breakdown(name: str, text: str, schedule: Schedule, runs: int = 3) -> dict[s
     out: dict[str, object] = {"bench": "step_breakdown", "program": name, "runs": runs}
     for kind in sorted(set(kinds)):
         sel = best[np.array(kinds) == kind]
-        out[kind] = {"cycles": int(sel.size), "p50": round(float(np.median(sel)), 1),
-                     "p90": round(float(np.percentile(sel, 90)), 1),
-                     "max": round(float(sel.max()), 1)}  # fmt: skip
+        out[kind] = {
+            "cycles": int(sel.size),
+            "p50": round(float(np.median(sel)), 1),
+            "p90": round(float(np.percentile(sel, 90)), 1),
+            "max": round(float(sel.max()), 1),
+        }
     q = np.percentile(best, [50, 99, 99.9])
-    out["all"] = {"p50": round(q[0], 1), "p99": round(q[1], 1), "p999": round(q[2], 1),
-                  "max": round(float(best.max()), 1)}  # fmt: skip
+    out["all"] = {
+        "p50": round(q[0], 1),
+        "p99": round(q[1], 1),
+        "p999": round(q[2], 1),
+        "max": round(float(best.max()), 1),
+    }
     return out
 
 
 def _override_writes(duration: float, period: float = 0.5) -> Schedule:
     steps = (0.6, 0.8, 1.0, 1.5, 2.0)
-    return Schedule(override=tuple((period * (k + 1) - 0.0004, steps[k % len(steps)])
-                                   for k in range(int(duration / period))))  # fmt: skip
+    return Schedule(
+        override=tuple(
+            (period * (k + 1) - 0.0004, steps[k % len(steps)])
+            for k in range(int(duration / period))
+        )
+    )
 
 
 def _nominal_calls(task: object) -> int:
@@ -292,9 +314,12 @@ def cold_cycles(
         groups.setdefault(kind, []).append(best[k])
     for kind, v in sorted(groups.items(), key=lambda kv: -max(kv[1])):
         a = np.array(v)
-        out[kind] = {"cycles": int(a.size), "p50": round(float(np.median(a)), 1),
-                     "p90": round(float(np.percentile(a, 90)), 1),
-                     "max": round(float(a.max()), 1)}  # fmt: skip
+        out[kind] = {
+            "cycles": int(a.size),
+            "p50": round(float(np.median(a)), 1),
+            "p90": round(float(np.percentile(a, 90)), 1),
+            "max": round(float(a.max()), 1),
+        }
     return out
 
 

@@ -34,10 +34,22 @@ def run_study(library: Path, out: Path, *extra: str) -> tuple[float, dict]:
     (exits when the study does not exit 0)."""
     t0 = time.perf_counter()
     r = subprocess.run(
-        [sys.executable, "-m", "liftd", "study", str(library), "-c", CONFIG, "--out", str(out),
-         *extra],
-        capture_output=True, text=True, check=False,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "liftd",
+            "study",
+            str(library),
+            "-c",
+            CONFIG,
+            "--out",
+            str(out),
+            *extra,
+        ],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
     wall = time.perf_counter() - t0
     if r.returncode != 0:
         raise SystemExit(f"liftd study exited {r.returncode}: {r.stderr[-3000:]}")
@@ -70,8 +82,17 @@ def main() -> None:
         library = base / "library"
         paths = write_library(library, 200)
         blocks = sum(len(p.read_text().splitlines()) for p in paths)
-        print(json.dumps({"bench": "study_library", "programs": len(paths), "lines": blocks,
-                          "cores": len(os.sched_getaffinity(0))}), flush=True)  # fmt: skip
+        print(
+            json.dumps(
+                {
+                    "bench": "study_library",
+                    "programs": len(paths),
+                    "lines": blocks,
+                    "cores": len(os.sched_getaffinity(0)),
+                }
+            ),
+            flush=True,
+        )
         walls = {}
         for jobs in (1, 2):
             fig = study(library, jobs, base / f"out{jobs}")

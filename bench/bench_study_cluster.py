@@ -61,12 +61,15 @@ def wait_workers(cluster: DaskCluster, n: int) -> None:
 
 def line(name: str, fig: dict[str, object], ref: dict[str, object], workers: int) -> str:
     rate = float(str(fig["programs_per_s"]))
-    return json.dumps({
-        "bench": f"study_{name}", **{k: v for k, v in fig.items() if k != "csv"},
-        "per_worker_programs_per_s": round(rate / workers, 3),
-        "vs_local_jobs_1": round(rate / float(str(ref["programs_per_s"])), 2),
-        "report_csv_equals_local_jobs_1": fig["csv"] == ref["csv"],
-    })  # fmt: skip
+    return json.dumps(
+        {
+            "bench": f"study_{name}",
+            **{k: v for k, v in fig.items() if k != "csv"},
+            "per_worker_programs_per_s": round(rate / workers, 3),
+            "vs_local_jobs_1": round(rate / float(str(ref["programs_per_s"])), 2),
+            "report_csv_equals_local_jobs_1": fig["csv"] == ref["csv"],
+        }
+    )
 
 
 def main() -> None:
@@ -79,9 +82,18 @@ def main() -> None:
         base = Path(tmp)
         library = base / "library"
         write_library(library, opts.jobs_library)
-        print(json.dumps({"bench": "study_cluster_setup", "programs": opts.jobs_library,
-                          "cores": len(os.sched_getaffinity(0)), "rounds": opts.rounds,
-                          "load_avg_1min": os.getloadavg()[0]}), flush=True)  # fmt: skip
+        print(
+            json.dumps(
+                {
+                    "bench": "study_cluster_setup",
+                    "programs": opts.jobs_library,
+                    "cores": len(os.sched_getaffinity(0)),
+                    "rounds": opts.rounds,
+                    "load_avg_1min": os.getloadavg()[0],
+                }
+            ),
+            flush=True,
+        )
         clusters = {n: DaskCluster(base / f"cluster{n}") for n in (1, 2)}  # idle: heartbeats
         try:
             for n, cluster in clusters.items():
@@ -89,10 +101,11 @@ def main() -> None:
                     cluster.add_worker()
                 wait_workers(cluster, n)
             runs: dict[str, tuple[int, list[str]]] = {
-                "local_1": (1, ["--jobs", "1"]), "local_2": (2, ["--jobs", "2"]),
+                "local_1": (1, ["--jobs", "1"]),
+                "local_2": (2, ["--jobs", "2"]),
                 "cluster_1": (1, ["--scheduler", clusters[1].address]),
                 "cluster_2": (2, ["--scheduler", clusters[2].address]),
-            }  # fmt: skip
+            }
             best: dict[str, dict[str, object]] = {}
             for k in range(opts.rounds):  # A B C D, A B C D, …: the same load on each
                 for name, (workers, extra) in runs.items():
@@ -107,19 +120,33 @@ def main() -> None:
             per_worker = float(str(best["cluster_2"]["programs_per_s"])) / 2
             for n in (1, 2, 8, 32, 128):
                 hours = 100_000 / (per_worker * n) / 3600
-                print(json.dumps({"bench": "study_estimate_100000_jobs", "workers": n,
-                                  "hours": round(hours, 2),
-                                  "from_programs_per_s_per_worker": round(per_worker, 3)}),
-                      flush=True)  # fmt: skip
+                print(
+                    json.dumps(
+                        {
+                            "bench": "study_estimate_100000_jobs",
+                            "workers": n,
+                            "hours": round(hours, 2),
+                            "from_programs_per_s_per_worker": round(per_worker, 3),
+                        }
+                    ),
+                    flush=True,
+                )
             for m in (opts.small // 10, opts.small) if opts.small else ():
                 small = base / f"small{m}"
                 small.mkdir()
                 for i in range(m):
                     (small / f"t{i:05d}.nc").write_text(TINY.format(x=20 + i % 500))
                 fig = study(small, base / f"small_out{m}", "--scheduler", clusters[2].address)
-                print(json.dumps({"bench": "study_cluster_client_rss", "workers": 2,
-                                  **{k: v for k, v in fig.items() if k != "csv"}}),
-                      flush=True)  # fmt: skip
+                print(
+                    json.dumps(
+                        {
+                            "bench": "study_cluster_client_rss",
+                            "workers": 2,
+                            **{k: v for k, v in fig.items() if k != "csv"},
+                        }
+                    ),
+                    flush=True,
+                )
         finally:
             for cluster in clusters.values():
                 cluster.stop()

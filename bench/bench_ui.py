@@ -37,10 +37,18 @@ sys.path.insert(0, str(ROOT))
 from bench import load as ads_load  # noqa: E402
 
 LIFT = "GEO.ch1.Z.lift_active"
-RT_OFF = {"sched_fifo_priority": 0, "hold_cpu_dma_latency": False, "lock_memory": False,
-          "stall_timeout_ms": 20000}  # fmt: skip
-RT_ON = {"sched_fifo_priority": 80, "hold_cpu_dma_latency": True, "lock_memory": True,
-         "stall_timeout_ms": 20000}  # fmt: skip
+RT_OFF = {
+    "sched_fifo_priority": 0,
+    "hold_cpu_dma_latency": False,
+    "lock_memory": False,
+    "stall_timeout_ms": 20000,
+}
+RT_ON = {
+    "sched_fifo_priority": 80,
+    "hold_cpu_dma_latency": True,
+    "lock_memory": True,
+    "stall_timeout_ms": 20000,
+}
 
 
 def emit(rec: dict[str, Any]) -> None:
@@ -143,11 +151,25 @@ def latency(d: Any, url: str, changes: int) -> None:
         tab.goto(url)
         tab.wait_for_selector("body[data-ready=true]")
         tab.evaluate(OBSERVE, LIFT)
-        ws = subprocess.Popen([sys.executable, __file__, "--ws-child", url, str(budget)],
-                              stdout=subprocess.PIPE, text=True)  # fmt: skip
+        ws = subprocess.Popen(
+            [sys.executable, __file__, "--ws-child", url, str(budget)],
+            stdout=subprocess.PIPE,
+            text=True,
+        )
         time.sleep(1.0)
-        poll = subprocess.Popen([sys.executable, __file__, "--poll-child", d.net_id, d.address,
-                                 str(changes), str(budget)], stdout=subprocess.PIPE, text=True)  # fmt: skip
+        poll = subprocess.Popen(
+            [
+                sys.executable,
+                __file__,
+                "--poll-child",
+                d.net_id,
+                d.address,
+                str(changes),
+                str(budget),
+            ],
+            stdout=subprocess.PIPE,
+            text=True,
+        )
         while poll.poll() is None:
             tab.wait_for_timeout(200)
         assert poll.stdout is not None
@@ -160,13 +182,22 @@ def latency(d: Any, url: str, changes: int) -> None:
     ws_seen = [tuple(json.loads(x)) for x in ws_out.splitlines() if x.strip()]
     for name, got in (("chromium", shown), ("ws_client", ws_seen)):
         lags, missed = _lags(plc, got)  # type: ignore[arg-type]
-        emit({"bench": "ui_flag_latency", "client": name, "changes": len(plc),
-              "missed": missed, "p50_ms": round(statistics.median(lags), 1),
-              "p99_ms": round(percentile(lags, 0.99), 1), "max_ms": round(max(lags), 1),
-              "within_100ms": sum(x <= 100 for x in lags), "browser": version,
-              "loadavg_1min": round(os.getloadavg()[0], 2),
-              "note": "vs pyads polling every 5 ms in its own process (its own lag: 0..5 ms "
-              "+ one request)"})  # fmt: skip
+        emit(
+            {
+                "bench": "ui_flag_latency",
+                "client": name,
+                "changes": len(plc),
+                "missed": missed,
+                "p50_ms": round(statistics.median(lags), 1),
+                "p99_ms": round(percentile(lags, 0.99), 1),
+                "max_ms": round(max(lags), 1),
+                "within_100ms": sum(x <= 100 for x in lags),
+                "browser": version,
+                "loadavg_1min": round(os.getloadavg()[0], 2),
+                "note": "vs pyads polling every 5 ms in its own process (its own lag: 0..5 ms "
+                "+ one request)",
+            }
+        )
 
 
 # -- load -----------------------------------------------------------------------------------
@@ -182,8 +213,11 @@ def scrape(port: int) -> dict[str, float]:
 
 
 def hist(before: dict[str, float], after: dict[str, float], name: str) -> dict[str, float]:
-    edges = sorted((float(k.split('le="')[1].rstrip('"}')), k) for k in after
-                   if k.startswith(f"liftd_geo_{name}_seconds_bucket") and "+Inf" not in k)  # fmt: skip
+    edges = sorted(
+        (float(k.split('le="')[1].rstrip('"}')), k)
+        for k in after
+        if k.startswith(f"liftd_geo_{name}_seconds_bucket") and "+Inf" not in k
+    )
     total = after[f"liftd_geo_{name}_seconds_count"] - before[f"liftd_geo_{name}_seconds_count"]
     res: dict[str, float] = {}
     for q in (0.5, 0.99, 0.999):
@@ -202,9 +236,11 @@ def load(d: Any, url: str, metrics_port: int, phase_s: float, rounds: int, rt: b
         for pages in (0, 10, 1):
             child = None
             if pages:
-                child = subprocess.Popen([sys.executable, __file__, "--pages-child", url,
-                                          str(pages), str(phase_s + 2)],
-                                         stdout=subprocess.PIPE, text=True)  # fmt: skip
+                child = subprocess.Popen(
+                    [sys.executable, __file__, "--pages-child", url, str(pages), str(phase_s + 2)],
+                    stdout=subprocess.PIPE,
+                    text=True,
+                )
                 time.sleep(1.5)  # connected
             procs, out = ads_load.start(d.net_id, d.address, phase_s, 1, 1000.0, 0, 10)
             a = scrape(metrics_port)
@@ -220,8 +256,15 @@ def load(d: Any, url: str, metrics_port: int, phase_s: float, rounds: int, rt: b
                 "loadavg_1min": round(os.getloadavg()[0], 2),
                 "daemon_cpu_pct": round(100 * cpu / phase_s, 2),
                 "daemon_rss_mb": round(b["process_resident_memory_bytes"] / 2**20, 1),
-                "geo_cpu_pct": round(100 * (b["liftd_geo_process_cpu_seconds_total"] -
-                                            a["liftd_geo_process_cpu_seconds_total"]) / phase_s, 2),
+                "geo_cpu_pct": round(
+                    100
+                    * (
+                        b["liftd_geo_process_cpu_seconds_total"]
+                        - a["liftd_geo_process_cpu_seconds_total"]
+                    )
+                    / phase_s,
+                    2,
+                ),
                 "exceeded": b["liftd_geo_exceeded_total"] - a["liftd_geo_exceeded_total"],
                 "compute_over_25pct": b["liftd_geo_compute_over_25pct_total"]
                 - a["liftd_geo_compute_over_25pct_total"],
@@ -231,7 +274,7 @@ def load(d: Any, url: str, metrics_port: int, phase_s: float, rounds: int, rt: b
                 "pyads_latency_us": poll["latency_us"],
                 **{f"lateness_{k}": v for k, v in hist(a, b, "lateness").items()},
                 **{f"compute_{k}": v for k, v in hist(a, b, "compute").items()},
-            }  # fmt: skip
+            }
             results[pages].append(rec)
     for pages, recs in results.items():
         emit({"bench": "ui_load", "pages": pages, "phase_s": phase_s, "rt": rt, "phases": recs})
@@ -251,8 +294,9 @@ def rss_without_and_with_ui(rounds: int = 2) -> None:
     for _ in range(rounds):
         for ui in (False, True):
             with tempfile.TemporaryDirectory() as tmp:
-                cfg = write_config(Path(tmp), program={"repeat": True},
-                                   ui={"enabled": ui, "port": 0}, rt=RT_OFF)  # fmt: skip
+                cfg = write_config(
+                    Path(tmp), program={"repeat": True}, ui={"enabled": ui, "port": 0}, rt=RT_OFF
+                )
                 d = Daemon(cfg)
                 try:
                     d.ready()
@@ -291,9 +335,14 @@ def main() -> None:
         program = Path(tmp) / "hops.nc"
         program.write_text(hops_program())
         metrics_port = free_port()
-        cfg = write_config(Path(tmp), program_file=str(program), program={"repeat": True},
-                           ui={"enabled": True, "port": 0}, rt=RT_ON if args.rt else RT_OFF,
-                           metrics={"prometheus_port": metrics_port})  # fmt: skip
+        cfg = write_config(
+            Path(tmp),
+            program_file=str(program),
+            program={"repeat": True},
+            ui={"enabled": True, "port": 0},
+            rt=RT_ON if args.rt else RT_OFF,
+            metrics={"prometheus_port": metrics_port},
+        )
         d = Daemon(cfg)
         try:
             d.ready()

@@ -41,9 +41,12 @@ def main() -> None:
         for step in STEPS_MM:
             n = round(LINE_M * 1e3 / step)
             for feed in FEEDS:
-                text = ("G90 G17 G94\nG01 X10 Y10 Z1 F6000\n" + f"G01 X{10 + step:.4f} F{feed}\n"
-                        + "".join(f"X{10 + (i + 1) * step:.4f}\n" for i in range(1, n))
-                        + "M30\n")  # fmt: skip
+                text = (
+                    "G90 G17 G94\nG01 X10 Y10 Z1 F6000\n"
+                    + f"G01 X{10 + step:.4f} F{feed}\n"
+                    + "".join(f"X{10 + (i + 1) * step:.4f}\n" for i in range(1, n))
+                    + "M30\n"
+                )
                 task, snaps = run_task(ch, text, max_time=60)
                 tb = task.prog.table
                 k = 5  # a segment of the line (they are all alike)
@@ -54,16 +57,39 @@ def main() -> None:
                 mid = [s.v_path for s in snaps if s.segment >= 2 and lo < s.positions[0] < hi]
                 ratio = min(mid) / bound
                 worst = min(worst, ratio)
-                print(json.dumps({
-                    "bench": "velocity", "look_ahead": setting, "blocks_ahead": look,
-                    "block_mm": step, "feed_mm_min": feed, "bound_mm_s": round(bound * 1e3, 2),
-                    "bound_by": ("feed" if bound == feed / 60_000 else
-                                 "axes" if bound == tb.cap[k] else "look-ahead"),
-                    "v_min_mid_mm_s": round(min(mid) * 1e3, 2), "ratio": round(ratio, 4),
-                    "limits_max": round(float(fd_ratios(ch, snaps).max()), 9),
-                }), flush=True)  # fmt: skip
-    print(json.dumps({"bench": "velocity_summary", "runs": len(LOOK_AHEAD) * 15,
-                      "worst_ratio": round(worst, 4), "target": 0.95}))  # fmt: skip
+                print(
+                    json.dumps(
+                        {
+                            "bench": "velocity",
+                            "look_ahead": setting,
+                            "blocks_ahead": look,
+                            "block_mm": step,
+                            "feed_mm_min": feed,
+                            "bound_mm_s": round(bound * 1e3, 2),
+                            "bound_by": (
+                                "feed"
+                                if bound == feed / 60_000
+                                else "axes"
+                                if bound == tb.cap[k]
+                                else "look-ahead"
+                            ),
+                            "v_min_mid_mm_s": round(min(mid) * 1e3, 2),
+                            "ratio": round(ratio, 4),
+                            "limits_max": round(float(fd_ratios(ch, snaps).max()), 9),
+                        }
+                    ),
+                    flush=True,
+                )
+    print(
+        json.dumps(
+            {
+                "bench": "velocity_summary",
+                "runs": len(LOOK_AHEAD) * 15,
+                "worst_ratio": round(worst, 4),
+                "target": 0.95,
+            }
+        )
+    )
 
 
 if __name__ == "__main__":

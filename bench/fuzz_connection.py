@@ -39,10 +39,19 @@ def main() -> None:
         ),
     )
     wall = time.perf_counter() - t0
-    print(json.dumps({"bench": "fuzz_connection", "examples": args.examples,
-                      "chunks": fuzz.STATS["chunks"], "bytes": fuzz.STATS["bytes"],
-                      "seconds": round(wall, 1), "chunks_per_s": round(fuzz.STATS["chunks"] / wall),
-                      "failures": 0}))  # fmt: skip
+    print(
+        json.dumps(
+            {
+                "bench": "fuzz_connection",
+                "examples": args.examples,
+                "chunks": fuzz.STATS["chunks"],
+                "bytes": fuzz.STATS["bytes"],
+                "seconds": round(wall, 1),
+                "chunks_per_s": round(fuzz.STATS["chunks"] / wall),
+                "failures": 0,
+            }
+        )
+    )
 
 
 if __name__ == "__main__":

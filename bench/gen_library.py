@@ -66,8 +66,14 @@ def cam_job(index: int, rng: random.Random) -> str:
     cols = max(1, int(SHEET_X // pitch_x))
     out = [f"( generated nesting job {index}: {parts} parts, POS_LIMIT {limit} mm )"]
     out += SHAPES.values()
-    out += [f"%job_{index:04d}", "N100 G90 G17 G71 G94", "N110 #SLOPE[TYPE=TRAPEZ]", "N120 D1",
-            f"N130 P5={w} P6={h} P7=6", "N140 G00 X0 Y0 Z1"]  # fmt: skip
+    out += [
+        f"%job_{index:04d}",
+        "N100 G90 G17 G71 G94",
+        "N110 #SLOPE[TYPE=TRAPEZ]",
+        "N120 D1",
+        f"N130 P5={w} P6={h} P7=6",
+        "N140 G00 X0 Y0 Z1",
+    ]
     n = 200
     for k in range(parts):
         x = 30.0 + (k % cols) * pitch_x

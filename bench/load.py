@@ -25,18 +25,38 @@ import pyads
 
 LIFT_SYMBOLS = ("GEO.ch1.Z.lift_active", "GEO.ch1.Z.lift_suppressed")
 NOTIFY_SYMBOLS = [
-    "GEO.ch1.Z.lift_active", "GEO.ch1.Z.lift_suppressed", "GEO.ch1.X.lift_active",
-    "GEO.ch1.X.lift_suppressed", "GEO.ch1.Y.lift_active", "GEO.ch1.Y.lift_suppressed",
-    "GEO.ch1.X.command_position", "GEO.ch1.Y.command_position", "GEO.ch1.Z.command_position",
-    "GEO.ch1.state", "GEO.ch1.line", "GEO.ch1.block", "GEO.ch1.override", "GEO.ch1.feed_hold",
-    "GEO.ch1.path_velocity", "GEO.ch1.Z.lift_phase", "GEO.ch1.error_id", "GEO.ch1.m_pending",
-    "GEO.timing.exceeded", "GEO.cycle",
-]  # fmt: skip
-TYPES = {"lift_active": pyads.PLCTYPE_BOOL, "lift_suppressed": pyads.PLCTYPE_BOOL,
-         "feed_hold": pyads.PLCTYPE_BOOL, "command_position": pyads.PLCTYPE_DINT,
-         "path_velocity": pyads.PLCTYPE_LREAL, "cycle": pyads.PLCTYPE_ULINT,
-         "override": pyads.PLCTYPE_UINT, "lift_phase": pyads.PLCTYPE_UINT,
-         "m_pending": pyads.PLCTYPE_DINT}  # fmt: skip
+    "GEO.ch1.Z.lift_active",
+    "GEO.ch1.Z.lift_suppressed",
+    "GEO.ch1.X.lift_active",
+    "GEO.ch1.X.lift_suppressed",
+    "GEO.ch1.Y.lift_active",
+    "GEO.ch1.Y.lift_suppressed",
+    "GEO.ch1.X.command_position",
+    "GEO.ch1.Y.command_position",
+    "GEO.ch1.Z.command_position",
+    "GEO.ch1.state",
+    "GEO.ch1.line",
+    "GEO.ch1.block",
+    "GEO.ch1.override",
+    "GEO.ch1.feed_hold",
+    "GEO.ch1.path_velocity",
+    "GEO.ch1.Z.lift_phase",
+    "GEO.ch1.error_id",
+    "GEO.ch1.m_pending",
+    "GEO.timing.exceeded",
+    "GEO.cycle",
+]
+TYPES = {
+    "lift_active": pyads.PLCTYPE_BOOL,
+    "lift_suppressed": pyads.PLCTYPE_BOOL,
+    "feed_hold": pyads.PLCTYPE_BOOL,
+    "command_position": pyads.PLCTYPE_DINT,
+    "path_velocity": pyads.PLCTYPE_LREAL,
+    "cycle": pyads.PLCTYPE_ULINT,
+    "override": pyads.PLCTYPE_UINT,
+    "lift_phase": pyads.PLCTYPE_UINT,
+    "m_pending": pyads.PLCTYPE_DINT,
+}
 
 
 def _type(symbol: str) -> Any:
@@ -47,8 +67,12 @@ def percentiles_us(ns: np.ndarray) -> dict[str, float]:
     if not len(ns):
         return {}
     q = np.percentile(ns, [50, 99, 99.9]) / 1e3
-    return {"p50": round(q[0], 1), "p99": round(q[1], 1), "p99.9": round(q[2], 1),
-            "max": round(float(ns.max()) / 1e3, 1)}  # fmt: skip
+    return {
+        "p50": round(q[0], 1),
+        "p99": round(q[1], 1),
+        "p99.9": round(q[2], 1),
+        "max": round(float(ns.max()) / 1e3, 1),
+    }
 
 
 def poller(net_id: str, address: str, period_s: float, duration_s: float, out: Any) -> None:
@@ -81,15 +105,23 @@ def poller(net_id: str, address: str, period_s: float, duration_s: float, out: A
     finally:
         plc.close()
     wall = time.perf_counter() - t0
-    out.put({"kind": "poller", "reads": n, "errors": errors, "rate": n / wall,
-             "latency_us": percentiles_us(lat[: min(n, len(lat))])})  # fmt: skip
+    out.put(
+        {
+            "kind": "poller",
+            "reads": n,
+            "errors": errors,
+            "rate": n / wall,
+            "latency_us": percentiles_us(lat[: min(n, len(lat))]),
+        }
+    )
 
 
 OVERRIDE_STEPS = (600, 800, 1000, 1500, 2000)  # 0.1 %
 
 
-def override_writer(net_id: str, address: str, period_s: float, duration_s: float,
-                    out: Any) -> None:  # fmt: skip
+def override_writer(
+    net_id: str, address: str, period_s: float, duration_s: float, out: Any
+) -> None:
     """A PLC that writes a new override (cycling 60/80/100/150/200 %) every period_s."""
     plc = pyads.Connection(net_id, 551, address)
     plc.open()
@@ -115,8 +147,14 @@ def override_writer(net_id: str, address: str, period_s: float, duration_s: floa
     out.put({"kind": "override_writer", "writes": n, "errors": errors})
 
 
-def notifier(net_id: str, address: str, cycle_ms: int, duration_s: float, out: Any,
-             subscriptions: int = len(NOTIFY_SYMBOLS)) -> None:  # fmt: skip
+def notifier(
+    net_id: str,
+    address: str,
+    cycle_ms: int,
+    duration_s: float,
+    out: Any,
+    subscriptions: int = len(NOTIFY_SYMBOLS),
+) -> None:
     plc = pyads.Connection(net_id, 551, address)
     plc.open()
     lift: dict[str, list[tuple[int, bool]]] = {s: [] for s in LIFT_SYMBOLS}  # (cycle, value)
@@ -143,41 +181,68 @@ def notifier(net_id: str, address: str, cycle_ms: int, duration_s: float, out: A
     handles = []
     symbols = [*NOTIFY_SYMBOLS[: subscriptions - 1], "GEO.cycle"]
     for symbol in dict.fromkeys(symbols):
-        attr = pyads.NotificationAttrib(ctypes.sizeof(_type(symbol)),
-                                        trans_mode=pyads.ADSTRANS_SERVERONCHA,
-                                        cycle_time=cycle_ms)  # fmt: skip
+        attr = pyads.NotificationAttrib(
+            ctypes.sizeof(_type(symbol)), trans_mode=pyads.ADSTRANS_SERVERONCHA, cycle_time=cycle_ms
+        )
         handles.append(plc.add_device_notification(symbol, attr, on(symbol)))
     time.sleep(duration_s)
     for h in handles:
         plc.del_device_notification(*h)
     plc.close()
-    changes = {sym: [(c, b) for (_, a), (c, b) in itertools.pairwise(samples) if a != b]
-               for sym, samples in lift.items()}  # fmt: skip
+    changes = {
+        sym: [(c, b) for (_, a), (c, b) in itertools.pairwise(samples) if a != b]
+        for sym, samples in lift.items()
+    }
     gaps = np.diff(np.array(cycle_t)) * 1e3 if len(cycle_t) > 1 else np.zeros(1)
-    out.put({"kind": "notifier", "subscriptions": len(handles), "samples": count[0],
-             "lift_active_samples": len(lift[LIFT_SYMBOLS[0]]),
-             "lift_active_changes_at": [c for c, _ in changes[LIFT_SYMBOLS[0]]],
-             "lift_changes": changes,
-             "cycles_seen": [first_cycle[0], last_cycle[0]],
-             "cycle_gap_ms": {"p50": round(float(np.median(gaps)), 2),
-                              "p99": round(float(np.percentile(gaps, 99)), 2),
-                              "max": round(float(gaps.max()), 2)}})  # fmt: skip
+    out.put(
+        {
+            "kind": "notifier",
+            "subscriptions": len(handles),
+            "samples": count[0],
+            "lift_active_samples": len(lift[LIFT_SYMBOLS[0]]),
+            "lift_active_changes_at": [c for c, _ in changes[LIFT_SYMBOLS[0]]],
+            "lift_changes": changes,
+            "cycles_seen": [first_cycle[0], last_cycle[0]],
+            "cycle_gap_ms": {
+                "p50": round(float(np.median(gaps)), 2),
+                "p99": round(float(np.percentile(gaps, 99)), 2),
+                "max": round(float(gaps.max()), 2),
+            },
+        }
+    )
 
 
 def start(
-    net_id: str, address: str, duration_s: float, pollers: int, poll_hz: float,
-    notifiers: int, cycle_ms: int, subscriptions: int = len(NOTIFY_SYMBOLS),
+    net_id: str,
+    address: str,
+    duration_s: float,
+    pollers: int,
+    poll_hz: float,
+    notifiers: int,
+    cycle_ms: int,
+    subscriptions: int = len(NOTIFY_SYMBOLS),
     override_every_s: float = 0.0,
-) -> tuple[list[mp.Process], Any]:  # fmt: skip
+) -> tuple[list[mp.Process], Any]:
     ctx = mp.get_context("spawn")
     out = ctx.Queue()
-    procs = [ctx.Process(target=poller, args=(net_id, address, 1 / poll_hz if poll_hz else 0.0,
-                                              duration_s, out)) for _ in range(pollers)]  # fmt: skip
-    procs += [ctx.Process(target=notifier, args=(net_id, address, cycle_ms, duration_s, out,
-                                                 subscriptions)) for _ in range(notifiers)]  # fmt: skip
+    procs = [
+        ctx.Process(
+            target=poller, args=(net_id, address, 1 / poll_hz if poll_hz else 0.0, duration_s, out)
+        )
+        for _ in range(pollers)
+    ]
+    procs += [
+        ctx.Process(
+            target=notifier, args=(net_id, address, cycle_ms, duration_s, out, subscriptions)
+        )
+        for _ in range(notifiers)
+    ]
     if override_every_s:
-        procs.append(ctx.Process(target=override_writer,
-                                 args=(net_id, address, override_every_s, duration_s, out)))  # fmt: skip
+        procs.append(
+            ctx.Process(
+                target=override_writer, args=(net_id, address, override_every_s, duration_s, out)
+            )
+        )
     for p in procs:
         p.start()
     return procs, out
@@ -229,8 +294,14 @@ def mismatches(notifiers: list[dict[str, Any]], trace: Path, margin: int = 25) -
             seen = [(c, v) for c, v in seen_all if lo <= c <= hi]
             used = [False] * len(seen)
             for k, v in expected:
-                j = next((j for j, (c, w) in enumerate(seen)
-                          if not used[j] and w == v and abs(c - k) <= margin), None)  # fmt: skip
+                j = next(
+                    (
+                        j
+                        for j, (c, w) in enumerate(seen)
+                        if not used[j] and w == v and abs(c - k) <= margin
+                    ),
+                    None,
+                )
                 if j is None:
                     lost += 1
                 else:

@@ -108,9 +108,13 @@ def take_rt(priority: int, cpu: int) -> list[str]:
 
 
 def run(
-    seconds: float, priority: int, hot_us: float, cpu: int = -1, period_ns: int = 1_000_000,
+    seconds: float,
+    priority: int,
+    hot_us: float,
+    cpu: int = -1,
+    period_ns: int = 1_000_000,
     pages: int = 0,
-) -> dict[str, object]:  # fmt: skip
+) -> dict[str, object]:
     for _ in range(3):
         touch(len(SPREAD) // PAGE)  # every page of SPREAD mapped before mlockall
     taken = take_rt(priority, cpu) if priority > 0 else []
@@ -148,16 +152,24 @@ def run(
         return round(times[min(n - 1, int(p * n))] / 1e3, 1)
 
     return {
-        "tool": "noise_probe", "cycles": n, "hot_us": round(hot, 1), "iterations": iterations,
+        "tool": "noise_probe",
+        "cycles": n,
+        "hot_us": round(hot, 1),
+        "iterations": iterations,
         "pages": pages,
-        "compute_us": {"0.5": q(0.5), "0.99": q(0.99), "0.999": q(0.999),
-                       "max": round(times[-1] / 1e3, 1)},
+        "compute_us": {
+            "0.5": q(0.5),
+            "0.99": q(0.99),
+            "0.999": q(0.999),
+            "max": round(times[-1] / 1e3, 1),
+        },
         "compute_mean_us": round(total_ns / 1e3 / max(n, 1), 2),
         "compute_s": round(total_ns / 1e9, 3),
-        "over_25pct": over, "over_25pct_pct": round(100 * over / max(n, 1), 4),
+        "over_25pct": over,
+        "over_25pct_pct": round(100 * over / max(n, 1), 4),
         "cpu_over_25pct": cpu_over,
         "rt": taken,
-    }  # fmt: skip
+    }
 
 
 def main() -> None:

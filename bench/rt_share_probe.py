@@ -74,9 +74,20 @@ def main() -> None:
         if neighbour is not None:
             neighbour.kill()
             neighbour.wait()
-    print(json.dumps({"bench": "rt_share_probe", "cpu": args.cpu, "seconds": args.seconds,
-                      "sched_rt_runtime_us": rt_runtime_us(), "neighbour": args.neighbour,
-                      "kernel": os.uname().release, **gaps}), flush=True)  # fmt: skip
+    print(
+        json.dumps(
+            {
+                "bench": "rt_share_probe",
+                "cpu": args.cpu,
+                "seconds": args.seconds,
+                "sched_rt_runtime_us": rt_runtime_us(),
+                "neighbour": args.neighbour,
+                "kernel": os.uname().release,
+                **gaps,
+            }
+        ),
+        flush=True,
+    )
 
 
 if __name__ == "__main__":

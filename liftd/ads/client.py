@@ -16,9 +16,14 @@ SOURCE = bytes([10, 1, 2, 3, 1, 1])
 
 class RawClient:
     def __init__(
-        self, port: int, target: bytes, source: bytes = SOURCE, rcvbuf: int = 0,
-        host: str = "127.0.0.1", timeout_s: float = 3.0,
-    ) -> None:  # fmt: skip
+        self,
+        port: int,
+        target: bytes,
+        source: bytes = SOURCE,
+        rcvbuf: int = 0,
+        host: str = "127.0.0.1",
+        timeout_s: float = 3.0,
+    ) -> None:
         self.sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
         if rcvbuf:
             self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, rcvbuf)
@@ -36,11 +41,18 @@ class RawClient:
         self.invoke = 0
         self.notifications = 0  # device notifications skipped while waiting for a response
 
-    def frame(self, command: int, payload: bytes, port: int = 551, target: bytes | None = None,
-              flags: int = 4) -> bytes:  # fmt: skip
+    def frame(
+        self,
+        command: int,
+        payload: bytes,
+        port: int = 551,
+        target: bytes | None = None,
+        flags: int = 4,
+    ) -> bytes:
         self.invoke += 1
-        header = wire.AmsHeader(target or self.target, port, self.source, 30000, command, flags,
-                                0, 0, self.invoke)  # fmt: skip
+        header = wire.AmsHeader(
+            target or self.target, port, self.source, 30000, command, flags, 0, 0, self.invoke
+        )
         return wire.encode_frame(header, payload)
 
     def send(self, data: bytes) -> None:

@@ -87,10 +87,15 @@ def _reply(req: Request, net_id: bytes, port: int, tags: list[tuple[int, bytes]]
 def discovery_reply(req: Request, net_id: bytes, port: int, host_name: str) -> bytes:
     """NetId (pyads reads only that), host name and TwinCAT version (ads-rs get_info)."""
     major, minor, build = TC_VERSION
-    return _reply(req, net_id, port, [
-        (Tag.HOST_NAME, host_name.encode("utf-8", "replace")[:255] + b"\0"),
-        (Tag.TC_VERSION, struct.pack("<BBH", major, minor, build)),
-    ])  # fmt: skip
+    return _reply(
+        req,
+        net_id,
+        port,
+        [
+            (Tag.HOST_NAME, host_name.encode("utf-8", "replace")[:255] + b"\0"),
+            (Tag.TC_VERSION, struct.pack("<BBH", major, minor, build)),
+        ],
+    )
 
 
 def add_route_reply(req: Request, net_id: bytes, port: int, status: int) -> bytes:

@@ -68,8 +68,10 @@ class PortTable(Generic[Owner]):
     def _free(self) -> int:
         span = LAST_DYNAMIC_PORT - FIRST_DYNAMIC_PORT + 1
         for _ in range(span):
-            port, self._next = self._next, FIRST_DYNAMIC_PORT + (self._next - FIRST_DYNAMIC_PORT
-                                                                 + 1) % span  # fmt: skip
+            port, self._next = (
+                self._next,
+                FIRST_DYNAMIC_PORT + (self._next - FIRST_DYNAMIC_PORT + 1) % span,
+            )
             if port not in self.owner_of and port not in self.reserved:
                 return port
         raise PortInUse("no free port")

@@ -28,9 +28,17 @@ from liftd.ads.symbols import DataType
 from liftd.ads.wire import AddNotificationRequest, AmsHeader, ReadWriteRequest
 
 __all__ = [  # the seam's declarations live in device.py; importable from here as before
-    "ENCODING", "STATIC_HANDLE_BIT", "AdsService", "DeviceInfo", "ObjectProvider", "Reply",
-    "ServiceLimits", "Session", "Symbol", "error_payload",
-]  # fmt: skip
+    "ENCODING",
+    "STATIC_HANDLE_BIT",
+    "AdsService",
+    "DeviceInfo",
+    "ObjectProvider",
+    "Reply",
+    "ServiceLimits",
+    "Session",
+    "Symbol",
+    "error_payload",
+]
 
 
 class Context(NamedTuple):
@@ -306,8 +314,9 @@ class AdsService:
 
     def _sym_upload_info2(self, s: Session, io: int, length: int) -> bytes:
         _, entries, type_entries, types = self._tables()
-        info = symbols.upload_info(len(self.provider.symbols()), len(entries), len(types),
-                                   len(type_entries))  # fmt: skip
+        info = symbols.upload_info(
+            len(self.provider.symbols()), len(entries), len(types), len(type_entries)
+        )
         return info[:length]
 
     def _data_type_by_name(self, s: Session, req: ReadWriteRequest, ctx: Context) -> bytes:
@@ -321,8 +330,11 @@ class AdsService:
         """0xF007: IG, IO and size of a symbol, 12 bytes (birkenfeld/ads-rs `src/symbol.rs`
         get_location / get_size read exactly these, the name sent without a NUL)."""
         sym = self._find(req.data)
-        return self._whole(wire.U32X3.pack(sym.index_group, sym.index_offset, sym.size),
-                           req.read_length, "symbol location")  # fmt: skip
+        return self._whole(
+            wire.U32X3.pack(sym.index_group, sym.index_offset, sym.size),
+            req.read_length,
+            "symbol location",
+        )
 
     def _device_data(self, s: Session, io: int, length: int) -> bytes:
         """0xF100: IO 0 → ADS state u16 + device state u16, IO 2 → device state

@@ -45,13 +45,25 @@ class DataType:
     comment: str = ""
 
     def entry(self, encoding: str) -> bytes:
-        name, base, comment = (s.encode(encoding, "replace") for s in (self.name, self.base,
-                                                                        self.comment))  # fmt: skip
+        name, base, comment = (
+            s.encode(encoding, "replace") for s in (self.name, self.base, self.comment)
+        )
         strings = name + b"\0" + base + b"\0" + comment + b"\0"
         head = DATA_TYPE_HEAD.pack(
-            DATA_TYPE_HEAD.size + len(strings), 1, type_hash(self.name), type_hash(self.base),
-            self.size, 0, int(self.adst), DATATYPE_FLAG, len(name), len(base), len(comment), 0, 0,
-        )  # fmt: skip
+            DATA_TYPE_HEAD.size + len(strings),
+            1,
+            type_hash(self.name),
+            type_hash(self.base),
+            self.size,
+            0,
+            int(self.adst),
+            DATATYPE_FLAG,
+            len(name),
+            len(base),
+            len(comment),
+            0,
+            0,
+        )
         return head + strings
 
 
@@ -90,8 +102,18 @@ BASE_TYPES: tuple[DataType, ...] = tuple(
 
 def upload_info(symbols: int, symbol_bytes: int, types: int, type_bytes: int) -> bytes:
     """The 64-byte upload info (version 3); a client that asks fewer bytes gets the head."""
-    return UPLOAD_INFO.pack(symbols, symbol_bytes, types, type_bytes, 0, 0, 0, CODE_PAGE_CP1252,
-                            UPLOAD_INCLUDES_BASE_TYPES, bytes(28))  # fmt: skip
+    return UPLOAD_INFO.pack(
+        symbols,
+        symbol_bytes,
+        types,
+        type_bytes,
+        0,
+        0,
+        0,
+        CODE_PAGE_CP1252,
+        UPLOAD_INCLUDES_BASE_TYPES,
+        bytes(28),
+    )
 
 
 def extended_handle(handle: int, size: int, type_name: bytes) -> bytes:

@@ -82,8 +82,7 @@ class UdpDiscovery(asyncio.DatagramProtocol):
             self.warn("ads.udp_refused", peer, service=req.service)
             return b""
         if req.service == Service.DISCOVER:
-            return discovery.discovery_reply(req, self.net_id, SYSTEM_SERVICE_PORT,
-                                             self.host_name)  # fmt: skip
+            return discovery.discovery_reply(req, self.net_id, SYSTEM_SERVICE_PORT, self.host_name)
         added = req.tags.get(Tag.NET_ID, b"")
         if len(added) != 6:
             raise ValueError(f"add route: NetId tag of {len(added)} bytes")

@@ -341,9 +341,16 @@ def encode_symbol_entry(e: SymbolEntry) -> bytes:
     strings = e.name + b"\0" + e.type_name + b"\0" + e.comment + b"\0"
     total = SYMBOL_HEAD.size + len(strings)
     head = SYMBOL_HEAD.pack(
-        total, e.index_group, e.index_offset, e.size, e.data_type, e.flags,
-        len(e.name), len(e.type_name), len(e.comment),
-    )  # fmt: skip
+        total,
+        e.index_group,
+        e.index_offset,
+        e.size,
+        e.data_type,
+        e.flags,
+        len(e.name),
+        len(e.type_name),
+        len(e.comment),
+    )
     return head + strings
 
 

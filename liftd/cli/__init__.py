@@ -126,10 +126,11 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--plot", metavar="OUT.png", help="write a figure of the run")
     sim.add_argument("--json", action="store_true", help="print the JSON summary on stdout")
     sim.add_argument(
-        "--view", action="store_true",
+        "--view",
+        action="store_true",
         help="then serve the run's trace in the browser (liftd view; a temporary trace "
         "without --trace)",
-    )  # fmt: skip
+    )
     sim.add_argument(
         "--compare",
         action="store_true",
@@ -165,26 +166,33 @@ def build_parser() -> argparse.ArgumentParser:
     st.add_argument("-c", "--config", help="liftd.toml")
     st.add_argument("--jobs", type=int, metavar="N", help="worker processes (default: all cores)")
     st.add_argument(
-        "--scheduler", metavar="ADDRESS",
+        "--scheduler",
+        metavar="ADDRESS",
         help="run on the Dask cluster of this scheduler (e.g. tcp://10.0.0.5:8786) instead of "
         "local processes; needs the cluster extra: pip install 'liftd[cluster]'",
-    )  # fmt: skip
+    )
     st.add_argument(
-        "--timeout", type=float, metavar="S",
-        help="with --scheduler: seconds to wait for the scheduler, then for a worker "
-        "(default 30)",
-    )  # fmt: skip
+        "--timeout",
+        type=float,
+        metavar="S",
+        help="with --scheduler: seconds to wait for the scheduler, then for a worker (default 30)",
+    )
     st.add_argument(
         "--channel", type=int, metavar="N", help="run the programs in channel N (default: [cnc])"
     )
     st.add_argument(
-        "--out", default="study", metavar="DIR",
+        "--out",
+        default="study",
+        metavar="DIR",
         help="where report.csv, report.json and report.html go (default: ./study)",
-    )  # fmt: skip
+    )
     st.add_argument(
-        "--max-time", type=float, default=3600.0, metavar="S",
+        "--max-time",
+        type=float,
+        default=3600.0,
+        metavar="S",
         help="stop a run after S simulated seconds (default 3600)",
-    )  # fmt: skip
+    )
     st.set_defaults(func=cmd_study)
     return parser
 

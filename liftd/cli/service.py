@@ -49,8 +49,10 @@ def cmd_reload(args: argparse.Namespace) -> int:
     except OSError as exc:
         print(f"liftd reload: no answer on {path}: {exc}", file=sys.stderr)
         return EXIT_RUNTIME
-    print(f"liftd reload: {'applied' if verdict.applied else 'rejected'}: {verdict.detail}",
-          file=sys.stdout if verdict.applied else sys.stderr)  # fmt: skip
+    print(
+        f"liftd reload: {'applied' if verdict.applied else 'rejected'}: {verdict.detail}",
+        file=sys.stdout if verdict.applied else sys.stderr,
+    )
     return EXIT_OK if verdict.applied else EXIT_CONFIG
 
 
@@ -68,11 +70,14 @@ def cmd_objects(args: argparse.Namespace) -> int:
         return EXIT_OK
     ports = ", ".join(str(p) for p in ads.ams_ports)
     print(f"AMS NetId {ads.net_id}, port {ports} (GEO), TCP {ads.host}:{ads.port}")
-    for ch, logical, index in zip(catalog.channels, catalog.ig_logicals, catalog.ig_indexes,
-                                  strict=True):  # fmt: skip
+    for ch, logical, index in zip(
+        catalog.channels, catalog.ig_logicals, catalog.ig_indexes, strict=True
+    ):
         axes = ", ".join(f"{ax.name} {ax.log_axis_nr}" for ax in ch.axes)
-        print(f"channel {ch.channel_id}: IG 0x{logical:X} (logical: IO = logical axis number × "
-              f"0x10000 + element; axes {axes}), index-based IG 0x{index:X}")  # fmt: skip
+        print(
+            f"channel {ch.channel_id}: IG 0x{logical:X} (logical: IO = logical axis number × "
+            f"0x10000 + element; axes {axes}), index-based IG 0x{index:X}"
+        )
     print(
         "index-based addressing: IO = position in the channel × 0x10000 + element; element "
         "attributes at IG + 0x100 (name), + 0x200 (type), + 0x300 (length), + 0x400 (unit), "
@@ -106,18 +111,33 @@ def cmd_plc(args: argparse.Namespace) -> int:
     ch = channel_arg(settings, args.channel).params
     names = [ax.name for ax in ch.axes]
     if args.axis is not None and args.axis not in names:
-        print(f"liftd plc: --axis {args.axis}: channel {ch.channel_id} of the configuration "
-              f"(-c) has the axes {', '.join(names)}", file=sys.stderr)  # fmt: skip
+        print(
+            f"liftd plc: --axis {args.axis}: channel {ch.channel_id} of the configuration "
+            f"(-c) has the axes {', '.join(names)}",
+            file=sys.stderr,
+        )
         return EXIT_CONFIG
     target = plc.Target(
-        host=host, tcp_port=tcp_port, net_id=args.net_id or ads.net_id, ams_port=args.port,
-        channel=ch.channel_id, axis=args.axis or ch.lift_axis,
-    )  # fmt: skip
+        host=host,
+        tcp_port=tcp_port,
+        net_id=args.net_id or ads.net_id,
+        ams_port=args.port,
+        channel=ch.channel_id,
+        axis=args.axis or ch.lift_axis,
+    )
     cfg_plc = settings.config.plc  # with m_ack = "plc" the loop waits for this PLC's acknowledge
     m_ack_delay = cfg_plc.m_ack_delay_ms * 1e-3 if cfg_plc.m_ack == "plc" else None
     try:
-        plc.run(target, schedule, args.cycle_ms, args.duration, args.json, args.timeout_ms,
-                args.start, m_ack_delay=m_ack_delay)  # fmt: skip
+        plc.run(
+            target,
+            schedule,
+            args.cycle_ms,
+            args.duration,
+            args.json,
+            args.timeout_ms,
+            args.start,
+            m_ack_delay=m_ack_delay,
+        )
     except plc.PlcError as exc:  # unreachable, or a read/write failed: never stale data
         print(f"liftd plc: {exc}", file=sys.stderr)
         return EXIT_RUNTIME

@@ -75,8 +75,10 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     methods = ("advanced", "lifting") if args.compare else (args.method,)
     names = _trace_names(args.trace, methods) if args.trace else {}
     if args.plot and any(Path(args.plot).resolve() == Path(n).resolve() for n in names.values()):
-        print(f"liftd simulate: --plot {args.plot} is a trace's file too: name another",
-              file=sys.stderr)  # fmt: skip
+        print(
+            f"liftd simulate: --plot {args.plot} is a trace's file too: name another",
+            file=sys.stderr,
+        )
         return EXIT_CONFIG
     traces: dict[str, TextIO] = {}
     try:
@@ -179,8 +181,9 @@ def _simulate_machine(
             traces[i] = stack.enter_context(open(name, "w", encoding="utf-8", newline=""))  # noqa: SIM115
     schedules = [schedule if i == primary else Schedule() for i in range(len(channels))]
     delay = settings.config.plc.m_ack_delay_ms * 1e-3
-    results = simulate_machine(channels, schedules, delay, traces, args.max_time,
-                               series=bool(args.plot))  # fmt: skip
+    results = simulate_machine(
+        channels, schedules, delay, traces, args.max_time, series=bool(args.plot)
+    )
     entries = []
     for c, (ch, _), result in zip(settings.machine, channels, results, strict=True):
         name = str(c.program) if c.program is not None else ""
@@ -192,8 +195,14 @@ def _simulate_machine(
         ch = channels[primary][0]
         program = settings.machine[primary].program or Path("-")
         title = f"{program.name}: {describe(main.summary)}"
-        plot.plot_run(Path(args.plot), main.series.rows, ch.axis_names, ch.lift_axis_index,
-                      main.summary.lifts, title)  # fmt: skip
+        plot.plot_run(
+            Path(args.plot),
+            main.series.rows,
+            ch.axis_names,
+            ch.lift_axis_index,
+            main.summary.lifts,
+            title,
+        )
     if args.json:
         text_out = json.dumps(machine_json(main.summary, tuple(entries)))
     else:

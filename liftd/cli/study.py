@@ -84,17 +84,24 @@ def cmd_study(args: argparse.Namespace) -> int:
         print(f"liftd study: {problem}", file=sys.stderr)
         return EXIT_CONFIG
     cfg = study_config(settings, chosen.params, args.max_time)
-    meta: JsonObject = {"liftd": __version__, "config": str(settings.path),
-            "method": chosen.params.lift_method.value, "programs": len(programs)}  # fmt: skip
+    meta: JsonObject = {
+        "liftd": __version__,
+        "config": str(settings.path),
+        "method": chosen.params.lift_method.value,
+        "programs": len(programs),
+    }
     if args.scheduler is None:
         jobs = min(args.jobs or len(os.sched_getaffinity(0)), len(programs))
-        return _study(args, meta, {"jobs": jobs}, lambda done: study.run_programs(
-            programs, cfg, jobs, done))  # fmt: skip
+        return _study(
+            args, meta, {"jobs": jobs}, lambda done: study.run_programs(programs, cfg, jobs, done)
+        )
     try:
         from liftd.sim import cluster  # noqa: PLC0415
     except ImportError as exc:
-        print(f"liftd study: --scheduler needs the Dask client ({exc}): {INSTALL_CLUSTER}",
-              file=sys.stderr)  # fmt: skip
+        print(
+            f"liftd study: --scheduler needs the Dask client ({exc}): {INSTALL_CLUSTER}",
+            file=sys.stderr,
+        )
         return EXIT_CONFIG
     timeout = args.timeout if args.timeout is not None else cluster.CONNECT_TIMEOUT_S
     try:
@@ -103,8 +110,12 @@ def cmd_study(args: argparse.Namespace) -> int:
         print(f"liftd study: {exc}", file=sys.stderr)
         return EXIT_CONFIG
     try:
-        return _study(args, meta, _cluster_run(connected), lambda done: cluster.run_programs(
-            connected, programs, cfg, done))  # fmt: skip
+        return _study(
+            args,
+            meta,
+            _cluster_run(connected),
+            lambda done: cluster.run_programs(connected, programs, cfg, done),
+        )
     finally:
         cluster.close(connected.client)
 
@@ -144,9 +155,11 @@ def _study(
             bar.close()
             run |= {
                 "wall_s": round(time.perf_counter() - t0, 3),
-                "max_rss_mib": {"parent": round(study.max_rss_kib() / 1024, 1),
-                                "worker": round(writer.aggregate.max_rss_kib / 1024, 1)},
-            }  # fmt: skip
+                "max_rss_mib": {
+                    "parent": round(study.max_rss_kib() / 1024, 1),
+                    "worker": round(writer.aggregate.max_rss_kib / 1024, 1),
+                },
+            }
             if stop is not None:
                 run["stopped"] = str(stop)
             figures = plot.study_figures(writer.aggregate) if plot.available() else None

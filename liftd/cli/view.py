@@ -19,8 +19,13 @@ def cmd_view(args: argparse.Namespace) -> int:
     return serve_trace(settings, args.trace, args.host, args.port, args.duration)
 
 
-def serve_trace(settings: Settings, trace: str, host: str | None, port: int | None,
-                duration: float | None = None) -> int:  # fmt: skip
+def serve_trace(
+    settings: Settings,
+    trace: str,
+    host: str | None,
+    port: int | None,
+    duration: float | None = None,
+) -> int:
     """Serve the page on `trace` until Ctrl-C / SIGTERM (or `duration` s)."""
     import structlog  # noqa: PLC0415
 
@@ -45,9 +50,16 @@ def serve_trace(settings: Settings, trace: str, host: str | None, port: int | No
         return EXIT_CONFIG
     drawings = [geometry.build(ch, text) if text else None for ch, text in programs]
     ui = settings.config.ui
-    cfg = WebConfig(host if host is not None else ui.host, port if port is not None else ui.port,
-                    False, None, ui.hosts, ui.max_connections, ui.max_message_bytes,
-                    mode="trace")  # fmt: skip
+    cfg = WebConfig(
+        host if host is not None else ui.host,
+        port if port is not None else ui.port,
+        False,
+        None,
+        ui.hosts,
+        ui.max_connections,
+        ui.max_message_bytes,
+        mode="trace",
+    )
     log = structlog.get_logger("liftd").bind(part="ui")
     server = UiServer(cfg, lambda: TraceSession(views, drawings, ui.rate_hz), log)
 
@@ -55,13 +67,18 @@ def serve_trace(settings: Settings, trace: str, host: str | None, port: int | No
         try:
             await server.start()
         except OSError as exc:
-            print(f"liftd view: cannot listen on {cfg.host}:{cfg.port}: {exc.strerror}",
-                  file=sys.stderr)  # fmt: skip
+            print(
+                f"liftd view: cannot listen on {cfg.host}:{cfg.port}: {exc.strerror}",
+                file=sys.stderr,
+            )
             return EXIT_RUNTIME
         shown = "127.0.0.1" if cfg.host in ("0.0.0.0", "") else cfg.host
         rows = sum(tr.n for tr in views.traces if tr is not None)
-        print(f"liftd view: http://{shown}:{server.port}/ ({Path(trace).name}, {rows} rows, "
-              f"{views.t0:.3f}..{views.t1:.3f} s); Ctrl-C stops", flush=True)  # fmt: skip
+        print(
+            f"liftd view: http://{shown}:{server.port}/ ({Path(trace).name}, {rows} rows, "
+            f"{views.t0:.3f}..{views.t1:.3f} s); Ctrl-C stops",
+            flush=True,
+        )
         stop = asyncio.Event()
         loop = asyncio.get_running_loop()
         for sig in (signal.SIGINT, signal.SIGTERM):

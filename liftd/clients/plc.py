@@ -255,23 +255,39 @@ class Printer:
         now = dt.datetime.now(dt.UTC)
         name = f"{self.axis}.{label}" if label.startswith("lift_") else label
         if self.as_json:
-            rec = {"time": now.isoformat(timespec="milliseconds"), "t": round(t_rel, 4),
-                   "object": name, "from": _plain(old), "to": _plain(new),
-                   "line": v["line"], "state": v["state"]}  # fmt: skip
+            rec = {
+                "time": now.isoformat(timespec="milliseconds"),
+                "t": round(t_rel, 4),
+                "object": name,
+                "from": _plain(old),
+                "to": _plain(new),
+                "line": v["line"],
+                "state": v["state"],
+            }
             print(json.dumps(rec), file=self.out, flush=True)
             return
         stamp = now.astimezone().strftime("%H:%M:%S.%f")[:-3]
         change = f"{_fmt(label, old) if old is not None else '-'} -> {_fmt(label, new)}"
-        print(f"{stamp}  +{t_rel:8.3f} s  {name:<18} {change:<16} line {v['line']:<5} "
-              f"override {v['override'] / 10:.1f} %", file=self.out, flush=True)  # fmt: skip
+        print(
+            f"{stamp}  +{t_rel:8.3f} s  {name:<18} {change:<16} line {v['line']:<5} "
+            f"override {v['override'] / 10:.1f} %",
+            file=self.out,
+            flush=True,
+        )
 
     def wrote(self, t_rel: float, symbol: str, value: Any) -> None:
         if self.as_json:
-            print(json.dumps({"t": round(t_rel, 4), "write": symbol, "value": _plain(value)}),
-                  file=self.out, flush=True)  # fmt: skip
+            print(
+                json.dumps({"t": round(t_rel, 4), "write": symbol, "value": _plain(value)}),
+                file=self.out,
+                flush=True,
+            )
         else:
-            print(f"{'':12}  +{t_rel:8.3f} s  write {symbol} = {_plain(value)}", file=self.out,
-                  flush=True)  # fmt: skip
+            print(
+                f"{'':12}  +{t_rel:8.3f} s  write {symbol} = {_plain(value)}",
+                file=self.out,
+                flush=True,
+            )
 
 
 def _plain(value: Any) -> Any:
@@ -334,27 +350,42 @@ def signals_ignored() -> Iterator[None]:
             signal.signal(signum, handler)
 
 
-def run(target: Target, schedule: Schedule, cycle_ms: float, duration_s: float | None,
-        as_json: bool, timeout_ms: int = 1000, start: bool = False,
-        out: TextIO = sys.stdout, m_ack_delay: float | None = None) -> None:  # fmt: skip
+def run(
+    target: Target,
+    schedule: Schedule,
+    cycle_ms: float,
+    duration_s: float | None,
+    as_json: bool,
+    timeout_ms: int = 1000,
+    start: bool = False,
+    out: TextIO = sys.stdout,
+    m_ack_delay: float | None = None,
+) -> None:
     """Poll until the duration ends, Ctrl-C, SIGTERM or SIGHUP. Raises PlcError."""
     quiet_adslib()
     plc = Plc(target, schedule, timeout_ms, start, m_ack_delay)
     # a supervisor's or `timeout`'s SIGTERM (and a closed terminal's SIGHUP) ends it as Ctrl-C
     # does: the levels it set are written back (before, the hold outlived it)
-    before = {signum: signal.signal(signum, _interrupt) for signum in (signal.SIGTERM,
-                                                                       signal.SIGHUP)}  # fmt: skip
+    before = {
+        signum: signal.signal(signum, _interrupt) for signum in (signal.SIGTERM, signal.SIGHUP)
+    }
     printer = Printer(out, as_json, target.axis)
     t0 = time.monotonic()
     try:
         name, state = plc.open()
         if not as_json:
-            print(f"connected to {name} at {target.address}, AMS NetId {target.net_id} port "
-                  f"{target.ams_port}; polling {', '.join(plc.labels.values())} every "
-                  f"{cycle_ms:g} ms", file=out, flush=True)  # fmt: skip
+            print(
+                f"connected to {name} at {target.address}, AMS NetId {target.net_id} port "
+                f"{target.ams_port}; polling {', '.join(plc.labels.values())} every "
+                f"{cycle_ms:g} ms",
+                file=out,
+                flush=True,
+            )
         if state != ADS_RUN:
-            print(f"liftd plc: warning: ADS state {state}, not RUN (5): the GEO task is not "
-                  "cycling", file=sys.stderr)  # fmt: skip
+            print(
+                f"liftd plc: warning: ADS state {state}, not RUN (5): the GEO task is not cycling",
+                file=sys.stderr,
+            )
         counters = poll(plc, printer, cycle_ms * 1e-3, duration_s)
     except KeyboardInterrupt:
         counters = None
@@ -373,8 +404,11 @@ def run(target: Target, schedule: Schedule, cycle_ms: float, duration_s: float |
             for symbol, value in restored:
                 printer.wrote(time.monotonic() - t0, symbol, value)
     if counters is not None and not as_json:
-        print(f"{counters['cycles']} PLC cycles, {counters['transitions']} transitions, "
-              f"{counters['late_cycles']} late cycles", file=out)  # fmt: skip
+        print(
+            f"{counters['cycles']} PLC cycles, {counters['transitions']} transitions, "
+            f"{counters['late_cycles']} late cycles",
+            file=out,
+        )
 
 
 def parse_host(text: str, default_port: int) -> tuple[str, int]:

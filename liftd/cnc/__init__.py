@@ -13,11 +13,12 @@ CPU per cycle, bit-identical results. Without a C compiler they run as Python.
 # failures patch `lift/profile.py` in the core run as Python (tests/support/pure_core.py).
 COMPILED: tuple[str, ...] = (
     "liftd.cnc.actions",
+    "liftd.cnc.channel_state",
+    "liftd.cnc.events",
     "liftd.cnc.geo_task",
     "liftd.cnc.lift_ahead",
     "liftd.cnc.machine",
     "liftd.cnc.plc",
-    "liftd.cnc.plc_commands",
     "liftd.cnc.release",
     "liftd.cnc.ruckig1",
     "liftd.cnc.runs",

@@ -1,65 +1,89 @@
-"""What a channel does at the boundaries its path reaches (`BoundaryActions`, the base of
-`GeoTask`): M functions with their acknowledge, M00, dwell, the program end, and each lift
-range's start and end, at the boundary's exact time; where the path rests, the waiting actions
-hold it until they are done. Closing a lift reports its path delay against the nominal run."""
+"""What a channel does at the boundaries its path reaches (`BoundaryActions`, a part of
+`GeoTask`): M functions with their acknowledge, M00, dwell, #FLUSH, the program end, and each
+lift range's start and end, at the boundary's exact time; where the path rests, the waiting
+actions hold it until they are done. Closing a lift reports its path delay against the nominal
+run. The channel's state changes through its state machine (channel_state.py)."""
 
 from __future__ import annotations
 
-from typing import Final
-
+from liftd.cnc import events
+from liftd.cnc.channel_state import ChannelStateMachine
+from liftd.cnc.events import EventLog
 from liftd.cnc.geo_program import GeoProgram
 from liftd.cnc.lift.controller import LiftController, LiftRecord
 from liftd.cnc.lift.ranges import LiftRange
+from liftd.cnc.lift_ahead import LiftAhead
 from liftd.cnc.params import MSync
 from liftd.cnc.path.interpolator import Crossing, Interpolator
 from liftd.cnc.path.program import Action, ActionKind
-from liftd.cnc.snapshot import ChannelState, Event, new_event
 
 LANDING_TOL = 1e-6  # m: Z counts as at POS when the path passes LIFT_END (1 µm)
 LANDING_TIME_TOL = 1e-6  # s: … and as at rest when its descent ends within 1 µs of that,
 LANDING_V_TOL = 1e-6  # m/s: … or when it moves slower than 1 µm/s and ends within
 LANDING_SETTLE_MAX = 1e-4  # s: 0.1 ms (then it moves less than 1e-10 m more)
 ACK_SYNCS = (MSync.MVS_SVS, MSync.MVS_SNS, MSync.MNS_SNS, MSync.MNE_SNS)
-# enum members as C statics of the compiled module (a dict and a type lookup each otherwise)
-ACTIVE: Final = ChannelState.ACTIVE
-HOLD: Final = ChannelState.HOLD
+INF = float("inf")
 
 
 class BoundaryActions:
-    """The actions at the path's boundaries, on the channel state `GeoTask` holds."""
+    """The actions at the path's boundaries, for the run loaded."""
 
-    prog: GeoProgram
-    interp: Interpolator
-    lift: LiftController
-    state: ChannelState
-    ov_eff: float
-    m_pending: int  # M function waiting for its acknowledge, -1 for none
-    m_acked: set[int]
-    ack_time: float
-    waiting: list[Action]  # actions left at the boundary where the path rests
-    wait_since: float  # time from which the current wait counts
-    rest_since: float  # time the path came to rest at the boundary where it rests
-    z_rest: tuple[int, float] | None  # (axis, Z) after a lift that ended here
-    events: list[Event]
-    lift_ranges: tuple[LiftRange, ...]  # the program's (`GeoProgram.ranges`)
-    range_of: dict[int, int]  # id of a LIFT_START's spec -> its range (`GeoProgram.range_of`)
-    prime_next: int  # the range whose start `LiftAhead._prime_lift` prepares
-    reset_requested: bool  # a PLC RESET is under way (the path brakes, Z rises to POS_LIMIT)
-    z_hold: tuple[int, float] | None  # (axis, Z) a RESET left, until the next START
-    axis_of: dict[str, int]  # axis name -> index in the channel
+    def __init__(
+        self,
+        channel: ChannelStateMachine,
+        log: EventLog,
+        ahead: LiftAhead,
+        axis_of: dict[str, int],
+        cycle_time: float,
+    ) -> None:
+        self.channel = channel
+        self.log = log
+        self.ahead = ahead  # the lift's horizon (a #FLUSH), the next range to prime
+        self.axis_of = axis_of  # axis name -> index in the channel
+        self.dt = cycle_time
+        self.ov_eff = 1.0  # the override in effect in this cycle (`GeoTask.step` sets it)
+        self.waiting: list[Action] = []  # actions left at the boundary where the path rests
+        self.wait_since = 0.0  # time from which the current wait counts
+        self.rest_since = 0.0  # time the path came to rest at the boundary where it rests
+        self.z_rest: tuple[int, float] | None = None  # (axis, Z) after a lift that ended here
+        self.z_hold: tuple[int, float] | None = None  # (axis, Z) a RESET left, until a START
 
-    def _end_of_program(self, t: float, line: int) -> None:
-        """The program ends (M30 reached, or an error stops it): `GeoTask`'s."""
-        raise NotImplementedError
+    def load(self, prog: GeoProgram, interp: Interpolator, lift: LiftController) -> None:
+        """A run is loaded: its program, path and lift; nothing waits."""
+        self.prog = prog
+        self.interp = interp
+        self.lift = lift
+        self.lift_ranges = prog.ranges
+        self.range_of = prog.range_of  # id of a LIFT_START's spec -> its range
+        self.waiting = []
 
-    def _flush_may_go(self, now: float) -> bool:
-        """Whether the path may leave the #FLUSH it rests at (`LiftAhead`'s)."""
-        raise NotImplementedError
+    def begin(self, t: float) -> None:
+        """The run starts at t: the actions of the program's first boundary wait."""
+        self.waiting = list(self.prog.path.boundaries[0].actions)
+        self.wait_since = t
 
-    def _emit(self, name: str, t: float, line: int, value: float = 0.0, text: str = "") -> None:
-        self.events.append(new_event((name, t, line, value, text, 0)))
+    def resume_at(self, t: float) -> None:
+        """A START after a STOP or an M00 at t: an M00 waiting is done; a path held at a
+        boundary leaves it no earlier than now: its waits may have ended while it was held (Z
+        arrived, an M function was acknowledged), and left at their time it jumped ahead by the
+        time it was held (a dwell under way starts again)."""
+        if self.waiting and self.waiting[0].kind is ActionKind.M00:
+            self.waiting.pop(0)
+        self.wait_since = max(self.wait_since, t)
 
-    def _cross(self, c: Crossing) -> None:
+    def end_of_program(self, t: float, line: int) -> None:
+        """The program ends: M30 reached, or an NC error stops it (then a lift under way rises
+        to POS_LIMIT and stays, vendor §2.4)."""
+        err = self.prog.error
+        if err is not None:
+            if self.lift.current is not None:
+                self.lift.error_in_range(t)
+            self.channel.error(t, err.id, err.line, err.message)
+        else:
+            self.channel.program_end(t, line)
+        self.waiting = []
+
+    def cross(self, c: Crossing) -> None:
         actions = self.prog.path.boundaries[c.boundary].actions
         if c.at_rest:
             self.waiting = list(actions)
@@ -68,7 +92,7 @@ class BoundaryActions:
         for action in actions:  # passing without a stop: nothing here waits
             self._do(action, c.t, c)
 
-    def _work_waiting(self, now: float) -> bool:
+    def work_waiting(self, now: float) -> bool:
         """Run the actions where the path rests; True when it may go on."""
         while self.waiting:
             if not self._do(self.waiting[0], self.wait_since, None, now):
@@ -76,11 +100,11 @@ class BoundaryActions:
             self.waiting.pop(0)
         k = self.interp.stopped_at
         if k is not None and k >= len(self.prog.path.segments):
-            self._end_of_program(self.wait_since, self.prog.path.boundaries[k].line)
+            self.end_of_program(self.wait_since, self.prog.path.boundaries[k].line)
             return False
         # a RESET under way keeps the path where it came to rest (a resume inside a range
         # set the lift rising for the rest of it again, instead of holding at POS_LIMIT)
-        return self.state is ACTIVE and not self.reset_requested
+        return self.channel.may_move()
 
     def _do(self, action: Action, t_at: float, crossing: Crossing | None, now: float = 0.0) -> bool:
         """Execute one action at time t_at; False while it still waits (only where the path
@@ -93,32 +117,55 @@ class BoundaryActions:
         elif kind is ActionKind.LIFT_END:
             return self._lift_end(action, t_at, crossing, now)
         elif kind is ActionKind.M_OUTPUT:
-            self._emit("geo.m_output", t_at, action.line, float(action.m_number))
-            if action.sync in ACK_SYNCS:
-                self.m_pending = action.m_number
-                self.m_acked.discard(action.m_number)
+            needs_ack = action.sync in ACK_SYNCS
+            self.channel.m_output(t_at, action.line, action.m_number, needs_ack)
         elif kind is ActionKind.M_WAIT:
-            if action.m_number not in self.m_acked:
+            if not self.channel.take_ack(action.m_number):
                 return False
-            self.m_acked.discard(action.m_number)
             if crossing is None:
-                self.wait_since = max(self.wait_since, self.ack_time)
+                self.wait_since = max(self.wait_since, self.channel.ack_time)
         elif kind is ActionKind.M00:
-            self._emit("geo.m00", t_at, action.line)
-            self.state = HOLD
+            self.channel.m00(t_at, action.line)
             return False
         elif kind is ActionKind.DWELL:
             if now < t_at + action.seconds:
                 return False
             self.wait_since = t_at + action.seconds
         elif kind is ActionKind.PROGRAM_END:
-            self._end_of_program(t_at, action.line)
+            self.end_of_program(t_at, action.line)
             return False
         elif kind is ActionKind.FLUSH and crossing is None:
-            return self._flush_may_go(now)  # unless Z could not make it from here
+            return self.flush_may_go(now)  # unless Z could not make it from here
         return True
 
-    def _resumed(self, k: int, rested: float) -> None:
+    def flush_may_go(self, now: float) -> bool:
+        """The path rests at a #FLUSH: it leaves unless it must wait for Z, that is unless Z,
+        as it is now, needs longer to reach POS than the path needs from here to the lift's
+        horizon (a lower bound at the override in effect). Then it leaves at the exact time
+        from which Z lands before the path can arrive (vendor §2.1.3 case 3: the flush "may
+        stop the path"); meanwhile Z descends against that time (`LiftAhead.lift_time`)."""
+        lift = self.lift
+        m = lift.motion
+        if m is None or not m.uses_time or not self.ahead.at_flush():
+            return True
+        k = self.ahead.horizon()
+        if k < 0:
+            return True  # another flush lies before the horizon: decided there
+        ip = self.interp
+        path_needs = ip.lower_bound(k, self.ov_eff) - ip.t_state
+        if path_needs == INF:
+            return True  # a feed hold or override 0: the override rule decides on release
+        leave = lift.t + m.landing_time() - path_needs
+        if leave <= self.wait_since:
+            return True
+        if leave > now:
+            return False
+        # never before the last cycle, where the path was published at rest (Z's need can
+        # fall by more than a cycle in one, when it turns to its descent)
+        self.wait_since = max(leave, now - self.dt)
+        return True
+
+    def resumed(self, k: int, rested: float) -> None:
         """The path left boundary k, where it rested from `rested`, at `wait_since`. Inside a
         lift range Z lifts again for the rest of it after a waiting point (its wait is the
         program's, not the lift's); at a #FLUSH Z goes on as it was (vendor §2.1.3 case 3:
@@ -137,7 +184,7 @@ class BoundaryActions:
             self._departure(rec, self.wait_since, None)
 
     def _lift_start(self, rng: LiftRange, t_at: float, crossing: Crossing | None) -> None:
-        if self.reset_requested:  # the path brakes for a RESET: no range starts any more
+        if self.channel.reset_requested:  # the path brakes for a RESET: no range starts now
             if self.lift.current is None and self.z_hold is None:
                 # the axis stays where it is (the first range skipped: the next one's start
                 # assumes this one ran), not where the path's POS would put it
@@ -145,14 +192,14 @@ class BoundaryActions:
             return
         if self.lift.current is not None:  # the last lift is still finishing (late): go on from Z
             z, vz, az = self.lift.z, self.lift.vz, self.lift.az
-            self._close_lift(t_at, rng.start.line)
+            self.close_lift(t_at, rng.start.line)
         else:  # the programmed Z at the start (the decoder tracked every earlier lift's POS)
             u_z = self.prog.entry_dir[rng.index]
             z = rng.start.z_start
             vz = crossing.v * u_z if crossing else 0.0
             az = crossing.a * u_z if crossing else 0.0
         self.lift.start(rng, t_at, z, vz, az)
-        self.prime_next = rng.index + 1
+        self.ahead.prime_next = rng.index + 1
         m = self.lift.motion
         if m is not None and not m.uses_time:  # coupled: Z at z(s) from the range's start
             s = self.prog.path.boundaries[rng.k_start].s
@@ -160,8 +207,8 @@ class BoundaryActions:
         rec = self.lift.record
         if rec is not None and crossing is not None:  # passing: the path leaves at once
             self._departure(rec, t_at, crossing)
-        self._emit(
-            "lift.start",
+        self.log.emit(
+            events.LIFT_START,
             t_at,
             rng.start.line,
             rng.start.target,
@@ -185,7 +232,7 @@ class BoundaryActions:
         m = lift.motion
         if lift.current is None or m is None:
             return True
-        if self.reset_requested:
+        if self.channel.reset_requested:
             # the path braking for a RESET passes LIFT_END: the range ends with the RESET,
             # Z held up at POS_LIMIT (`lift.aborted`), never closed here with Z far from POS
             # and handed back to the path's Z (Z jumped up to 35 mm in one cycle: bench_reset)
@@ -225,16 +272,16 @@ class BoundaryActions:
             if rec is not None:
                 rec.arrival_error, rec.late = error, True
             text = f"Z {error * 1e3:.6f} mm from POS when the path passed LIFT_END"
-            self._emit("lift.late", t_at, action.line, error, text)
+            self.log.emit(events.LIFT_LATE, t_at, action.line, error, text)
             lift.ending = True
             return True
-        self._close_lift(t_at, action.line)
+        self.close_lift(t_at, action.line)
         return True
 
     def _z_landed(self) -> bool:
         return self.lift.z_done
 
-    def _close_lift(self, t: float, line: int) -> None:
+    def close_lift(self, t: float, line: int) -> None:
         rng = self.lift.current
         if rng is not None:
             self.interp.drop_lift_stop(rng.k_end)
@@ -258,4 +305,4 @@ class BoundaryActions:
             else:  # no path motion: all the time is the path waiting for Z
                 rec.path_delay = max(0.0, rec.t_end - rec.t_start - rec.waits)
             self.interp.nominal_stop()
-            self._emit("lift.end", rec.t_end, line, rec.peak)
+            self.log.emit(events.LIFT_END, rec.t_end, line, rec.peak)

@@ -42,7 +42,7 @@ class GeoProgram:
     first_line: int
     stops: tuple[tuple[int, ...], ...]  # per range: waiting points strictly inside it
     # per range: boundaries strictly inside it where the path stops only for a #FLUSH / #FLUSH
-    # WAIT (not waiting points of the lift: vendor §2.1.3 case 3, `LiftAhead._horizon`)
+    # WAIT (not waiting points of the lift: vendor §2.1.3 case 3, `LiftAhead.horizon`)
     flushes: tuple[tuple[int, ...], ...]
     z_index: int
     plans: tuple[RangePlan | None, ...]  # per range: z(s) of path-based Lifting, else None
@@ -215,8 +215,9 @@ def _conditional(path: PathProgram) -> dict[int, tuple[int, ...]]:
     return {m: tuple(ks) for m, ks in out.items()}
 
 
-def _limits_reach(rng: LiftRange, changed: list[int], nominal: PathTable,
-                  ch: ChannelParams) -> bool:  # fmt: skip
+def _limits_reach(
+    rng: LiftRange, changed: list[int], nominal: PathTable, ch: ChannelParams
+) -> bool:
     """Whether segments the lifts' limits changed can shape the path inside `rng`: those in
     the range, and those after it that the path inside it can see (within its look-ahead
     and its braking distance from the fastest it can go there at 200 % override). Segments

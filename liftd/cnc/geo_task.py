@@ -17,17 +17,24 @@ from __future__ import annotations
 
 from typing import Final
 
-from liftd.cnc.geo_program import PreparedPrograms, same_start
+from liftd.cnc import events
+from liftd.cnc.actions import BoundaryActions
+from liftd.cnc.channel_state import ChannelStateMachine
+from liftd.cnc.events import EventLog
+from liftd.cnc.geo_program import GeoProgram, PreparedPrograms, same_start
+from liftd.cnc.lift.controller import LiftController
 from liftd.cnc.lift.monitor import AccelMonitor
 from liftd.cnc.lift.profile import LiftProfiles, ProfileError
+from liftd.cnc.lift_ahead import LiftAhead
 from liftd.cnc.nc.blocks import ErrorId
 from liftd.cnc.params import ChannelParams
+from liftd.cnc.path.interpolator import Interpolator
 from liftd.cnc.path.program import PathProgram
-from liftd.cnc.plc import MAX_OVERRIDE
-from liftd.cnc.plc_commands import PlcCommands
+from liftd.cnc.plc import MAX_OVERRIDE, clamp_override
 from liftd.cnc.runs import Runs, RunState
 from liftd.cnc.snapshot import (
     ChannelState,
+    Command,
     GeoInputs,
     GeoSnapshot,
     LiftPhase,
@@ -43,10 +50,15 @@ ACTIVE: Final = ChannelState.ACTIVE
 HOLD: Final = ChannelState.HOLD
 ERROR: Final = ChannelState.ERROR
 NO_PHASE: Final = LiftPhase.NONE
+HOLD_LIMIT: Final = LiftPhase.HOLD_LIMIT
+NO_COMMAND: Final = Command.NONE
 
 
-class GeoTask(PlcCommands):
-    """One CNC channel's GEO task running one NC program."""
+class GeoTask:
+    """One CNC channel's GEO task running one NC program. It holds its parts: the channel's
+    state machine (`channel`), the actions at the path's boundaries (`actions`), what the lift
+    sees ahead (`ahead`), the runs of the program (`next_runs`) and the run loaded: its
+    program (`prog`), its interpolator with the nominal run (`interp`) and its lift (`lift`)."""
 
     def __init__(
         self,
@@ -61,33 +73,29 @@ class GeoTask(PlcCommands):
         self.autostart = autostart
         self.z_index = channel.lift_axis_index
         self.home = start_position or tuple(0.0 for _ in channel.axes)
-        self.state = READY
+        self.log = EventLog()
+        self.channel = ChannelStateMachine(self.log)
         self.cycle = 0
         self.t_cycle = 0.0
         self.ov_eff = 1.0
         self.ov_req = 1.0
         self.ov_max = MAX_OVERRIDE
         self.was_holding = False
-        self.stop_requested = False
-        self.reset_requested = False
-        self.m_pending = -1
-        self.m_acked = set()
-        self.error_id = 0
-        self.error_line = 0
-        self.events = []
-        self.waiting = []
-        self.z_rest = None
-        self.z_hold: tuple[int, float] | None = None  # (axis, Z) a RESET in a range left
-        self.wait_since = self.rest_since = 0.0
-        self.ack_time = 0.0
-        self.runs = 0
+        # the run loaded (`_load`)
+        self.prog: GeoProgram
         self.path: PathProgram  # self.prog.path
+        self.interp: Interpolator
+        self.lift: LiftController
         # the IPO acceleration monitor of every axis that lifts (the configured lift axis and
         # any other a program lifts); `z_monitor` is the configured one's, for the summary
         self.monitors: dict[int, AccelMonitor] = {}
         # axis name → index, for a START's lift axes (`ChannelParams.axis_names` is a property
         # of an interpreted class that builds a tuple: ~23 % of a repeat START's cycle, perf)
         self.axis_of = {name: k for k, name in enumerate(channel.axis_names)}
+        self.ahead = LiftAhead(channel.cycle_time)
+        self.actions = BoundaryActions(
+            self.channel, self.log, self.ahead, self.axis_of, channel.cycle_time
+        )
         self.z_monitor = self._monitor_of(self.z_index)
         self.programs = PreparedPrograms(program_text, channel)
         # committed look-ahead per axis that may lift (computed here, outside the cycle)
@@ -105,7 +113,7 @@ class GeoTask(PlcCommands):
         decoding and no building in its cycle; from then on, the run after each START is
         built in the cycles after it, a piece per cycle (`Runs.deferred`)."""
         # before the first START: the run after run 1
-        self.next_runs.prepare(self.prog.path.end_position, max(self.runs, 1))
+        self.next_runs.prepare(self.prog.path.end_position, max(self.channel.runs, 1))
 
     def wants_run(self) -> tuple[float, ...] | None:
         """Where a START now would load the program from, when the run from there is not
@@ -114,7 +122,8 @@ class GeoTask(PlcCommands):
         otherwise. The GEO process builds that run off the cycle (`build_run`, in a
         thread) and hands it over (`offer_run`) before it lets the START through, so that
         a START after a RESET costs its cycle what a repeat START does."""
-        if self.state is not READY or not self.runs or self.reset_requested:
+        ch = self.channel
+        if ch.state is not READY or not ch.runs or ch.reset_requested:
             return None
         pos = self._positions()
         ahead = self.next_runs.ahead
@@ -128,7 +137,22 @@ class GeoTask(PlcCommands):
 
     def offer_run(self, run: RunState) -> None:
         """The run `build_run` built, for the next START (cheap: a GEO cycle may call it)."""
-        self.next_runs.offer(run, self.runs)
+        self.next_runs.offer(run, self.channel.runs)
+
+    @property
+    def state(self) -> ChannelState:
+        return self.channel.state
+
+    @property
+    def runs(self) -> int:
+        """Runs started (a START after the first loads the next one)."""
+        return self.channel.runs
+
+    @property
+    def ready_after_reset(self) -> bool:
+        """READY since a RESET completed, and no START since (the GEO loop's reload keeps
+        it READY whatever its autostart)."""
+        return self.channel.ready_after_reset
 
     @property
     def next_run_ready(self) -> bool:
@@ -149,24 +173,9 @@ class GeoTask(PlcCommands):
         self.lift = lift
         for name in run.prog.lift_axes:
             self._monitor_of(self.axis_of[name])
-        self.waiting = []
-        self.m_acked.clear()
-        self.m_pending = -1
-        self.range_of = run.prog.range_of
-        self._reset_priming(run.prog.ranges)
-
-    def _end_of_program(self, t: float, line: int) -> None:
-        err = self.prog.error
-        if err is not None:
-            if self.lift.current is not None:
-                self.lift.error_in_range(t)  # Z rises to POS_LIMIT and stays (vendor §2.4)
-            self.state = ERROR
-            self.error_id, self.error_line = err.id, err.line
-            self._emit("geo.error", t, err.line, float(err.id), err.message)
-        else:
-            self.state = READY
-            self._emit("geo.program_end", t, line)
-        self.waiting = []
+        self.channel.new_run()
+        self.actions.load(run.prog, run.interp, lift)
+        self.ahead.load(run.prog, run.interp, lift)
 
     # -- helpers ----------------------------------------------------------------------------------
     def _positions(self) -> tuple[float, ...]:
@@ -178,16 +187,17 @@ class GeoTask(PlcCommands):
         segs = self.path.segments
         if k is not None and 0 < k <= len(segs):
             pos = segs[k - 1].geom.end
-            if self.z_rest is not None:
-                z, value = self.z_rest
+            z_rest = self.actions.z_rest
+            if z_rest is not None:
+                z, value = z_rest
                 pos = (*pos[:z], value, *pos[z + 1 :])
         else:
             pos = self.interp.position()
         if self.lift.current is not None:
             z = self.lift.axis_index
             pos = (*pos[:z], self.lift.z, *pos[z + 1 :])
-        elif self.z_hold is not None:  # a RESET inside a range left Z there
-            z, value = self.z_hold
+        elif self.actions.z_hold is not None:  # a RESET inside a range left Z there
+            z, value = self.actions.z_hold
             pos = (*pos[:z], value, *pos[z + 1 :])
         return pos
 
@@ -198,15 +208,15 @@ class GeoTask(PlcCommands):
         m = self.lift.motion
         if m is None or holding:
             return ov_req
-        k = self._horizon()
+        k = self.ahead.horizon()
         verdict = m.limit_override(ov_req, self.ov_eff, self.was_holding, k, self.interp)
         self.ov_max = verdict.override_max
         t0 = self.interp.t_state
         if verdict.path_waits:
             self.interp.add_lift_stop(k)
-            self._emit("lift.path_waits", t0, self.line, float(k))
+            self.log.emit(events.LIFT_PATH_WAITS, t0, self.line, float(k))
         elif verdict.limited and verdict.override != self.ov_eff:  # a new grant, not each cycle
-            self._emit("lift.override_limited", t0, self.line, verdict.override)
+            self.log.emit(events.LIFT_OVERRIDE_LIMITED, t0, self.line, verdict.override)
         return verdict.override
 
     # -- cycle ------------------------------------------------------------------------------------
@@ -218,21 +228,26 @@ class GeoTask(PlcCommands):
         dt = self.dt
         t_in = self.t_cycle if self.cycle > 1 else (round(t / dt) - 1) * dt
         self.t_cycle = t
-        self.events = []
-        if self.autostart and self.runs == 0:
+        log, ch, actions = self.log, self.channel, self.actions
+        log.clear()
+        if self.autostart and ch.runs == 0:
             self._start(t_in)
-        self._command(inputs.command, t_in)
-        if inputs.m_ack and self.m_pending >= 0:
-            self._acknowledge(self.m_pending, t_in)
-        self.ov_req = min(max(inputs.override, 0.0), MAX_OVERRIDE)
-        holding = inputs.feed_hold or self.stop_requested or self.state is not ACTIVE
-        self.ov_eff = self._limit_override(self.ov_req, holding)
+        if inputs.command is not NO_COMMAND:
+            self._command(inputs.command, t_in)
+        if inputs.m_ack and ch.m_pending >= 0:
+            number = ch.acknowledge(t_in, self.line)
+            # the dict, not GeoProgram.conditional_for: a Python frame in an acknowledge's cycle
+            for k in self.prog.conditional.get(number, ()):
+                self.interp.acknowledge_conditional(k)
+        self.ov_req = clamp_override(inputs.override)
+        holding = ch.holding(inputs.feed_hold)
+        self.ov_eff = actions.ov_eff = self._limit_override(self.ov_req, holding)
         self.was_holding = holding
         self.interp.set_inputs(self.ov_eff, holding)
         self.interp.nominal_step(t, self.ov_req, holding)
-        if self.state is ACTIVE:
+        if ch.state is ACTIVE:
             self._run_path(t)
-        elif self.state is HOLD and self.interp.stopped_at is None:
+        elif ch.state is HOLD and self.interp.stopped_at is None:
             # a PLC STOP holds the path at rest mid-block: its time goes on, as in a feed
             # hold, so that START leaves from here and now (a path left at the stop's time
             # jumped on START to where it would have been without the stop, further the
@@ -243,18 +258,18 @@ class GeoTask(PlcCommands):
             ip = self.interp
             t_rem, refine = 0.0, None
             if m.uses_time:
-                t_rem, refine = self._lift_time(t, m.t)
+                t_rem, refine = self.ahead.lift_time(t, m.t, self.ov_eff)
             self.lift.step(t, ip.s, ip.v, ip.a, t_rem, self.ov_eff, refine)
             for finding in self.lift.findings:
-                self._emit(finding.name, t, self.line, finding.value)
+                log.emit(finding.name, t, self.line, finding.value)
             self.lift.findings.clear()
             if self.lift.ending and self.lift.z_done:
-                self._close_lift(t, self.line)
+                actions.close_lift(t, self.line)
         self._settle(t)
-        if not self.events and not self._started:
+        if not log.items and not self._started:
             if self.interp.stopped_at is None:
-                self._prime_lift()
-            elif self.state is ACTIVE:
+                self.ahead.prime(t)
+            elif ch.state is ACTIVE:
                 self.interp.prime_leaving()  # the resume's profile, in a quiet cycle of the wait
         positions = self._positions()
         self._monitor(positions, t)
@@ -262,8 +277,78 @@ class GeoTask(PlcCommands):
         if self._started:
             self._started = False
         else:
-            self.next_runs.deferred(self.path.end_position, self.runs)
+            self.next_runs.deferred(self.path.end_position, ch.runs)
         return snap
+
+    # -- the PLC's commands: what a transition of the channel does to the path and the lift ------
+    def _start(self, t: float) -> None:
+        ch = self.channel
+        if ch.state is READY:
+            if ch.runs:
+                self._load(self._positions())  # a new run from where the last one ended
+                self.actions.z_hold = None  # the new run starts there
+            self._started = True
+            self.interp.start(t)
+            self.actions.begin(t)
+            ch.program_start(t, self.prog.first_line)
+        elif ch.state is HOLD:
+            self.actions.resume_at(t)
+            ch.resume(t, self.line)
+        else:
+            ch.cancel_stop()
+
+    def _command(self, cmd: Command, t: float) -> None:
+        ch = self.channel
+        if ch.takes_start(cmd):
+            self._start(t)
+        elif ch.request(cmd) and self.lift.current is not None and ch.state is not ERROR:
+            # a RESET: the program ends inside a lift range: Z rises to POS_LIMIT and stays,
+            # the vendor's reaction to an error in a range (§2.4), never down onto the path
+            # it leaves between LIFT_START and LIFT_END
+            self.lift.error_in_range(t)
+
+    def _settle(self, t: float) -> None:
+        """STOP and RESET complete once the path is at rest."""
+        ch = self.channel
+        if not ch.stop_requested and not ch.reset_requested:
+            return
+        at_rest = self.interp.v == 0.0 and self.interp.a == 0.0
+        if ch.stop_due(at_rest):
+            ch.stopped(t, self.line)
+        lift = self.lift
+        if ch.reset_due(at_rest) and (
+            lift.current is None
+            or (
+                not lift.error_pending  # Z still follows the path to rest, then rises
+                and lift.vz == 0.0
+                and lift.az == 0.0
+                # at POS_LIMIT, not at the start of its rise from rest (path-based)
+                and (lift.phase is not HOLD_LIMIT or lift.needed_time() == 0.0)
+            )
+        ):
+            # every axis at rest, the lift axis too: a lift it was in ends where Z is (at
+            # POS_LIMIT: `_command`) and stays there (not the path's Z inside the range) until
+            # the next START loads the program from the current positions
+            self.actions.waiting = []
+            line = self.line
+            if lift.current is not None:
+                self.actions.z_hold = (lift.axis_index, lift.z)
+                lift.abort()
+                self.log.emit(events.LIFT_ABORTED, t, line, lift.z)
+            lift.active = lift.suppressed = False
+            ch.reset_done(t, line)
+
+    @property
+    def line(self) -> int:
+        """The NC line of the block being executed (or of the action waiting)."""
+        waiting = self.actions.waiting
+        if waiting:
+            return waiting[0].line
+        k = self.interp.stopped_at
+        if k is not None:
+            return self.path.boundaries[k].line or self.prog.first_line
+        segs = self.path.segments
+        return segs[min(self.interp.segment, len(segs) - 1)].line if segs else 0
 
     def _monitor_of(self, axis: int) -> AccelMonitor:
         mon = self.monitors.get(axis)
@@ -279,28 +364,29 @@ class GeoTask(PlcCommands):
             if axis == lifting and mon.ratio > rec.z_a_max_ratio:  # type: ignore[union-attr]
                 rec.z_a_max_ratio = mon.ratio  # type: ignore[union-attr]
             if entered == mon.ERROR:
-                self._emit("lift.z_acc_error", t, self.line, mon.ratio)
+                self.log.emit(events.LIFT_Z_ACC_ERROR, t, self.line, mon.ratio)
             elif entered == mon.WARNING:
-                self._emit("lift.z_acc_warning", t, self.line, mon.ratio)
+                self.log.emit(events.LIFT_Z_ACC_WARNING, t, self.line, mon.ratio)
 
     def _run_path(self, t: float) -> None:
+        actions = self.actions
         for _ in range(100000):  # bounded: every pass ends a wait or passes a boundary
             if self.interp.stopped_at is not None:
-                if not self._work_waiting(t):
+                if not actions.work_waiting(t):
                     return
                 k = self.interp.stopped_at
                 rested = self.interp.t_state
-                self.interp.resume(self.wait_since)
-                self.z_rest = None
+                self.interp.resume(actions.wait_since)
+                actions.z_rest = None
                 if k is not None:
-                    self._resumed(k, rested)
+                    actions.resumed(k, rested)
             for crossing in self.interp.advance(t):
-                self._cross(crossing)
-            if self.interp.stopped_at is None or self.state is not ACTIVE:
+                actions.cross(crossing)
+            if self.interp.stopped_at is None or self.channel.state is not ACTIVE:
                 return
 
     def _snapshot(self, t: float, inputs: GeoInputs, positions: tuple[float, ...]) -> GeoSnapshot:
-        lift = self.lift
+        lift, ch = self.lift, self.channel
         if lift.current is None:
             phase, vz, az = NO_PHASE, 0.0, 0.0
         else:
@@ -314,7 +400,7 @@ class GeoTask(PlcCommands):
             (
                 self.cycle,
                 t,
-                self.state,
+                ch.state,
                 self.line,
                 self.interp.segment,
                 positions,
@@ -328,10 +414,10 @@ class GeoTask(PlcCommands):
                 phase,
                 vz,
                 az,
-                self.m_pending,
-                self.error_id,
-                self.error_line,
-                tuple(self.events),
+                ch.m_pending,
+                ch.error_id,
+                ch.error_line,
+                tuple(self.log.items),
                 v_block_max,
                 v_block_end,
                 lift.axis_index,

@@ -1,37 +1,44 @@
-"""What the lift sees of the path ahead (`LiftAhead`, between `BoundaryActions` and `GeoTask`):
-the boundary it plans for (its horizon) and the next lift start's work done in the cycles
-before it. Changes with how a lift looks ahead; the channel's cycle stays in `geo_task.py`."""
+"""What the lift sees of the path ahead (`LiftAhead`, a part of `GeoTask`): the boundary it
+plans for (its horizon), the remaining path time it plans against, and the next lift start's
+work done in the cycles before it. Changes with how a lift looks ahead; the channel's cycle
+stays in `geo_task.py`."""
 
 from __future__ import annotations
 
 import functools
 
-from liftd.cnc.actions import BoundaryActions
+from liftd.cnc.geo_program import GeoProgram
 from liftd.cnc.lift.advanced import Refine
+from liftd.cnc.lift.controller import LiftController
 from liftd.cnc.lift.ranges import LiftRange
 from liftd.cnc.path.interpolator import Interpolator
 
 INF = float("inf")
 
 
-class LiftAhead(BoundaryActions):
-    """The lift's horizon and the priming of the next lift start, on `GeoTask`'s state."""
+class LiftAhead:
+    """The lift's horizon and the priming of the next lift start, for the run loaded."""
 
-    dt: float  # the cycle time
-    t_cycle: float  # the time of the current cycle
-    _prime_stage: int  # pieces of the next lift's start done (`_prime_lift`)
-    _prime_for: int  # … for this range (`prime_next`)
-    _prime_restarts: int  # … with the interpolator's restarts at this count
+    def __init__(self, cycle_time: float) -> None:
+        self.dt = cycle_time
+        self.lift_ranges: tuple[LiftRange, ...] = ()  # the run's (`GeoProgram.ranges`)
+        self.prime_next = 0  # the range whose start `prime` prepares
+        self._prime_stage = 0  # pieces of the next lift's start done
+        self._prime_for = -1  # … for this range (`prime_next`)
+        self._prime_restarts = -1  # … with the interpolator's restarts at this count
 
-    def _reset_priming(self, ranges: tuple[LiftRange, ...]) -> None:
-        """A run's ranges, none primed yet (the task loads a run)."""
-        self.lift_ranges = ranges
+    def load(self, prog: GeoProgram, interp: Interpolator, lift: LiftController) -> None:
+        """A run is loaded: its program, path and lift; its ranges, none primed yet."""
+        self.prog = prog
+        self.interp = interp
+        self.lift = lift
+        self.lift_ranges = prog.ranges
         self.prime_next = 0
         self._prime_stage = 0
         self._prime_for = -1
         self._prime_restarts = -1
 
-    def _horizon(self) -> int:
+    def horizon(self) -> int:
         """Boundary the lift plans for: LIFT_END, or an earlier waiting point of the range;
         -1 where the path's time to it is unknown: a #FLUSH / #FLUSH WAIT lies before it.
 
@@ -41,9 +48,9 @@ class LiftAhead(BoundaryActions):
         nor starts again after it. The channel is emptied at a flush, so the lift does not
         count on the blocks after it until the path is there: Z keeps rising toward POS_LIMIT
         as in a feed hold, and at the flush the path waits if Z could not make it from there
-        (`_flush_may_go`). liftd follows this passage where the general one (§2.4: "the
-        programmed target position is reached briefly in the flush block") disagrees: the
-        method-specific passage first, and it keeps Z up (issue 37 item 2)."""
+        (`BoundaryActions.flush_may_go`). liftd follows this passage where the general one
+        (§2.4: "the programmed target position is reached briefly in the flush block")
+        disagrees: the method-specific passage first, and it keeps Z up (issue 37 item 2)."""
         rng = self.lift.current
         if rng is None or rng.k_end < 0:
             return -1
@@ -62,54 +69,28 @@ class LiftAhead(BoundaryActions):
                 return -1  # the path has not left this flush yet: beyond it is unknown
         return horizon
 
-    def _at_flush(self) -> bool:
+    def at_flush(self) -> bool:
         """Whether the path rests at a #FLUSH inside the current lift range."""
         rng = self.lift.current
         k = self.interp.stopped_at
         return rng is not None and k is not None and k in self.prog.flushes[rng.index]
 
-    def _lift_time(self, t: float, t_z: float) -> tuple[float, Refine | None]:
+    def lift_time(self, t: float, t_z: float, ov_eff: float) -> tuple[float, Refine | None]:
         """The remaining path time a time-based lift plans against, from Z's time t_z: to its
         horizon, a lower bound that `refine` makes exact; inf where the horizon is unknown.
         Where the path rests at a flush, the least time it needs from there if it left now
-        (at t): Z plans to land by then, the path waits until it can (`_flush_may_go`)."""
-        k = self._horizon()
+        (at t): Z plans to land by then, the path waits until it can
+        (`BoundaryActions.flush_may_go`)."""
+        k = self.horizon()
         if k < 0:
             return INF, None
         ip = self.interp
-        if self._at_flush():
-            return t + ip.lower_bound(k, self.ov_eff) - ip.t_state - t_z, None
+        if self.at_flush():
+            return t + ip.lower_bound(k, ov_eff) - ip.t_state - t_z, None
         # a bound that costs nothing while it still holds; exact on demand
         return ip.arrival_bound(k) - t_z, functools.partial(_remaining, ip, k, t_z)
 
-    def _flush_may_go(self, now: float) -> bool:
-        """The path rests at a #FLUSH: it leaves unless it must wait for Z, that is unless Z,
-        as it is now, needs longer to reach POS than the path needs from here to the lift's
-        horizon (a lower bound at the override in effect). Then it leaves at the exact time
-        from which Z lands before the path can arrive (vendor §2.1.3 case 3: the flush "may
-        stop the path"); meanwhile Z descends against that time (`_lift_time`)."""
-        lift = self.lift
-        m = lift.motion
-        if m is None or not m.uses_time or not self._at_flush():
-            return True
-        k = self._horizon()
-        if k < 0:
-            return True  # another flush lies before the horizon: decided there
-        ip = self.interp
-        path_needs = ip.lower_bound(k, self.ov_eff) - ip.t_state
-        if path_needs == INF:
-            return True  # a feed hold or override 0: the override rule decides on release
-        leave = lift.t + m.landing_time() - path_needs
-        if leave <= self.wait_since:
-            return True
-        if leave > now:
-            return False
-        # never before the last cycle, where the path was published at rest (Z's need can
-        # fall by more than a cycle in one, when it turns to its descent)
-        self.wait_since = max(leave, now - self.dt)
-        return True
-
-    def _prime_lift(self) -> None:
+    def prime(self, t_cycle: float) -> None:
         """Work of the next lift start's cycle done in the two quiet cycles before it, once
         the path's crossing of its LIFT_START is committed: the lift's first rising cycle
         (`AdvancedLift.prime`, a ruckig solve), then the lower bound of the path's arrival at
@@ -128,7 +109,7 @@ class LiftAhead(BoundaryActions):
             return
         rng = self.lift_ranges[i]
         t_at = ip.arrivals.get(rng.k_start)
-        if t_at is None or t_at > self.t_cycle + 2.5 * self.dt:
+        if t_at is None or t_at > t_cycle + 2.5 * self.dt:
             return
         found = ip.crossing_within(rng.k_start, 2)
         if found is None:

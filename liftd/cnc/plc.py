@@ -16,6 +16,13 @@ from liftd.cnc.snapshot import ChannelState, Command, GeoInputs, GeoSnapshot, ne
 
 MAX_OVERRIDE = 2.0  # 200 %: the highest path override a PLC may request (fraction)
 
+
+def clamp_override(requested: float) -> float:
+    """A requested path override as the channel takes it: 0 … MAX_OVERRIDE (a fraction). The
+    one place of this rule: the GEO task's inputs and the runtime's staged PLC writes."""
+    return min(max(requested, 0.0), MAX_OVERRIDE)
+
+
 # enum members as C statics of the compiled module (an enum attribute is two lookups a use)
 HOLD: Final = ChannelState.HOLD
 NO_COMMAND: Final = Command.NONE

@@ -5,7 +5,7 @@ from __future__ import annotations
 import enum
 import functools
 from collections.abc import Callable
-from typing import NamedTuple, cast
+from typing import Annotated, NamedTuple, cast, get_args, get_origin, get_type_hints
 
 
 class ChannelState(enum.IntEnum):
@@ -27,12 +27,15 @@ class Command(enum.IntEnum):
 
 
 class LiftPhase(enum.IntEnum):
-    NONE = 0
+    """The lift axis's phase in its range: the set-point generator's (lift/advanced.py), COUPLED
+    for path-based Lifting."""
+
+    NONE = 0  # no lift under way (the generator idle)
     UP = 1
     DOWN = 2
-    DONE = 3
-    DIRECT = 4
-    HOLD_LIMIT = 5
+    DONE = 3  # at the target, at rest
+    DIRECT = 4  # time-optimal straight to the target (suppressed, or POS beyond POS_LIMIT)
+    HOLD_LIMIT = 5  # program error inside the range: rise to POS_LIMIT and stay
     COUPLED = 6  # path-based Lifting: z = f(s)
 
 
@@ -56,41 +59,71 @@ class Event(NamedTuple):
     channel: int = 0  # logical channel id of a machine of several channels; 0: the only one
 
 
+class Rec(NamedTuple):
+    """How a `GeoSnapshot` field travels in the binary record of a cycle (runtime/records.py)."""
+
+    code: str  # its struct format character; "" for a field the record leaves out
+    per_axis: bool = False  # one value per channel axis (an empty tuple packs as zeros)
+
+
+# The snapshot's one layout: each field's name, type, default and record format in one place.
+# `runtime/records.py` builds the record format and pack/unpack from it (`record_layout`); the
+# GEO task builds the tuple by position through `new_snapshot`, typed by `SnapshotFields`
+# (tests/unit/cnc/test_snapshot_layout.py checks that both follow this class).
 class GeoSnapshot(NamedTuple):
     """Everything the GEO task publishes after one cycle. Positions in m, velocity in m/s."""
 
-    cycle: int
-    t: float
-    state: ChannelState
-    line: int  # NC source line of the block being executed
-    segment: int  # motion segment index (0-based), = active block
-    positions: tuple[float, ...]  # command positions of all channel axes
-    v_path: float
-    override: float  # in effect (fraction)
-    override_requested: float
-    override_max: float  # highest override the lift currently accepts
-    feed_hold: bool
-    lift_active: bool
-    lift_suppressed: bool
-    lift_phase: LiftPhase
-    lift_vz: float  # lift axis command velocity (m/s)
-    lift_az: float  # lift axis command acceleration (m/s²)
-    m_pending: int  # M function waiting for its acknowledge, -1 for none
-    error_id: int
-    error_line: int
-    events: tuple[Event, ...]
-    v_block_max: float = 0.0  # highest path velocity of the active block (m/s), with override
-    v_block_end: float = 0.0  # path velocity allowed at the end of the active block (m/s)
-    lift_axis: int = -1  # channel axis index of the current (or last) lift range, -1 none yet
-    lift_counts: tuple[int, ...] = ()  # lifts started per channel axis since program start
+    cycle: Annotated[int, Rec("q")]
+    t: Annotated[float, Rec("d")]
+    state: Annotated[ChannelState, Rec("i")]
+    line: Annotated[int, Rec("i")]  # NC source line of the block being executed
+    segment: Annotated[int, Rec("i")]  # motion segment index (0-based), = active block
+    # command positions of all channel axes
+    positions: Annotated[tuple[float, ...], Rec("d", per_axis=True)]
+    v_path: Annotated[float, Rec("d")]
+    override: Annotated[float, Rec("d")]  # in effect (fraction)
+    override_requested: Annotated[float, Rec("d")]
+    override_max: Annotated[float, Rec("d")]  # highest override the lift currently accepts
+    feed_hold: Annotated[bool, Rec("?")]
+    lift_active: Annotated[bool, Rec("?")]
+    lift_suppressed: Annotated[bool, Rec("?")]
+    lift_phase: Annotated[LiftPhase, Rec("i")]
+    lift_vz: Annotated[float, Rec("d")]  # lift axis command velocity (m/s)
+    lift_az: Annotated[float, Rec("d")]  # lift axis command acceleration (m/s²)
+    m_pending: Annotated[int, Rec("i")]  # M function waiting for its acknowledge, -1 for none
+    error_id: Annotated[int, Rec("i")]
+    error_line: Annotated[int, Rec("i")]
+    events: Annotated[tuple[Event, ...], Rec("")]  # travel as event records of their own
+    # highest path velocity of the active block (m/s), with override
+    v_block_max: Annotated[float, Rec("d")] = 0.0
+    # path velocity allowed at the end of the active block (m/s)
+    v_block_end: Annotated[float, Rec("d")] = 0.0
+    # channel axis index of the current (or last) lift range, -1 none yet
+    lift_axis: Annotated[int, Rec("i")] = -1
+    # lifts started per channel axis since program start
+    lift_counts: Annotated[tuple[int, ...], Rec("I", per_axis=True)] = ()
 
 
-# GeoSnapshot's fields in order, for `new_snapshot`
+# GeoSnapshot's field types in order, for `new_snapshot` (mypy checks the GEO task's tuple
+# against it; a unit test checks it against the class)
 SnapshotFields = tuple[
     int, float, ChannelState, int, int, tuple[float, ...], float, float, float, float, bool,
     bool, bool, LiftPhase, float, float, int, int, int, tuple[Event, ...], float, float, int,
     tuple[int, ...],
-]  # fmt: skip
+]  # fmt: skip # one type per field, in the order of the class above: 5 lines, not 26
+
+
+def record_layout() -> tuple[tuple[str, Rec, type], ...]:
+    """(name, record format, runtime type) of each GeoSnapshot field, in order: the type an
+    enum field is made of again when a record is read."""
+    hints = get_type_hints(GeoSnapshot, include_extras=True)
+    rows = []
+    for name in GeoSnapshot._fields:
+        hint = hints[name]
+        base, rec = get_args(hint)[:2]
+        rows.append((name, rec, get_origin(base) or base))
+    return tuple(rows)
+
 
 # The cycle's constructors: tuple.__new__ in C. Calling the NamedTuple class runs its __new__,
 # a Python frame (~0.3 µs of every cycle in the compiled core).

@@ -20,6 +20,8 @@ a program: what a START after a RESET, an error or a program end and what a relo
 built by `Preparer` in the loop's idle time, the START held back until it is (preparer.py).
 """
 
+# `# fmt: skip` where it stays: ruff's one-item-per-line layout of those statements would
+# take this file past the house's ~450 lines a file (the others were removed, issue 40)
 from __future__ import annotations
 
 import functools
@@ -28,6 +30,7 @@ import signal
 import time
 from typing import Final, cast
 
+from liftd.cnc import events as event_names
 from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.machine import ChannelProgram, Machine
 from liftd.cnc.runs import RunState
@@ -69,9 +72,7 @@ OVERRUN_EVENT_EVERY_NS = 1_000_000_000  # at most one geo.overrun event per seco
 # COMPUTE_OVER_BURST events refilled at one per COMPUTE_OVER_EVENT_EVERY_NS
 COMPUTE_OVER_EVENT_EVERY_NS = 100_000_000
 COMPUTE_OVER_BURST = 10
-PROGRAM_END: Final = "geo.program_end"  # the event of a program's end (a repeat starts it again)
-RESET_DONE: Final = "geo.reset"  # a RESET completed: READY stands until the PLC starts
-PROGRAM_START: Final = "geo.program_start"  # a START ran the program: a RESET's READY is over
+PROGRAM_END: Final = event_names.PROGRAM_END  # a program's end (a repeat starts it again)
 # PLC writes read off the input ring in one cycle (~2 µs each with their event): 256 written at
 # once (one sum write) cost a cycle ~0.5 ms before; now they take 16 cycles
 INPUTS_PER_CYCLE: Final = 16
@@ -133,7 +134,9 @@ class GeoLoop:
             w = unpack_input(raw)
             if w.channel < n and plcs[w.channel].apply(w):
                 changed = True
-                ev = new_event(("geo.plc_input", t_next, 0, w.value, INPUT_NAMES[w.signal], 0))
+                ev = new_event(
+                    (event_names.PLC_INPUT, t_next, 0, w.value, INPUT_NAMES[w.signal], 0)
+                )
                 self.events.send(ev, self.tags[w.channel])
                 if plcs[w.channel].backlog >= BACKLOG:
                     break
@@ -186,7 +189,7 @@ class GeoLoop:
                     run = cast(RunState, result)
                     self.machine.tasks[i].offer_run(run)
                     where = " ".join(f"{1e3 * x:.3f}" for x in run.start)
-                    self.events.send(Event("geo.prepared", t, run.prog.first_line,
+                    self.events.send(Event(event_names.PREPARED, t, run.prog.first_line,
                                            round(took_ns / 1e6, 3), f"run from {where} mm"),
                                      self.tags[i])  # fmt: skip
             elif key[2] is self.pending[i]:
@@ -228,12 +231,13 @@ class GeoLoop:
             self.built[i] = None
             took = True
             self.current[i] = pending
+            task.channel.carry_over(self.machine.tasks[i].channel)  # a RESET's READY stands
             self.machine.replace(i, task)
             common = self.pending_cfg
             plc = PlcInputs(common.m_ack_auto, common.m_ack_delay_s)
             plc.carry_over(self.plcs[i])  # the PLC's levels, and what this cycle read
             self.plcs[i] = plc
-            self.events.send(Event("geo.reloaded", snap.t, 0, 0.0, pending.program_name),
+            self.events.send(Event(event_names.RELOADED, snap.t, 0, 0.0, pending.program_name),
                              self.tags[i])  # fmt: skip
             # autostart: as at start-up, unless a RESET made this READY: then the channel
             # stays READY, whatever it loaded, until the PLC starts it
@@ -320,14 +324,14 @@ class GeoLoop:
             for i in channels:
                 for ev in snaps[i].events:
                     send(ev, tags[i])
-                    name = ev.name
-                    if name == PROGRAM_END:  # not any way into READY: a RESET is not one
+                    if ev.name == PROGRAM_END:  # not any way into READY: a RESET is not one
                         ends = [i] if ends is None else [*ends, i]
-                    elif name == RESET_DONE:
-                        self.reset_ready[i] = True
+                # READY after a RESET, until a START: the channel's state machine says so
+                ready = self.machine.tasks[i].ready_after_reset
+                if ready is not self.reset_ready[i]:
+                    self.reset_ready[i] = ready
+                    if ready:
                         self._prepare_run(i)  # ahead of the PLC's START
-                    elif name == PROGRAM_START:
-                        self.reset_ready[i] = False
             reloaded = self._check_reload(snaps)
             if ends is not None:  # `repeat` as the configuration in effect now has it
                 for i in ends:
@@ -365,19 +369,19 @@ class GeoLoop:
                     pre_us = (step_start - wake) // 1000  # the PLC inputs' drain, the inputs
                     what = (f"{did}; cpu {compute_cpu // 1000} µs; step {step_ns // 1000} µs; "
                             f"before {pre_us} µs")  # fmt: skip
-                    send(Event("geo.compute_over", t, snaps[0].line, compute_ns / 1e3, what))
+                    send(Event(event_names.COMPUTE_OVER, t, snaps[0].line, compute_ns / 1e3, what))
             if end > deadline + period_ns:
                 exceeded += 1
                 words[EXCEEDED] = exceeded
                 if end - last_overrun_event >= OVERRUN_EVENT_EVERY_NS:
                     last_overrun_event = end
-                    send(Event("geo.overrun", t, snaps[0].line, compute_ns / 1e3))
+                    send(Event(event_names.OVERRUN, t, snaps[0].line, compute_ns / 1e3))
             words[CYCLES] = k
             skipped = clock.next_cycle(end)
             if skipped:
                 regridded += skipped
                 words[REGRIDDED] = regridded
-                send(Event("geo.regrid", t, snaps[0].line, float(skipped)))
+                send(Event(event_names.REGRID, t, snaps[0].line, float(skipped)))
 
 
 def build_task(pending: ChannelConfig, start: tuple[float, ...]) -> GeoTask:
@@ -434,12 +438,12 @@ def main(control_fd: int, shm_fd: int) -> bool:
         loop.spin = state.spin
         for r in state.results:
             text = f"{r.setting}: {'ok' if r.ok else 'not permitted'} ({r.detail})"
-            events.send(Event("geo.rt_setting", 0.0, 0, 1.0 if r.ok else 0.0, text))
+            events.send(Event(event_names.RT_SETTING, 0.0, 0, 1.0 if r.ok else 0.0, text))
         gc.freeze()  # nothing allocated so far is ever collected: no GC pauses in the cycle
         gc.disable()
         loop.run()
     except Exception as exc:  # a bug in the core: report it, stop serving (the daemon exits)
-        events.send(Event("geo.fault", 0.0, 0, 0.0, f"{type(exc).__name__}: {exc}"))
+        events.send(Event(event_names.FAULT, 0.0, 0, 0.0, f"{type(exc).__name__}: {exc}"))
         ok = False
     finally:
         if loop is not None:

@@ -132,8 +132,9 @@ class GeoProcess:
         try:
             self.proc = subprocess.Popen(
                 [sys.executable, "-m", "liftd.runtime", *map(str, fds)],
-                pass_fds=fds, stdin=subprocess.DEVNULL,
-            )  # fmt: skip
+                pass_fds=fds,
+                stdin=subprocess.DEVNULL,
+            )
         except OSError as exc:  # no fork (TasksMax, ENOMEM), the venv's python gone or barred
             raise GeoStartError(f"cannot start {sys.executable}: {exc.strerror}") from None
         finally:
@@ -160,8 +161,9 @@ class GeoProcess:
             try:
                 self._drain_events()
             except Exception as exc:  # a consumer's bug must not end the events' delivery
-                loop.call_exception_handler({"message": "GEO event consumer failed",
-                                             "exception": exc})  # fmt: skip
+                loop.call_exception_handler(
+                    {"message": "GEO event consumer failed", "exception": exc}
+                )
             await asyncio.sleep(EVENT_POLL_S)
 
     def _drain_events(self) -> None:
@@ -199,8 +201,9 @@ class GeoProcess:
             elif now - since > limit:
                 self.alive = False
                 self.proc.kill()
-                return GeoFailure("geo.stalled", {"cycles": progress[0],
-                                                  "seconds": round(now - since, 3)})  # fmt: skip
+                return GeoFailure(
+                    "geo.stalled", {"cycles": progress[0], "seconds": round(now - since, 3)}
+                )
 
     # -- reload ------------------------------------------------------------------------------------
     async def reload(self, cfg: LoopConfig) -> None:

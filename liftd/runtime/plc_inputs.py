@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from collections import deque
 
-from liftd.cnc.plc import MAX_OVERRIDE, Schedule, SimPlc
+from liftd.cnc.plc import Schedule, SimPlc, clamp_override
 from liftd.cnc.snapshot import (
     ChannelState,
     Command,
@@ -28,8 +28,11 @@ from liftd.cnc.snapshot import (
     new_inputs,
 )
 
-_COMMANDS = {PlcSignal.START: Command.START, PlcSignal.STOP: Command.STOP,
-             PlcSignal.RESET: Command.RESET}  # fmt: skip
+_COMMANDS = {
+    PlcSignal.START: Command.START,
+    PlcSignal.STOP: Command.STOP,
+    PlcSignal.RESET: Command.RESET,
+}
 _NO_SCHEDULE = Schedule()
 _IDLE = GeoInputs()
 
@@ -56,7 +59,7 @@ class PlcInputs:
         unchanged."""
         sig = w.signal
         if sig is PlcSignal.OVERRIDE:
-            old, self.next_override = self.next_override, min(max(w.value, 0.0), MAX_OVERRIDE)
+            old, self.next_override = self.next_override, clamp_override(w.value)
             changed = self.next_override != old
         elif sig is PlcSignal.FEED_HOLD:
             old_hold, self.next_feed_hold = self.next_feed_hold, w.value != 0.0

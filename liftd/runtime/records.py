@@ -4,21 +4,22 @@ Pure; struct and pickle only (packing a snapshot costs ~1 µs)."""
 
 from __future__ import annotations
 
+import enum
 import functools
 import os
 import pickle
 import struct
 from collections.abc import Callable, Sequence
-from typing import Any, cast
+from typing import Any, Final, cast
 
+from liftd.cnc import events
 from liftd.cnc.snapshot import (
-    ChannelState,
     Event,
     GeoSnapshot,
-    LiftPhase,
     LoopStats,
     PlcSignal,
     PlcWrite,
+    record_layout,
 )
 
 INPUT = struct.Struct("<IdI")  # signal, value, machine index of the channel
@@ -26,45 +27,52 @@ EVENT_HEAD = struct.Struct("<HHIdd")  # name id (+ channel id << 8), text bytes,
 EVENT_NAME_MASK = 0xFF
 MAX_EVENT_TEXT = 1000  # a record's text (the event stream holds 64 KiB)
 
-EVENT_NAMES = (
-    "",  # 0: the name travels in the text ("name\0text")
-    "geo.program_start",
-    "geo.program_end",
-    "geo.resume",
-    "geo.stopped",
-    "geo.reset",
-    "geo.error",
-    "geo.m_output",
-    "geo.m_ack",
-    "geo.m00",
-    "lift.start",
-    "lift.end",
-    "lift.late",
-    "lift.path_waits",
-    "lift.override_limited",
-    "lift.fallback",
-    "lift.guard_clamped",
-    "lift.z_acc_warning",
-    "lift.z_acc_error",
-    "geo.overrun",
-    "geo.compute_over",
-    "geo.regrid",
-    "geo.reloaded",
-    "geo.plan_error",
-    "geo.plc_input",
-    "lift.aborted",
-)
+EVENT_NAMES = events.RECORDED  # an event record names its event by index here
 EVENT_IDS = {name: i for i, name in enumerate(EVENT_NAMES)}
 
 
 STATS = "qqddddqdq"  # LoopStats
 
 
+def _runs(codes: list[tuple[str, bool]]) -> list[tuple[int, int, bool]]:
+    """(first, end, per axis) of each run of packed fields, from each field's (format, per
+    axis): consecutive scalars form one run, a per-axis field is a run of its own."""
+    runs: list[tuple[int, int, bool]] = []
+    for i, (code, per_axis) in enumerate(codes):
+        if not code:
+            continue
+        if not per_axis and runs and not runs[-1][2] and runs[-1][1] == i:
+            runs[-1] = (runs[-1][0], i + 1, False)
+        else:
+            runs.append((i, i + 1, per_axis))
+    return runs
+
+
+# GeoSnapshot's record layout (`snapshot.record_layout`) as runs of consecutive fields: (first,
+# end, per axis): a run of scalars packs as a slice of the tuple, a per-axis field as its tuple
+# (an empty one as zeros); a field without a format is left out, and a record reads it as ().
+_LAYOUT = record_layout()
+_RUNS: Final = tuple(_runs([(rec.code, rec.per_axis) for _, rec, _ in _LAYOUT]))
+# the fields made of an enum again when a record is read: their index and the enum's members
+_ENUMS: Final[dict[int, dict[int, Any]]] = {
+    i: {int(m): m for m in tp}
+    for i, (_, _, tp) in enumerate(_LAYOUT)
+    if isinstance(tp, type) and issubclass(tp, enum.IntEnum)
+}
+
+
 def _fields(s: GeoSnapshot, n_axes: int) -> tuple[Any, ...]:
-    """The snapshot's packed fields: the tuple without its events, positions and lift counts
-    flattened. Slices of the tuple, not 25 attribute reads and a starred display: packing
-    was 12.6 % of the GEO process's CPU samples (perf of `liftd run` on the demo, 2026-12-01)."""
-    return s[:5] + s[5] + s[6:19] + s[20:23] + (s[23] or (0,) * n_axes)
+    """The snapshot's packed fields: slices of the tuple and its per-axis tuples, not 25
+    attribute reads and a starred display: packing was 12.6 % of the GEO process's CPU samples
+    (perf of `liftd run` on the demo, 2026-12-01)."""
+    out: tuple[Any, ...] = ()
+    fields: tuple[Any, ...] = s
+    for first, end, per_axis in _RUNS:
+        if per_axis:
+            out += fields[first] or (0,) * n_axes
+        else:
+            out += fields[first:end]
+    return out
 
 
 class SnapshotCodec:
@@ -72,27 +80,35 @@ class SnapshotCodec:
 
     def __init__(self, n_axes: int) -> None:
         self.n = n_axes
-        self.fmt = struct.Struct(f"<qdiii{n_axes}ddddd???iddiiiddi{n_axes}I" + STATS)
+        body = "".join(f"{n_axes}{rec.code}" if rec.per_axis else rec.code for _, rec, _ in _LAYOUT)
+        self.fmt = struct.Struct(f"<{body}{STATS}")
         self.size = self.fmt.size
+        # how many values a snapshot is in the record
+        self.values = sum(n_axes if rec.per_axis else 1 for _, rec, _ in _LAYOUT if rec.code)
 
     def pack(self, s: GeoSnapshot, st: LoopStats) -> bytes:
         return self.fmt.pack(*(_fields(s, self.n) + st))
 
     def unpack(self, raw: bytes) -> tuple[GeoSnapshot, LoopStats]:
         v = self.fmt.unpack(raw)
-        return self.snapshot_of(v), LoopStats(*v[21 + 2 * self.n :])
+        return self.snapshot_of(v), LoopStats(*v[self.values :])
 
     def snapshot_of(self, v: tuple[Any, ...]) -> GeoSnapshot:
-        """The snapshot from the unpacked fields (its 21 + 2·n_axes values first)."""
+        """The snapshot from the unpacked fields (its `values` first)."""
         n = self.n
-        pos = tuple(v[5 : 5 + n])
-        r = v[5 + n :]
-        snap = GeoSnapshot(
-            v[0], v[1], ChannelState(v[2]), v[3], v[4], pos, r[0], r[1], r[2], r[3], r[4],
-            r[5], r[6], LiftPhase(r[7]), r[8], r[9], r[10], r[11], r[12], (), r[13], r[14],
-            r[15], tuple(r[16 : 16 + n]),
-        )  # fmt: skip
-        return snap
+        fields: list[Any] = []
+        at = 0
+        for i, (_, rec, _) in enumerate(_LAYOUT):
+            if not rec.code:
+                fields.append(())
+            elif rec.per_axis:
+                fields.append(tuple(v[at : at + n]))
+                at += n
+            else:
+                members = _ENUMS.get(i)
+                fields.append(v[at] if members is None else members[v[at]])
+                at += 1
+        return GeoSnapshot(*fields)
 
 
 class MachineCodec:
@@ -106,7 +122,7 @@ class MachineCodec:
         bodies = "".join(c.fmt.format[1 : -len(STATS)] for c in self.channels)  # no "<", stats
         self.fmt = struct.Struct(f"<{bodies}{STATS}")
         self.size = self.fmt.size
-        self._fields = [21 + 2 * n for n in self.axes]
+        self._fields = [c.values for c in self.channels]
 
     def pack(self, snaps: Sequence[GeoSnapshot], st: LoopStats) -> bytes:
         axes = self.axes

@@ -134,9 +134,16 @@ class Shared:
 
     def totals(self) -> LoopTotals:
         w = self.words
-        return LoopTotals(w[CYCLES], w[EXCEEDED], w[COMPUTE_OVER], w[REGRIDDED],
-                          self.events.dropped, w[COMPUTE_SUM_NS], w[LATENESS_SUM_NS],
-                          w[COMPUTE_CPU_OVER])  # fmt: skip
+        return LoopTotals(
+            w[CYCLES],
+            w[EXCEEDED],
+            w[COMPUTE_OVER],
+            w[REGRIDDED],
+            self.events.dropped,
+            w[COMPUTE_SUM_NS],
+            w[LATENESS_SUM_NS],
+            w[COMPUTE_CPU_OVER],
+        )
 
     def close(self) -> None:
         """Release the views, unmap the block (and unlink it if this side created it)."""

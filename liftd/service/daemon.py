@@ -15,6 +15,8 @@ running one kept; then READY=1. If the GEO process dies or stalls, ADS reports E
 0x707) and `run` returns False, which the CLI maps to its exit code for systemd to restart.
 """
 
+# `# fmt: skip` where it stays: ruff's one-item-per-line layout of those statements would
+# take this file past the house's ~450 lines a file (the others were removed, issue 40)
 from __future__ import annotations
 
 import asyncio
@@ -72,9 +74,13 @@ class StartError(Exception):
 
 class Daemon:
     def __init__(
-        self, settings: Settings, config_arg: str | None, program_arg: str | None,
-        trace_path: str | None, duration_s: float | None = None,
-    ) -> None:  # fmt: skip
+        self,
+        settings: Settings,
+        config_arg: str | None,
+        program_arg: str | None,
+        trace_path: str | None,
+        duration_s: float | None = None,
+    ) -> None:
         self.settings = settings
         self.started = settings  # what the listener, the loop's RT settings and logs run with
         self.duration_s = duration_s
@@ -89,16 +95,17 @@ class Daemon:
         try:
             self.catalog = Catalog([c.params for c in settings.machine])
             self.provider = CncProvider(self.catalog, self._view, self._submit)
-            self.service = AdsService(self.provider, service_limits(settings.config.ads),
-                                      DeviceInfo())  # fmt: skip
-            self.server = AdsServer(server_config(settings.config.ads), self.service,
-                                    self.log.bind(part="ads"))  # fmt: skip
+            self.service = AdsService(
+                self.provider, service_limits(settings.config.ads), DeviceInfo()
+            )
+            self.server = AdsServer(
+                server_config(settings.config.ads), self.service, self.log.bind(part="ads")
+            )
             self.ui = self._ui(settings)
             events: Callable[[Event], None] = GeoEventLog(self.log)
             if self.ui is not None:
                 events = _tee(events, self.ui.on_event)
-            self.geo = GeoProcess(self.shared, events,
-                                  settings.config.rt.stall_timeout_ms * 1e-3)  # fmt: skip
+            self.geo = GeoProcess(self.shared, events, settings.config.rt.stall_timeout_ms * 1e-3)
         except BaseException:
             self.shared.close()
             raise
@@ -116,8 +123,9 @@ class Daemon:
             return None
         from liftd.service.ui_host import UiHost  # noqa: PLC0415
 
-        return UiHost(settings, self.catalog, self.provider, self.server, self._view,
-                      self.log.bind(part="ui"))  # fmt: skip
+        return UiHost(
+            settings, self.catalog, self.provider, self.server, self._view, self.log.bind(part="ui")
+        )
 
     # -- what the ADS provider sees -------------------------------------------------------------
     def _view(self) -> GeoView | None:
@@ -133,9 +141,13 @@ class Daemon:
 
     def _ads_stats(self) -> AdsStats:
         c = self.server.counters
-        return AdsStats(len(self.server.connections), c.requests,
-                        c.closed_for_errors + c.internal_errors, c.notifications_sent,
-                        logs.dropped())  # fmt: skip
+        return AdsStats(
+            len(self.server.connections),
+            c.requests,
+            c.closed_for_errors + c.internal_errors,
+            c.notifications_sent,
+            logs.dropped(),
+        )
 
     def _submit(self, w: PlcWrite) -> None:
         if not self.shared.inputs.put(pack_input(w)):
@@ -174,16 +186,28 @@ class Daemon:
         )
         core = core_build()
         ui = {"ui": self.ui.url} if self.ui is not None else {}
-        self.log.info("daemon.ready", seconds=round(time.monotonic() - t0, 3),
-                      ads_port=self.server.port, net_id=ads.net_id, core=core, **ui)  # fmt: skip
+        self.log.info(
+            "daemon.ready",
+            seconds=round(time.monotonic() - t0, 3),
+            ads_port=self.server.port,
+            net_id=ads.net_id,
+            core=core,
+            **ui,
+        )
         if core == "stale":
-            self.log.warning("geo.core_stale", hint="a compiled module is older than its "
-                             "source, which does not run until `make core`")  # fmt: skip
+            self.log.warning(
+                "geo.core_stale",
+                hint="a compiled module is older than its "
+                "source, which does not run until `make core`",
+            )
         failure = await self._serve()
         if failure is not None:
             self.provider.down_state = AdsState.ERROR
-            self.log.error(failure.event, **failure.detail,
-                           detail="ADS now reports ERROR; exiting for a restart")  # fmt: skip
+            self.log.error(
+                failure.event,
+                **failure.detail,
+                detail="ADS now reports ERROR; exiting for a restart",
+            )
         await self.shutdown()
         return failure is None
 

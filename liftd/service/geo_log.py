@@ -35,5 +35,6 @@ class GeoEventLog:
             level = "warning"
         value = float(f"{ev.value:.9g}")  # no float noise in the log
         extra = {"channel": ev.channel} if ev.channel else {}  # a machine of several channels
-        getattr(self.log, level)(ev.name, t=round(ev.t, 6), line=ev.line, value=value,
-                                 text=ev.text or None, **extra)  # fmt: skip
+        getattr(self.log, level)(
+            ev.name, t=round(ev.t, 6), line=ev.line, value=value, text=ev.text or None, **extra
+        )

@@ -25,11 +25,25 @@ from typing import Any, TextIO
 
 import structlog
 
-LEVELS = {"debug": logging.DEBUG, "info": logging.INFO, "warning": logging.WARNING,
-          "error": logging.ERROR}  # fmt: skip
+LEVELS = {
+    "debug": logging.DEBUG,
+    "info": logging.INFO,
+    "warning": logging.WARNING,
+    "error": logging.ERROR,
+}
 # syslog priorities of structlog's method names (sd-daemon(3): SD_ERR "<3>", SD_WARNING "<4>")
-PRIORITY = {"debug": 7, "info": 6, "msg": 6, "warning": 4, "warn": 4, "error": 3,
-            "err": 3, "exception": 3, "critical": 2, "fatal": 2}  # fmt: skip
+PRIORITY = {
+    "debug": 7,
+    "info": 6,
+    "msg": 6,
+    "warning": 4,
+    "warn": 4,
+    "error": 3,
+    "err": 3,
+    "exception": 3,
+    "critical": 2,
+    "fatal": 2,
+}
 DEFAULT_QUEUE_LINES = 10_000
 
 
@@ -80,8 +94,9 @@ class LineQueue:
             # stderr reader had gone, 13 000 failed writes a second)
             if wrote and self._dropped != self._reported and not lines:
                 held, self._reported = self._dropped - self._reported, self._dropped
-                structlog.get_logger("liftd").warning("log.dropped", lines=held,
-                                                      total=self._dropped)  # fmt: skip
+                structlog.get_logger("liftd").warning(
+                    "log.dropped", lines=held, total=self._dropped
+                )
             if self._stop and not lines:
                 return
 
@@ -153,9 +168,12 @@ def _to_journal(out: TextIO, journal_stream: str) -> bool:
 
 
 def configure(
-    level: str = "info", fmt: str = "auto", queue_lines: int = DEFAULT_QUEUE_LINES,
-    stream: TextIO | None = None, env: Mapping[str, str] | None = None,
-) -> None:  # fmt: skip
+    level: str = "info",
+    fmt: str = "auto",
+    queue_lines: int = DEFAULT_QUEUE_LINES,
+    stream: TextIO | None = None,
+    env: Mapping[str, str] | None = None,
+) -> None:
     """Set up structlog for the daemon (`stream`/`env` default to stderr and os.environ)."""
     global _lines  # noqa: PLW0603  # one writer per process, like structlog's own config
     out = stream if stream is not None else sys.stderr

@@ -22,12 +22,14 @@ RESTART_SECTIONS = ("rt", "log", "metrics", "ui")  # applied when the processes 
 def needs_restart(running: LiftdConfig, new: LiftdConfig) -> list[str]:
     """The keys of `new` that differ from what the daemon runs with and that only a restart
     applies: the listen address and AMS identity, the real-time, log and metrics settings."""
-    keys = [f"ads.{k}" for k in RESTART_KEYS
-            if getattr(new.ads, k) != getattr(running.ads, k)]  # fmt: skip
+    keys = [f"ads.{k}" for k in RESTART_KEYS if getattr(new.ads, k) != getattr(running.ads, k)]
     for name in RESTART_SECTIONS:
         old_s, new_s = getattr(running, name), getattr(new, name)
-        keys += [f"{name}.{k}" for k in type(new_s).model_fields
-                 if getattr(new_s, k) != getattr(old_s, k)]  # fmt: skip
+        keys += [
+            f"{name}.{k}"
+            for k in type(new_s).model_fields
+            if getattr(new_s, k) != getattr(old_s, k)
+        ]
     return keys
 
 
@@ -61,10 +63,11 @@ def trace_names(trace: str, settings: Settings) -> list[str]:
     """One trace per channel: the [cnc] channel's at OUT.csv, channel N's at OUT.chN.csv."""
     out = Path(trace)
     return [
-        trace if i == settings.primary_index
+        trace
+        if i == settings.primary_index
         else str(out.with_name(f"{out.stem}.ch{c.params.channel_id}{out.suffix or '.csv'}"))
         for i, c in enumerate(settings.machine)
-    ]  # fmt: skip
+    ]
 
 
 def shape(settings: Settings) -> tuple[tuple[int, int, tuple[int, ...]], ...]:
@@ -73,10 +76,13 @@ def shape(settings: Settings) -> tuple[tuple[int, int, tuple[int, ...]], ...]:
     own program boundary: an axis moving between channels would be in two for a while)."""
     several = len(settings.machine) > 1
     return tuple(
-        (c.params.channel_id, len(c.params.axes),
-         tuple(ax.log_axis_nr for ax in c.params.axes) if several else ())
+        (
+            c.params.channel_id,
+            len(c.params.axes),
+            tuple(ax.log_axis_nr for ax in c.params.axes) if several else (),
+        )
         for c in settings.machine
-    )  # fmt: skip
+    )
 
 
 def log_programs(settings: Settings, cfg: LoopConfig, log: Any) -> None:
@@ -96,7 +102,12 @@ def log_programs(settings: Settings, cfg: LoopConfig, log: Any) -> None:
         result = decode(run.program_text, DecoderContext.from_channel(ch, home))
         for err in result.errors:
             level = "warning" if err.severity is Severity.WARNING else "error"
-            getattr(log, level)("nc.problem", file=err.file or str(c.program),
-                                line=err.line, id=err.id, message=err.message,
-                                **tag)  # fmt: skip
+            getattr(log, level)(
+                "nc.problem",
+                file=err.file or str(c.program),
+                line=err.line,
+                id=err.id,
+                message=err.message,
+                **tag,
+            )
         log.info("daemon.program", file=str(c.program), blocks=len(result.blocks), **tag)

@@ -30,8 +30,18 @@ from liftd.runtime.shared import LoopTotals
 from liftd.service import logs
 
 # histogram upper edges (ns) served, whatever the run: 10 µs … 10 ms (each an EDGES entry)
-BUCKETS_NS = (10_000, 25_000, 50_000, 100_000, 250_000, 500_000, 1_000_000, 2_500_000,
-              5_000_000, 10_000_000)  # fmt: skip
+BUCKETS_NS = (
+    10_000,
+    25_000,
+    50_000,
+    100_000,
+    250_000,
+    500_000,
+    1_000_000,
+    2_500_000,
+    5_000_000,
+    10_000_000,
+)
 assert set(BUCKETS_NS) <= set(EDGES)
 
 
@@ -68,22 +78,41 @@ class LiftdCollector(Collector):
         t, a = s.totals, s.ads
         for name, text, value in (
             ("geo_cycles", "GEO cycles computed", t.cycles),
-            ("geo_exceeded", "GEO cycles that finished after the start of the next one "
-             "(TwinCAT exceed counter)", t.exceeded),
-            ("geo_compute_over_25pct", "GEO cycles whose compute took more than 25 % of the "
-             "cycle time", t.compute_over),
-            ("geo_compute_cpu_over_25pct", "GEO cycles whose compute took more than 25 % of the "
-             "cycle time on the loop thread's CPU clock", t.compute_cpu_over),
+            (
+                "geo_exceeded",
+                "GEO cycles that finished after the start of the next one (TwinCAT exceed counter)",
+                t.exceeded,
+            ),
+            (
+                "geo_compute_over_25pct",
+                "GEO cycles whose compute took more than 25 % of the cycle time",
+                t.compute_over,
+            ),
+            (
+                "geo_compute_cpu_over_25pct",
+                "GEO cycles whose compute took more than 25 % of the "
+                "cycle time on the loop thread's CPU clock",
+                t.compute_cpu_over,
+            ),
             ("geo_regridded", "wall-clock GEO ticks skipped after a stall", t.regridded),
-            ("geo_events_dropped", "GEO events dropped (the daemon had not read the last 64 KiB)",
-             t.events_dropped),
+            (
+                "geo_events_dropped",
+                "GEO events dropped (the daemon had not read the last 64 KiB)",
+                t.events_dropped,
+            ),
             ("ads_requests", "ADS requests answered", a.requests),
-            ("ads_errors", "ADS connections closed for protocol errors and requests answered "
-             "0x700", a.errors),
+            (
+                "ads_errors",
+                "ADS connections closed for protocol errors and requests answered 0x700",
+                a.errors,
+            ),
             ("ads_notifications", "ADS device notification frames sent", a.notifications),
-            ("log_dropped", "log lines dropped because the log output did not keep up",
-             logs.dropped()),
-        ):  # fmt: skip
+            (
+                "log_dropped",
+                "log lines dropped because the log output did not keep up",
+                logs.dropped(),
+            ),
+        ):
             yield CounterMetricFamily(f"liftd_{name}", text, value)
         yield GaugeMetricFamily(
             "liftd_geo_running", "1 while the GEO loop cycles and ADS serves", int(s.geo_running)
@@ -94,9 +123,11 @@ class LiftdCollector(Collector):
             ("compute", s.compute_hist, t.compute_sum_ns, "compute time"),
         ):
             yield HistogramMetricFamily(
-                f"liftd_geo_{name}_seconds", f"GEO cycle {what}", buckets=buckets(hist),
+                f"liftd_geo_{name}_seconds",
+                f"GEO cycle {what}",
+                buckets=buckets(hist),
                 sum_value=total_ns / 1e9,
-            )  # fmt: skip
+            )
 
 
 def registry(sample: Callable[[], Sample], geo_pid: Callable[[], int | None]) -> CollectorRegistry:
@@ -108,9 +139,12 @@ def registry(sample: Callable[[], Sample], geo_pid: Callable[[], int | None]) ->
 
 
 async def serve(
-    host: str, port: int, sample: Callable[[], Sample], alive: Callable[[], bool],
+    host: str,
+    port: int,
+    sample: Callable[[], Sample],
+    alive: Callable[[], bool],
     geo_pid: Callable[[], int | None],
-) -> asyncio.Server:  # fmt: skip
+) -> asyncio.Server:
     reg = registry(sample, geo_pid)
 
     async def handle(reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:

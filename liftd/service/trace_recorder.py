@@ -18,8 +18,14 @@ DRAIN_PERIOD_S = 0.02
 
 
 class TraceRecorder:
-    def __init__(self, outs: Sequence[TextIO], ring: Ring, codec: MachineCodec,
-                 axis_names: Sequence[tuple[str, ...]], log: Any) -> None:  # fmt: skip
+    def __init__(
+        self,
+        outs: Sequence[TextIO],
+        ring: Ring,
+        codec: MachineCodec,
+        axis_names: Sequence[tuple[str, ...]],
+        log: Any,
+    ) -> None:
         """`outs` and `axis_names`: one per channel, in channel order."""
         self.outs = list(outs)
         self.ring = ring
@@ -71,7 +77,12 @@ class TraceRecorder:
                 ok = False
                 self.log.error("trace.stopped", reason=exc.strerror)
         # the ring's margin as used: how far the writer fell behind, its longest pause
-        self.log.info("trace.closed", rows=rows, backlog_max=backlog_max,
-                      capacity=ring.capacity, pause_max_ms=round(gap_max * 1e3, 1))  # fmt: skip
+        self.log.info(
+            "trace.closed",
+            rows=rows,
+            backlog_max=backlog_max,
+            capacity=ring.capacity,
+            pause_max_ms=round(gap_max * 1e3, 1),
+        )
         if ring.dropped:
             self.log.warning("trace.dropped", records=ring.dropped)

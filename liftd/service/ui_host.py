@@ -28,19 +28,30 @@ from liftd.ui.web import Refused, UiServer, WebConfig
 
 class UiHost:
     def __init__(
-        self, settings: Settings, catalog: Catalog, provider: CncProvider, server: AdsServer,
-        view: Callable[[], GeoView | None], log: Any,
-    ) -> None:  # fmt: skip
+        self,
+        settings: Settings,
+        catalog: Catalog,
+        provider: CncProvider,
+        server: AdsServer,
+        view: Callable[[], GeoView | None],
+        log: Any,
+    ) -> None:
         ui = settings.config.ui
         self.settings = settings
         self.provider = provider
         self.ads = server
         self.log = log
         self.hub = LiveHub(catalog, view, self._peers, ui.rate_hz)
-        cfg = WebConfig(ui.host, ui.port, ui.control, settings.ui_token, ui.hosts,
-                        ui.max_connections, ui.max_message_bytes)  # fmt: skip
-        self.server = UiServer(cfg, lambda: LiveSession(self.hub), log, self._write,
-                               self._policy)  # fmt: skip
+        cfg = WebConfig(
+            ui.host,
+            ui.port,
+            ui.control,
+            settings.ui_token,
+            ui.hosts,
+            ui.max_connections,
+            ui.max_message_bytes,
+        )
+        self.server = UiServer(cfg, lambda: LiveSession(self.hub), log, self._write, self._policy)
         self._task: asyncio.Task[None] | None = None
         self._jobs: set[asyncio.Future[Any]] = set()
         self._staged: dict[int, geometry.Geometry] = {}
@@ -66,8 +77,9 @@ class UiHost:
         self._task = asyncio.create_task(self.hub.run())
         self.draw(cfg, staged=False)
         ui = self.settings.config.ui
-        self.log.info("ui.listening", url=self.url, control=ui.control and
-                      self.settings.ui_token is not None)  # fmt: skip
+        self.log.info(
+            "ui.listening", url=self.url, control=ui.control and self.settings.ui_token is not None
+        )
 
     def draw(self, cfg: LoopConfig, staged: bool = True) -> None:
         """Each channel's program drawn in a worker thread; a reload's (`staged`) waits for
@@ -103,8 +115,10 @@ class UiHost:
 
     # -- adapters ---------------------------------------------------------------------------------
     def _peers(self) -> list[dict[str, Any]]:
-        return [{"peer": p, "net_id": n, "requests": r, "notifications": k}
-                for p, n, r, k in self.ads.peers()]  # fmt: skip
+        return [
+            {"peer": p, "net_id": n, "requests": r, "notifications": k}
+            for p, n, r, k in self.ads.peers()
+        ]
 
     def _policy(self, ip: str) -> str:
         """The ADS access policy for a writing peer: its IP in `[ads] allow_ips`; with

@@ -15,8 +15,9 @@ HIDDEN = "(hidden)"
 TOKEN = re.compile(r"^[!-~]{16,256}$")  # printable ASCII without blanks, 16..256 characters
 
 
-def ui_token(ui: UiSection, base: Path, file: str, text: str,
-             problems: list[Problem]) -> str | None:  # fmt: skip
+def ui_token(
+    ui: UiSection, base: Path, file: str, text: str, problems: list[Problem]
+) -> str | None:
     """The control token `[ui]` gives, or None; problems are appended to `problems`."""
 
     def error(key: str, value: str | None, message: str) -> None:
@@ -36,8 +37,11 @@ def ui_token(ui: UiSection, base: Path, file: str, text: str,
             error("token_file", ui.token_file, f"cannot read the token file {path}: {reason}")
             return None
         if not TOKEN.match(token):
-            error("token_file", ui.token_file, f"{path} must hold one token of 16..256 "
-                  "printable ASCII characters without blanks")  # fmt: skip
+            error(
+                "token_file",
+                ui.token_file,
+                f"{path} must hold one token of 16..256 printable ASCII characters without blanks",
+            )
             return None
     if ui.control and token is None:
         error("control", "true", "control from the page needs [ui] token or token_file")

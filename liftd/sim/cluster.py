@@ -191,8 +191,10 @@ def connect(address: str, timeout: float) -> Cluster:
 def _mismatch(worker: str, version: object, count: int = 1) -> str:
     text = version if isinstance(version, str) else f"{type(version).__name__}: {version}"
     more = f" (and {count - 1} more)" if count > 1 else ""
-    return (f"the Dask worker {worker}{more} runs liftd {text}, this client liftd {__version__}: "
-            "install the same liftd on every worker")  # fmt: skip
+    return (
+        f"the Dask worker {worker}{more} runs liftd {text}, this client liftd {__version__}: "
+        "install the same liftd on every worker"
+    )
 
 
 def _abandon(client: distributed.Client) -> None:
@@ -294,9 +296,17 @@ def _run(
             return read
         text, sources = read
         files = [(f.name, f.path, shared.files.text(f), f.error) for f in sources.files]
-        fut = client.submit(task, __version__, shared.settings, programs[i], text,
-                            sources.program, files, key=f"liftd-study-{tag}-{next(keys)}",
-                            pure=False)  # fmt: skip
+        fut = client.submit(
+            task,
+            __version__,
+            shared.settings,
+            programs[i],
+            text,
+            sources.program,
+            files,
+            key=f"liftd-study-{tag}-{next(keys)}",
+            pure=False,
+        )
         fut.add_done_callback(lambda f: done.put((i, f)))
         flight[i] = (fut, len(text), shared.generation)
         return None
@@ -402,10 +412,11 @@ def _failed(program: str, exc: BaseException) -> ProgramResult:
 
 
 def _renewals(address: str) -> str:
-    return (f"the Dask workers at {address} lost the study's shared data {MAX_RENEWALS} times "
-            "(every worker holding it died)")  # fmt: skip
+    return (
+        f"the Dask workers at {address} lost the study's shared data {MAX_RENEWALS} times "
+        "(every worker holding it died)"
+    )
 
 
 def _lost(address: str, received: int, total: int) -> str:
-    return (f"the Dask scheduler at {address} went away: {received} of {total} programs "
-            "received")  # fmt: skip
+    return f"the Dask scheduler at {address} went away: {received} of {total} programs received"

@@ -275,8 +275,11 @@ def study_figures(agg: Aggregate) -> list[tuple[str, bytes]]:
     ax.legend(loc="upper left", fontsize=8)
     ax.grid(alpha=0.3)
     shown = f"{len(pts)} of {agg.lift_points.seen}" if agg.lift_points.seen > len(pts) else "all"
-    save(fig, f"Mean clearance per lift ({shown} compared lifts): above the line Advanced "
-              "Lifting keeps Z higher over the sheet.")  # fmt: skip
+    save(
+        fig,
+        f"Mean clearance per lift ({shown} compared lifts): above the line Advanced "
+        "Lifting keeps Z higher over the sheet.",
+    )
 
     fig, ax = plt.subplots(figsize=(6.5, 4))
     edges = RATIO_EDGES
@@ -287,8 +290,11 @@ def study_figures(agg: Aggregate) -> list[tuple[str, bytes]]:
     ax.set_xlabel("clearance ratio Advanced / path-based")
     ax.set_ylabel("lifts")
     ax.grid(alpha=0.3, axis="y")
-    save(fig, "Clearance ratio per compared lift (all of them): 1 means no gain, 2 twice "
-              "the clearance with Advanced Lifting.")  # fmt: skip
+    save(
+        fig,
+        "Clearance ratio per compared lift (all of them): 1 means no gain, 2 twice "
+        "the clearance with Advanced Lifting.",
+    )
 
     prog = np.asarray(agg.program_points.items, dtype=float).reshape(-1, 2)
     fig, ax = plt.subplots(figsize=(6.5, 4))
@@ -297,14 +303,20 @@ def study_figures(agg: Aggregate) -> list[tuple[str, bytes]]:
     ax.set_xlabel("program time, Advanced Lifting [s]")
     ax.set_ylabel("path-based − Advanced [% of the time]")
     ax.grid(alpha=0.3)
-    save(fig, "Program time with path-based Lifting, per program that ran to the end: what its "
-              "slower ranges cost (above 0) against Advanced Lifting.")  # fmt: skip
+    save(
+        fig,
+        "Program time with path-based Lifting, per program that ran to the end: what its "
+        "slower ranges cost (above 0) against Advanced Lifting.",
+    )
 
     fig, ax = plt.subplots(figsize=(5.5, 4))
     ax.bar([name for _, name in OVERLOAD_CLASSES], agg.overload_counts, color=COLOURS["lifting"])
     ax.set_xlabel("Z overload cycles of path-based Lifting (above P-AXIS-00441)")
     ax.set_ylabel("programs")
     ax.grid(alpha=0.3, axis="y")
-    save(fig, "Programs by the cycles in which path-based Lifting's Z acceleration exceeds the "
-              "P-AXIS-00441 warning level (Advanced Lifting stays within a_max).")  # fmt: skip
+    save(
+        fig,
+        "Programs by the cycles in which path-based Lifting's Z acceleration exceeds the "
+        "P-AXIS-00441 warning level (Advanced Lifting stays within a_max).",
+    )
     return out

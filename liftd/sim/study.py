@@ -92,8 +92,12 @@ class RowError:
         return f"{where}line {self.line}: {ident}: {self.message}"
 
     def to_json(self) -> JsonObject:
-        return {"method": self.method, "id": self.error_id, "line": self.line,
-                "message": self.message}  # fmt: skip
+        return {
+            "method": self.method,
+            "id": self.error_id,
+            "line": self.line,
+            "message": self.message,
+        }
 
 
 @dataclass(frozen=True, slots=True)
@@ -172,8 +176,9 @@ class ProgramRow:
         more = len(self.errors) - MAX_WHY
         texts = [e.text() for e in self.errors[:MAX_WHY]]
         if self.unfinished_after:
-            texts.insert(0, f"did not finish within {self.unfinished_after:g} s simulated "
-                            "(--max-time)")  # fmt: skip
+            texts.insert(
+                0, f"did not finish within {self.unfinished_after:g} s simulated (--max-time)"
+            )
         return "; ".join(texts) + (f"; … {more} more" if more > 0 else "")
 
     def value(self, column: str) -> object:
@@ -284,8 +289,10 @@ def read_one(
 
 
 def too_large(size: int, limit: int) -> str:
-    return (f"too large to send to the cluster: {size / 2**20:.1f} MiB with its subroutine "
-            f"files (at most {limit / 2**20:.0f} MiB); run it in a local study")  # fmt: skip
+    return (
+        f"too large to send to the cluster: {size / 2**20:.1f} MiB with its subroutine "
+        f"files (at most {limit / 2**20:.0f} MiB); run it in a local study"
+    )
 
 
 def liftd_failed(exc: Exception) -> str:

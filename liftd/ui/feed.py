@@ -69,14 +69,22 @@ class Feed:
     history: list[deque[Sample]] = field(default_factory=list)
 
     def __post_init__(self) -> None:
-        self.objects = [(o.symbol, o.get, _rounder(o)) for o in self.catalog.objects
-                        if o.symbol not in self.missing]  # fmt: skip
+        self.objects = [
+            (o.symbol, o.get, _rounder(o))
+            for o in self.catalog.objects
+            if o.symbol not in self.missing
+        ]
         self.lifts = [
-            LiftFlags(i, a, f"GEO.ch{c.channel_id}.{ax.name}.lift_count",
-                      f"GEO.ch{c.channel_id}.{ax.name}.lift_active",
-                      f"GEO.ch{c.channel_id}.{ax.name}.lift_suppressed")
-            for i, c in enumerate(self.catalog.channels) for a, ax in enumerate(c.axes)
-        ]  # fmt: skip
+            LiftFlags(
+                i,
+                a,
+                f"GEO.ch{c.channel_id}.{ax.name}.lift_count",
+                f"GEO.ch{c.channel_id}.{ax.name}.lift_active",
+                f"GEO.ch{c.channel_id}.{ax.name}.lift_suppressed",
+            )
+            for i, c in enumerate(self.catalog.channels)
+            for a, ax in enumerate(c.axes)
+        ]
         self.values = {o.symbol: None for o in self.catalog.objects}
         self.history = [deque() for _ in self.catalog.channels]
 
@@ -133,8 +141,7 @@ class Feed:
 
     def full(self) -> dict[str, Any]:
         """What a page gets first: every value and the history."""
-        return {"values": self.values,
-                "history": [[s.as_json() for s in h] for h in self.history]}  # fmt: skip
+        return {"values": self.values, "history": [[s.as_json() for s in h] for h in self.history]}
 
 
 def encode(message: dict[str, Any]) -> str:

@@ -81,9 +81,14 @@ def build(ch: ChannelParams, text: str, start: tuple[float, ...] | None = None) 
     home = start if start is not None else tuple(0.0 for _ in ch.axes)
     lines = tuple(text.splitlines())
     base: dict[str, Any] = {
-        "channel": ch.channel_id, "axes": list(ch.axis_names), "lift_axis": ch.lift_axis,
-        "method": ch.lift_method.value, "path": [], "ranges": [], "error": None,
-    }  # fmt: skip
+        "channel": ch.channel_id,
+        "axes": list(ch.axis_names),
+        "lift_axis": ch.lift_axis,
+        "method": ch.lift_method.value,
+        "path": [],
+        "ranges": [],
+        "error": None,
+    }
     try:
         result = decode(text, DecoderContext.from_channel(ch, home))
         path = prepare(result.blocks, ch, home)
@@ -100,11 +105,15 @@ def build(ch: ChannelParams, text: str, start: tuple[float, ...] | None = None) 
         k_end = rng.k_end if rng.k_end >= 0 else len(path.segments)
         spec = rng.start
         item = {
-            "start_line": spec.line, "end_line": rng.end_line, "axis": spec.axis,
-            "method": _method(rng, ch), "suppressed": rng.suppressed,
-            "pos": round(spec.target * MM, 4), "pos_limit": round(spec.pos_limit * MM, 4),
+            "start_line": spec.line,
+            "end_line": rng.end_line,
+            "axis": spec.axis,
+            "method": _method(rng, ch),
+            "suppressed": rng.suppressed,
+            "pos": round(spec.target * MM, 4),
+            "pos_limit": round(spec.pos_limit * MM, 4),
             "path": _thin(_points(path, rng.k_start, k_end), max(2, budget)),
-        }  # fmt: skip
+        }
         drawn.append((spec.line, rng.end_line, item))
     base["ranges"] = [d[2] for d in drawn]
     if result.first_error is not None:

@@ -38,8 +38,11 @@ def range_extras(geos: Sequence[Geometry | None], view: GeoView) -> dict[str, An
         if geo is None:
             continue
         key = str(geo.channel_id)
-        on = snap.lift_active or snap.lift_suppressed or snap.lift_phase not in (
-            LiftPhase.NONE, LiftPhase.DONE)  # fmt: skip
+        on = (
+            snap.lift_active
+            or snap.lift_suppressed
+            or snap.lift_phase not in (LiftPhase.NONE, LiftPhase.DONE)
+        )
         ranges[key] = geo.open_range(snap.line) if on else None
         texts[key] = geo.block_text(snap.line)
     return {"range": ranges, "text": texts}
@@ -51,8 +54,9 @@ def times(view: GeoView) -> list[float]:
 
 
 class LiveHub:
-    def __init__(self, catalog: Catalog, view: ViewSource, peers: PeerSource,
-                 rate_hz: int = 50) -> None:  # fmt: skip
+    def __init__(
+        self, catalog: Catalog, view: ViewSource, peers: PeerSource, rate_hz: int = 50
+    ) -> None:
         self.catalog = catalog
         self.view = view
         self.peers = peers
@@ -60,8 +64,13 @@ class LiveHub:
         self.feed = Feed(catalog)
         self.ring: deque[tuple[int, str]] = deque(maxlen=RING)
         self.geometry: list[Geometry | None] = [None] * len(catalog.channels)
-        self.extras: dict[str, Any] = {"range": {}, "text": {}, "peers": [], "geo": "starting",
-                                       "error": {}}  # fmt: skip
+        self.extras: dict[str, Any] = {
+            "range": {},
+            "text": {},
+            "peers": [],
+            "geo": "starting",
+            "error": {},
+        }
         self.events: deque[dict[str, Any]] = deque(maxlen=EVENTS_KEPT)
         self._pending: deque[Event] = deque()
         self.events_dropped = 0
@@ -106,8 +115,11 @@ class LiveHub:
         view = self.view()
         extras: dict[str, Any] = {}
         events = [self._event(ev) for ev in self._pending if ev.name not in QUIET]
-        suppressed = {self._index(ev.channel) for ev in self._pending
-                      if ev.name == "lift.start" and ev.text == "suppressed"}  # fmt: skip
+        suppressed = {
+            self._index(ev.channel)
+            for ev in self._pending
+            if ev.name == "lift.start" and ev.text == "suppressed"
+        }
         self._pending.clear()
         if events:
             self.events.extend(events)
@@ -161,8 +173,14 @@ class LiveHub:
     @staticmethod
     def _event(ev: Event) -> dict[str, Any]:
         value = float(f"{ev.value:.9g}")
-        return {"name": ev.name, "t": round(ev.t, 6), "line": ev.line, "value": value,
-                "text": ev.text, "channel": ev.channel}  # fmt: skip
+        return {
+            "name": ev.name,
+            "t": round(ev.t, 6),
+            "line": ev.line,
+            "value": value,
+            "text": ev.text,
+            "channel": ev.channel,
+        }
 
     # -- what a page takes ------------------------------------------------------------------------
     @property
@@ -170,9 +188,11 @@ class LiveHub:
         return self._v
 
     def full(self) -> dict[str, Any]:
-        return {"v": self.version, **self.feed.full(),
-                "x": {**self.extras, "events": list(self.events),
-                      "geometry": self.drawings()}}  # fmt: skip
+        return {
+            "v": self.version,
+            **self.feed.full(),
+            "x": {**self.extras, "events": list(self.events), "geometry": self.drawings()},
+        }
 
     def since(self, version: int) -> list[str] | None:
         """The encoded frames after `version`, None when the ring no longer has them all."""
@@ -186,12 +206,27 @@ class LiveHub:
 def describe(catalog: Catalog) -> dict[str, Any]:
     """The objects a page shows (symbol, unit, type, writable, comment) and the channels."""
     return {
-        "objects": [{"symbol": o.symbol, "unit": o.unit, "type": o.type.isg,
-                     "writable": o.writable, "comment": o.comment} for o in catalog.objects],
-        "channels": [{"id": c.channel_id, "axes": list(c.axis_names), "lift_axis": c.lift_axis,
-                      "method": c.lift_method.value} for c in catalog.channels],
+        "objects": [
+            {
+                "symbol": o.symbol,
+                "unit": o.unit,
+                "type": o.type.isg,
+                "writable": o.writable,
+                "comment": o.comment,
+            }
+            for o in catalog.objects
+        ],
+        "channels": [
+            {
+                "id": c.channel_id,
+                "axes": list(c.axis_names),
+                "lift_axis": c.lift_axis,
+                "method": c.lift_method.value,
+            }
+            for c in catalog.channels
+        ],
         "cycle_time_s": catalog.channel.cycle_time,
-    }  # fmt: skip
+    }
 
 
 class LiveSession:

@@ -20,8 +20,9 @@ SPEEDS = (0.1, 0.25, 0.5, 1.0, 2.0, 5.0, 10.0)
 
 
 class TraceSession:
-    def __init__(self, views: TraceViews, geometry: Sequence[Geometry | None],
-                 rate_hz: int = 50) -> None:  # fmt: skip
+    def __init__(
+        self, views: TraceViews, geometry: Sequence[Geometry | None], rate_hz: int = 50
+    ) -> None:
         self.views = views
         self.geometry = list(geometry)
         self.period: float | None = 1.0 / rate_hz
@@ -35,8 +36,13 @@ class TraceSession:
         self._moved = False
 
     def _position(self) -> dict[str, Any]:
-        return {"t": round(self.t, 6), "t0": self.views.t0, "t1": self.views.t1,
-                "playing": self.playing, "speed": self.speed}  # fmt: skip
+        return {
+            "t": round(self.t, 6),
+            "t0": self.views.t0,
+            "t1": self.views.t1,
+            "playing": self.playing,
+            "speed": self.speed,
+        }
 
     def hello(self) -> dict[str, Any]:
         """The page's full state at the current time (its history rebuilt from the rows)."""
@@ -49,13 +55,23 @@ class TraceSession:
         self.feed.sample(view)
         self.feed.values = self.feed.read(view)
         self._last = time.monotonic()
-        extras = {**range_extras(self.geometry, view), "geo": "trace",
-                  "trace": self._position(), "peers": [], "events": [],
-                  "geometry": [g.drawing if g else None for g in self.geometry]}  # fmt: skip
+        extras = {
+            **range_extras(self.geometry, view),
+            "geo": "trace",
+            "trace": self._position(),
+            "peers": [],
+            "events": [],
+            "geometry": [g.drawing if g else None for g in self.geometry],
+        }
         state = {"v": self.version, **self.feed.full(), "x": extras}
         missing = sorted(self.views.missing)
-        return {"op": "hello", "mode": "trace", **describe(self.views.catalog), "state": state,
-                "missing": missing}  # fmt: skip
+        return {
+            "op": "hello",
+            "mode": "trace",
+            **describe(self.views.catalog),
+            "state": state,
+            "missing": missing,
+        }
 
     def take(self) -> list[str] | None:
         if self._jumped:
@@ -74,8 +90,11 @@ class TraceSession:
         view = self.views.view(self.t)
         deltas = self.feed.update(view, self.views.suppressed_between(before, self.t))
         frames: list[dict[str, Any]] = [{"c": d} for d in deltas] or [{"c": {}}]
-        frames[-1]["x"] = {**range_extras(self.geometry, view), "trace": self._position(),
-                           "t": times(view)}  # fmt: skip
+        frames[-1]["x"] = {
+            **range_extras(self.geometry, view),
+            "trace": self._position(),
+            "t": times(view),
+        }
         self._moved = False
         out = []
         for frame in frames:

@@ -68,8 +68,9 @@ def read_trace(path: str, ch: ChannelParams) -> ChannelTrace:
         try:
             for lineno, row in enumerate(reader, start=2):
                 if len(row) != len(head):
-                    raise TraceError(f"{path}: line {lineno}: {len(row)} fields, the header "
-                                     f"has {len(head)}")  # fmt: skip
+                    raise TraceError(
+                        f"{path}: line {lineno}: {len(row)} fields, the header has {len(head)}"
+                    )
                 for h in names:
                     cols[h].append(float(row[index[h]]))
                 if lineno > MAX_ROWS:
@@ -101,8 +102,16 @@ class TraceViews:
         self.t1 = max(tr.columns["t"][-1] for tr in present)
         self.dt = catalog.channel.cycle_time
         prefixes = ["GEO.timing.", "GEO.ads.", "PLC."]
-        suffixes = [".feed_hold", ".override_requested", ".m_pending", ".error_id", ".error_line",
-                    ".block", ".max_path_velocity", ".max_path_velocity_block_end"]  # fmt: skip
+        suffixes = [
+            ".feed_hold",
+            ".override_requested",
+            ".m_pending",
+            ".error_id",
+            ".error_line",
+            ".block",
+            ".max_path_velocity",
+            ".max_path_velocity_block_end",
+        ]
         for i, tr in enumerate(traces):
             geo = f"GEO.ch{catalog.channels[i].channel_id}."
             if tr is None:
@@ -114,9 +123,10 @@ class TraceViews:
             if "lift_phase" not in tr.columns:
                 prefixes.append(f"{geo}{tr.params.lift_axis}.lift_phase")
         self.missing = frozenset(
-            o.symbol for o in catalog.objects
+            o.symbol
+            for o in catalog.objects
             if o.symbol.startswith(tuple(prefixes)) or o.symbol.endswith(tuple(suffixes))
-        )  # fmt: skip
+        )
 
     def row(self, i: int, t: float) -> int:
         tr = self.traces[i]
@@ -128,9 +138,28 @@ class TraceViews:
         tr = self.traces[i]
         ch = self.catalog.channels[i]
         if tr is None or k < 0:
-            return GeoSnapshot(0, 0.0, ChannelState.READY, 0, 0, tuple(0.0 for _ in ch.axes),
-                               0.0, 1.0, 1.0, 1.0, False, False, False, LiftPhase.NONE, 0.0,
-                               0.0, -1, 0, 0, ())  # fmt: skip
+            return GeoSnapshot(
+                0,
+                0.0,
+                ChannelState.READY,
+                0,
+                0,
+                tuple(0.0 for _ in ch.axes),
+                0.0,
+                1.0,
+                1.0,
+                1.0,
+                False,
+                False,
+                False,
+                LiftPhase.NONE,
+                0.0,
+                0.0,
+                -1,
+                0,
+                0,
+                (),
+            )
         c = tr.columns
         axis = ch.lift_axis_index
         counts = [0] * len(ch.axes)
@@ -140,14 +169,31 @@ class TraceViews:
             return c[name][k] if name in c else default
 
         return GeoSnapshot(
-            round(c["t"][k] / self.dt), c["t"][k],
-            ChannelState(int(col("state", ChannelState.ACTIVE))), int(c["line"][k]), 0,
-            tuple(c[a.lower()][k] / MM for a in ch.axis_names), c["v_path"][k] / MM,
-            c["override"][k], c["override"][k], col("override_max", c["override"][k]), False,
-            c["lift_active"][k] > 0.5, c["lift_suppressed"][k] > 0.5,
-            LiftPhase(int(col("lift_phase", 0))), col("vz", 0.0) / MM, col("az", 0.0) / MM,
-            -1, 0, 0, (), 0.0, 0.0, axis, tuple(counts),
-        )  # fmt: skip
+            round(c["t"][k] / self.dt),
+            c["t"][k],
+            ChannelState(int(col("state", ChannelState.ACTIVE))),
+            int(c["line"][k]),
+            0,
+            tuple(c[a.lower()][k] / MM for a in ch.axis_names),
+            c["v_path"][k] / MM,
+            c["override"][k],
+            c["override"][k],
+            col("override_max", c["override"][k]),
+            False,
+            c["lift_active"][k] > 0.5,
+            c["lift_suppressed"][k] > 0.5,
+            LiftPhase(int(col("lift_phase", 0))),
+            col("vz", 0.0) / MM,
+            col("az", 0.0) / MM,
+            -1,
+            0,
+            0,
+            (),
+            0.0,
+            0.0,
+            axis,
+            tuple(counts),
+        )
 
     def view(self, t: float) -> GeoView:
         snaps = tuple(self.snapshot(i, self.row(i, t)) for i in range(len(self.traces)))

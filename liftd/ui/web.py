@@ -36,14 +36,20 @@ from aiohttp import WSMsgType, web
 
 from liftd.ui.feed import encode
 
-CSP = ("default-src 'none'; script-src 'self'; style-src 'self'; img-src 'self' data:; "
-       "connect-src 'self'; font-src 'self'; base-uri 'none'; form-action 'none'; "
-       "frame-ancestors 'none'")  # fmt: skip
+CSP = (
+    "default-src 'none'; script-src 'self'; style-src 'self'; img-src 'self' data:; "
+    "connect-src 'self'; font-src 'self'; base-uri 'none'; form-action 'none'; "
+    "frame-ancestors 'none'"
+)
 HEADERS = {
-    "Content-Security-Policy": CSP, "X-Content-Type-Options": "nosniff",
-    "X-Frame-Options": "DENY", "Referrer-Policy": "no-referrer", "Cache-Control": "no-store",
-    "Cross-Origin-Opener-Policy": "same-origin", "Cross-Origin-Resource-Policy": "same-origin",
-}  # fmt: skip
+    "Content-Security-Policy": CSP,
+    "X-Content-Type-Options": "nosniff",
+    "X-Frame-Options": "DENY",
+    "Referrer-Policy": "no-referrer",
+    "Cache-Control": "no-store",
+    "Cross-Origin-Opener-Policy": "same-origin",
+    "Cross-Origin-Resource-Policy": "same-origin",
+}
 STATIC = {"index.html": "text/html", "app.js": "text/javascript", "style.css": "text/css"}
 SEND_TIMEOUT_S = 5.0
 SOCKET_BUFFER = 1 << 15  # a page takes ~20-50 KB/s: room for a second of it
@@ -181,9 +187,13 @@ def http_logger(log: Any) -> logging.Logger:
 
 class UiServer:
     def __init__(
-        self, cfg: WebConfig, new_session: Callable[[], Session], log: Any,
-        writer: Writer | None = None, policy: PeerPolicy | None = None,
-    ) -> None:  # fmt: skip
+        self,
+        cfg: WebConfig,
+        new_session: Callable[[], Session],
+        log: Any,
+        writer: Writer | None = None,
+        policy: PeerPolicy | None = None,
+    ) -> None:
         self.cfg = cfg
         self.new_session = new_session
         self.log = log
@@ -192,8 +202,7 @@ class UiServer:
         self.counters = Counters()
         self.open = 0
         self.port = 0
-        self._files = {n: (resources.files("liftd.ui") / "static" / n).read_bytes()
-                       for n in STATIC}  # fmt: skip
+        self._files = {n: (resources.files("liftd.ui") / "static" / n).read_bytes() for n in STATIC}
         self._runner: web.AppRunner | None = None
 
     # -- lifecycle --------------------------------------------------------------------------------
@@ -206,8 +215,9 @@ class UiServer:
         self._runner = web.AppRunner(app, access_log=None, handle_signals=False,
                                      logger=http_logger(self.log))  # fmt: skip
         await self._runner.setup()
-        site = web.TCPSite(self._runner, self.cfg.host, self.cfg.port, backlog=64,
-                           shutdown_timeout=0.5)  # fmt: skip
+        site = web.TCPSite(
+            self._runner, self.cfg.host, self.cfg.port, backlog=64, shutdown_timeout=0.5
+        )
         await site.start()
         addresses = self._runner.addresses  # the real port (port 0 = any)
         self.port = int(addresses[0][1]) if addresses else self.cfg.port
@@ -219,9 +229,9 @@ class UiServer:
 
     # -- HTTP -------------------------------------------------------------------------------------
     @web.middleware
-    async def _guard(self, request: web.Request,
-                     handler: Callable[[web.Request], Awaitable[web.StreamResponse]]
-                     ) -> web.StreamResponse:  # fmt: skip
+    async def _guard(
+        self, request: web.Request, handler: Callable[[web.Request], Awaitable[web.StreamResponse]]
+    ) -> web.StreamResponse:
         if not host_allowed(request.host, self.cfg.hosts):
             self.counters.refused += 1
             response: web.StreamResponse = web.Response(status=421, text="unknown Host\n")
@@ -235,8 +245,9 @@ class UiServer:
         return response
 
     async def _index(self, request: web.Request) -> web.Response:
-        return web.Response(body=self._files["index.html"], content_type="text/html",
-                            charset="utf-8")  # fmt: skip
+        return web.Response(
+            body=self._files["index.html"], content_type="text/html", charset="utf-8"
+        )
 
     async def _no_icon(self, request: web.Request) -> web.Response:
         return web.Response(status=204)
@@ -251,14 +262,19 @@ class UiServer:
     async def _ws(self, request: web.Request) -> web.StreamResponse:
         if not origin_allowed(request.headers.get("Origin"), request.host):
             self.counters.refused += 1
-            self.log.warning("ui.origin_refused", origin=request.headers.get("Origin"),
-                             peer=request.remote)  # fmt: skip
+            self.log.warning(
+                "ui.origin_refused", origin=request.headers.get("Origin"), peer=request.remote
+            )
             return web.Response(status=403, text="cross-origin WebSocket refused\n")
         if self.open >= self.cfg.max_connections:
             self.counters.refused += 1
             return web.Response(status=503, text="too many pages open\n")
-        ws = web.WebSocketResponse(max_msg_size=self.cfg.max_message_bytes, compress=False,
-                                   heartbeat=20.0, writer_limit=SOCKET_BUFFER)  # fmt: skip
+        ws = web.WebSocketResponse(
+            max_msg_size=self.cfg.max_message_bytes,
+            compress=False,
+            heartbeat=20.0,
+            writer_limit=SOCKET_BUFFER,
+        )
         transport = request.transport
         sock = transport.get_extra_info("socket") if transport else None
         if sock is not None:  # fixed buffers (no autotuning to MBs): a page that does not read
@@ -302,8 +318,9 @@ class UiServer:
                     await sender
         return ws
 
-    async def _send_loop(self, ws: web.WebSocketResponse, request: web.Request,
-                         session: Session, page: _Page) -> None:  # fmt: skip
+    async def _send_loop(
+        self, ws: web.WebSocketResponse, request: web.Request, session: Session, page: _Page
+    ) -> None:
         session.attach(page.wake)
         try:
             hello = {**session.hello(), "control": self._control_state(page)}
@@ -317,8 +334,9 @@ class UiServer:
                     hello = {**session.hello(), "control": self._control_state(page)}
                     await self._send(ws, request, encode(hello))
                 elif frames:
-                    await self._send(ws, request, '{"op":"frames","frames":[' +
-                                     ",".join(frames) + "]}")  # fmt: skip
+                    await self._send(
+                        ws, request, '{"op":"frames","frames":[' + ",".join(frames) + "]}"
+                    )
                 if session.period is None:
                     await page.wake.wait()
                 else:
@@ -337,8 +355,11 @@ class UiServer:
         try:
             await asyncio.wait_for(ws.send_str(text), SEND_TIMEOUT_S)
         except TimeoutError:
-            self.log.warning("ui.page_dropped", peer=page_peer(request),
-                             detail="the page does not take its updates")  # fmt: skip
+            self.log.warning(
+                "ui.page_dropped",
+                peer=page_peer(request),
+                detail="the page does not take its updates",
+            )
             if request.transport is not None:
                 request.transport.abort()
             raise asyncio.CancelledError from None
@@ -411,8 +432,9 @@ class UiServer:
         symbol, value = msg.get("symbol"), msg.get("value")
         if not isinstance(symbol, str) or not 0 < len(symbol) <= MAX_SYMBOL_CHARS:
             return refuse("symbol: a PLC.chN.* name")
-        if not isinstance(value, bool | int) or (not isinstance(value, bool) and
-                                                  not -(1 << 31) <= value < 1 << 31):  # fmt: skip
+        if not isinstance(value, bool | int) or (
+            not isinstance(value, bool) and not -(1 << 31) <= value < 1 << 31
+        ):
             return refuse("value: true/false, or an integer in the object's ADS unit")
         if not _rate_ok(page.writes, MAX_WRITES_PER_S, time.monotonic()):
             return refuse(f"more than {MAX_WRITES_PER_S} writes a second")

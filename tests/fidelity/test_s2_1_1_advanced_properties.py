@@ -19,16 +19,20 @@ from tests.support.closed_loop import events, run_task
 LANDED = 1e-6  # m
 
 # §3's single-row example, at F30000, with limits the demo Z can reach: five ranges back to back
-SINGLE_ROW = ("G01 X10 Y10 Z1 F6000\n"
-              "G01 X50 Y10 F30000 Z[LIFT POS=30 POS_LIMIT=140]\n"
-              "G01 X90 Y10 Z[LIFT POS=20 POS_LIMIT=140]\n"
-              "G01 X130 Y10 Z[LIFT POS=25 POS_LIMIT=140]\n"
-              "G01 X170 Y10 Z[LIFT POS=30 POS_LIMIT=140]\n"
-              "G01 X210 Y10 Z[LIFT POS=30 POS_LIMIT=140]\nM30\n")  # fmt: skip
+SINGLE_ROW = (
+    "G01 X10 Y10 Z1 F6000\n"
+    "G01 X50 Y10 F30000 Z[LIFT POS=30 POS_LIMIT=140]\n"
+    "G01 X90 Y10 Z[LIFT POS=20 POS_LIMIT=140]\n"
+    "G01 X130 Y10 Z[LIFT POS=25 POS_LIMIT=140]\n"
+    "G01 X170 Y10 Z[LIFT POS=30 POS_LIMIT=140]\n"
+    "G01 X210 Y10 Z[LIFT POS=30 POS_LIMIT=140]\nM30\n"
+)
 # the same with LIFT_END directly followed by LIFT_START
-END_THEN_START = ("G01 X10 Y10 Z1 F6000\nZ[LIFT_START POS=30 POS_LIMIT=140]\nG01 X50 F30000\n"
-                  "Z[LIFT_END]\nZ[LIFT_START POS=20 POS_LIMIT=140]\nG01 X90\nZ[LIFT_END]\n"
-                  "Z[LIFT_START POS=25 POS_LIMIT=140]\nG01 X130\nZ[LIFT_END]\nM30\n")  # fmt: skip
+END_THEN_START = (
+    "G01 X10 Y10 Z1 F6000\nZ[LIFT_START POS=30 POS_LIMIT=140]\nG01 X50 F30000\n"
+    "Z[LIFT_END]\nZ[LIFT_START POS=20 POS_LIMIT=140]\nG01 X90\nZ[LIFT_END]\n"
+    "Z[LIFT_START POS=25 POS_LIMIT=140]\nG01 X130\nZ[LIFT_END]\nM30\n"
+)
 JOINTS_MM = {SINGLE_ROW: (50, 90, 130, 170), END_THEN_START: (50, 90)}
 TARGETS_MM = {SINGLE_ROW: (30, 20, 25, 30, 30), END_THEN_START: (30, 20, 25)}
 
@@ -63,8 +67,7 @@ def test_s2_1_1_a_joint_between_ranges_is_not_a_waiting_condition(
     task, snaps = run_task(ch, text)
     assert snaps[-1].state is ChannelState.READY and not events(snaps, "lift.late")
     _landed_each(task, snaps, TARGETS_MM[text])
-    joints = [s for s in snaps
-              if any(abs(s.positions[0] / MM - x) < 0.5 for x in JOINTS_MM[text])]  # fmt: skip
+    joints = [s for s in snaps if any(abs(s.positions[0] / MM - x) < 0.5 for x in JOINTS_MM[text])]
     assert joints and min(s.v_path for s in joints) > 0.1  # m/s: no stop at any joint
     if method is LiftMethod.ADVANCED:
         # 29 mm up in the first 40 mm (80 ms at F30000) is more than Z can do: that range and
@@ -99,15 +102,18 @@ def test_s4_2_3_flags_and_lift_count_through_back_to_back_ranges(method: LiftMet
 
 @pytest.mark.parametrize("method", [LiftMethod.ADVANCED, LiftMethod.LIFTING])
 @pytest.mark.parametrize("wait", ["M08", "G04 X0.3"])
-def test_s2_1_1_path_length_0_after_a_wait_moves_z_continuously(method: LiftMethod,
-                                                                 wait: str) -> None:  # fmt: skip
+def test_s2_1_1_path_length_0_after_a_wait_moves_z_continuously(
+    method: LiftMethod, wait: str
+) -> None:
     """§2.1.1: "if the motion path = 0, the path axes stop and the lift axis is … positioned at
     the target". Right after a waiting condition (an M function the PLC acknowledges, a dwell)
     Z stepped from 1 to 50 mm in one cycle for the wait and back (issue 15 item 2). Every axis's
     command position is continuous in every cycle: |Δpos| ≤ v_max·dt."""
     ch = make_channel(method)
-    text = (f"G01 X40 Y10 Z1 F6000\n{wait}\nZ[LIFT_START POS=50 POS_LIMIT=120]\nZ[LIFT_END]\n"
-            "G01 X60 F6000\nM30\n")  # fmt: skip
+    text = (
+        f"G01 X40 Y10 Z1 F6000\n{wait}\nZ[LIFT_START POS=50 POS_LIMIT=120]\nZ[LIFT_END]\n"
+        "G01 X60 F6000\nM30\n"
+    )
     task, snaps = run_task(ch, text)
     assert snaps[-1].state is ChannelState.READY
     p = np.array([s.positions for s in snaps])
@@ -127,8 +133,10 @@ def test_s2_1_1_a_waiting_condition_inside_a_range_z_moves_on_to_target_height(w
     the lift axis moves on to target height": Z is at POS when the path stops at the wait, and
     lifts again for the rest of the range afterwards."""
     ch = make_channel()
-    text = (f"G01 X10 Y10 Z1 F6000\nZ[LIFT_START POS=5 POS_LIMIT=80]\nG01 X150 F24000\n{wait}\n"
-            "G01 X300\nZ[LIFT_END]\nM30\n")  # fmt: skip
+    text = (
+        f"G01 X10 Y10 Z1 F6000\nZ[LIFT_START POS=5 POS_LIMIT=80]\nG01 X150 F24000\n{wait}\n"
+        "G01 X300\nZ[LIFT_END]\nM30\n"
+    )
     task, snaps = _run_with_restart(ch, text) if wait == "M00" else run_task(ch, text)
     assert snaps[-1].state is ChannelState.READY and not events(snaps, "lift.late")
     at_wait = [s for s in snaps if abs(s.positions[0] - 0.150) < 1e-9 and s.v_path == 0.0]

@@ -113,8 +113,10 @@ def test_s2_1_3_special_case_3_a_flush_has_no_influence_on_the_lift_profile(flus
     follows the method-specific passage (issue 37 item 2)."""
     ch = make_channel()
     heights = []
-    for blocks in (f"N40 X150\nN50 X140\nN60 {flush}\nN70 X90\nN80 X40\n",
-                   "N40 X150\nN50 X140\nN70 X90\nN80 X40\n"):  # fmt: skip
+    for blocks in (
+        f"N40 X150\nN50 X140\nN60 {flush}\nN70 X90\nN80 X40\n",
+        "N40 X150\nN50 X140\nN70 X90\nN80 X40\n",
+    ):
         _, snaps = flush_run(ch, blocks)
         lifted = [s for s in snaps if s.lift_active]
         heights.append(np.array([s.positions[2] for s in lifted]))

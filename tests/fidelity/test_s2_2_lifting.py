@@ -42,8 +42,9 @@ def test_s2_2_1_inside_the_range_the_path_keeps_z_within_its_acceleration(shape:
     assert not events(snaps, "lift.z_acc_warning")
 
 
-@pytest.mark.parametrize(("override", "hold"), [("0:150", ""), ("0:100,0.5:170", ""),
-                                                 ("", "0.35:0.2")])  # fmt: skip
+@pytest.mark.parametrize(
+    ("override", "hold"), [("0:150", ""), ("0:100,0.5:170", ""), ("", "0.35:0.2")]
+)
 def test_s2_2_1_feed_changes_may_use_the_overload_band(override: str, hold: str) -> None:
     """§2.2.1 "Dynamikplanung": a feed change during the lift (feed hold, override) adds to Z's
     acceleration, which "can exceed its maximum briefly"; the total stays within the overload
@@ -70,8 +71,9 @@ def test_s2_2_3_special_case_2_flush_is_lift_end_at_pos_limit_then_lift_start() 
     POS=40 POS_LIMIT=40: Z is at POS_LIMIT at the flush, then lowers to POS = 12. The
     method-specific passage; §2.4's "target position reached in the flush block" is not
     followed (issue 37 item 2)."""
-    task, snaps = flush_run(make_channel(LiftMethod.LIFTING), "N40 X50\nN50 X40\nN60 #FLUSH\n"
-                            "N70 X30\nN80 X20\n", end="")  # fmt: skip
+    task, snaps = flush_run(
+        make_channel(LiftMethod.LIFTING), "N40 X50\nN50 X40\nN60 #FLUSH\nN70 X30\nN80 X20\n", end=""
+    )
     plan = task.prog.plans[0]  # one range, its plan cut at the flush
     assert plan is not None and [p.z1 for p in plan.parts] == [40 * MM, 12 * MM]
     at_flush = on_return(snaps, 0.04)

@@ -85,8 +85,9 @@ def test_netids_and_write_rights_as_configured(tmp_path: Path) -> None:
         viewer.close()
         plc = RawClient(port, target, source=net_id_bytes(PLC))
         assert write_override(plc, 500) == 0
-        assert wait_for(lambda: plc.read_by_name("GEO.ch1.override_requested", 2)
-                        == (0, struct.pack("<H", 500)))  # fmt: skip
+        assert wait_for(
+            lambda: plc.read_by_name("GEO.ch1.override_requested", 2) == (0, struct.pack("<H", 500))
+        )
         plc.close()
     finally:
         assert d.stop() == 0

@@ -56,8 +56,13 @@ def test_by_name_lists_and_writes(served: tuple[Harness, pyads.Connection]) -> N
     h.set(lift_active=True, positions=(0.1, 0.02, 0.0415))
     assert plc.read_by_name("GEO.ch1.Z.lift_active", pyads.PLCTYPE_BOOL) is True
     assert plc.read_by_name("gpAx[3].ipo_state.lift_active") is True  # type from 0xF009
-    names = ["GEO.ch1.Z.lift_active", "GEO.ch1.Z.command_position", "GEO.ch1.path_velocity",
-             "GEO.ch1.override", "GEO.cycle"]  # fmt: skip
+    names = [
+        "GEO.ch1.Z.lift_active",
+        "GEO.ch1.Z.command_position",
+        "GEO.ch1.path_velocity",
+        "GEO.ch1.override",
+        "GEO.cycle",
+    ]
     assert plc.read_list_by_name(names) == {
         "GEO.ch1.Z.lift_active": True,
         "GEO.ch1.Z.command_position": 415_000,  # 0.1 µm

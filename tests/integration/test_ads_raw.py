@@ -23,8 +23,9 @@ LIFT = struct.pack("<III", 0x121301, 0x30095, 1)
 
 @pytest.fixture
 def h() -> Iterator[Harness]:
-    with Harness(make_channel(), incomplete_frame_timeout_s=0.3, write_queue_frames=16,
-                 max_frame_bytes=4096) as harness:  # fmt: skip
+    with Harness(
+        make_channel(), incomplete_frame_timeout_s=0.3, write_queue_frames=16, max_frame_bytes=4096
+    ) as harness:
         yield harness
 
 
@@ -111,15 +112,22 @@ def test_access_policy() -> None:
     with other_ips as h:
         assert client(h).closed_by_server()
     allowed = net_id_bytes("10.1.2.3.1.1")
-    with Harness(make_channel(), allow_net_ids=frozenset({allowed}), reject="error",
-                 write_net_ids=frozenset({allowed})) as h:  # fmt: skip
+    with Harness(
+        make_channel(),
+        allow_net_ids=frozenset({allowed}),
+        reject="error",
+        write_net_ids=frozenset({allowed}),
+    ) as h:
         ok = client(h)
         assert ok.read(0x121301, 0x30095, 1) == (0, b"\x00")
         stranger = client(h, source=bytes([10, 9, 9, 9, 1, 1]))
         assert wire.decode_read_response(stranger.request(2, LIFT).payload) == (0x723, b"")
     reader = net_id_bytes("10.5.5.5.1.1")
-    with Harness(make_channel(), allow_net_ids=frozenset({allowed, reader}),
-                 write_net_ids=frozenset({allowed})) as h:  # fmt: skip
+    with Harness(
+        make_channel(),
+        allow_net_ids=frozenset({allowed, reader}),
+        write_net_ids=frozenset({allowed}),
+    ) as h:
         sym = h.provider.find_symbol("PLC.ch1.override")
         write = struct.pack("<III", sym.index_group, sym.index_offset, 2) + struct.pack("<H", 500)
         ro = client(h, source=reader)

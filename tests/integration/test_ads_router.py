@@ -107,8 +107,9 @@ def test_system_service_port_10000() -> None:
 
 
 def test_idle_connections_are_evicted_for_a_real_client_and_time_out() -> None:
-    with Harness(make_channel(), max_connections=6, max_connections_per_ip=6,
-                 first_frame_timeout_s=1.0) as h:  # fmt: skip
+    with Harness(
+        make_channel(), max_connections=6, max_connections_per_ip=6, first_frame_timeout_s=1.0
+    ) as h:
         idle = [idle_socket(h) for _ in range(6)]
         t0 = time.monotonic()
         c = client(h)

@@ -23,8 +23,9 @@ pytestmark = [pytest.mark.integration, pytest.mark.timing]
 def daemon(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Daemon]:
     tmp: Path = tmp_path_factory.mktemp("attacks")
     # SCHED_FIFO where permitted: then the GEO loop must not notice the attacks at all
-    cfg = write_config(tmp, program={"repeat": True}, ads=ATTACK_ADS,
-                       rt={"sched_fifo_priority": 80})  # fmt: skip
+    cfg = write_config(
+        tmp, program={"repeat": True}, ads=ATTACK_ADS, rt={"sched_fifo_priority": 80}
+    )
     d = Daemon(cfg)
     d.ready()
     yield d

@@ -34,10 +34,10 @@ def two_channel_config(tmp: Path, net_id: str) -> Path:
     the RT settings tests cannot have on a shared VM."""
     text = SHIPPED.read_text()
     config = REPO / "config"
-    text = re.sub(r'startup_list = "([^"]+)"', lambda m: f'startup_list = "{config / m[1]}"',
-                  text)  # fmt: skip
-    text = re.sub(r'(file|program) = "(programs/[^"]+)"',
-                  lambda m: f'{m[1]} = "{config / m[2]}"', text)  # fmt: skip
+    text = re.sub(r'startup_list = "([^"]+)"', lambda m: f'startup_list = "{config / m[1]}"', text)
+    text = re.sub(
+        r'(file|program) = "(programs/[^"]+)"', lambda m: f'{m[1]} = "{config / m[2]}"', text
+    )
     text = text.replace("port = 48898", "port = 0").replace('"127.0.0.1.1.1"', f'"{net_id}"')
     text += (
         "\n[rt]\nsched_fifo_priority = 0\nhold_cpu_dma_latency = false\nlock_memory = false\n"
@@ -62,8 +62,9 @@ def test_pyads_reads_both_channels_at_their_index_groups(tmp_path: Path) -> None
             while time.monotonic() < deadline and not (
                 any(a for a, _ in seen) and any(b for _, b in seen)
             ):
-                seen.add((plc.read(*CH1_Z, pyads.PLCTYPE_BOOL),
-                          plc.read(*CH2_W, pyads.PLCTYPE_BOOL)))  # fmt: skip
+                seen.add(
+                    (plc.read(*CH1_Z, pyads.PLCTYPE_BOOL), plc.read(*CH2_W, pyads.PLCTYPE_BOOL))
+                )
                 time.sleep(0.005)
             assert any(a for a, _ in seen) and any(b for _, b in seen), seen
             assert plc.read_by_name("GEO.ch2.W.lift_active") in (True, False)
@@ -80,18 +81,49 @@ def test_pyads_reads_both_channels_at_their_index_groups(tmp_path: Path) -> None
         finally:
             plc.close()
         run = subprocess.run(
-            [sys.executable, "-m", "liftd", "plc", "-c", str(cfg), "--host", d.address,
-             "--channel", "2", "--duration", "12", "--json"],
-            capture_output=True, text=True, timeout=60, check=False,
-        )  # fmt: skip
+            [
+                sys.executable,
+                "-m",
+                "liftd",
+                "plc",
+                "-c",
+                str(cfg),
+                "--host",
+                d.address,
+                "--channel",
+                "2",
+                "--duration",
+                "12",
+                "--json",
+            ],
+            capture_output=True,
+            text=True,
+            timeout=60,
+            check=False,
+        )
         assert run.returncode == 0, run.stderr
         objects = {json.loads(line).get("object") for line in run.stdout.splitlines()}
         assert "W.lift_active" in objects, run.stdout[:500]
         bad = subprocess.run(
-            [sys.executable, "-m", "liftd", "plc", "-c", str(cfg), "--host", d.address,
-             "--channel", "3", "--duration", "1"],
-            capture_output=True, text=True, timeout=60, check=False,
-        )  # fmt: skip
+            [
+                sys.executable,
+                "-m",
+                "liftd",
+                "plc",
+                "-c",
+                str(cfg),
+                "--host",
+                d.address,
+                "--channel",
+                "3",
+                "--duration",
+                "1",
+            ],
+            capture_output=True,
+            text=True,
+            timeout=60,
+            check=False,
+        )
         assert bad.returncode == 2 and "--channel" in bad.stderr
     finally:
         assert d.stop() == 0
@@ -99,8 +131,17 @@ def test_pyads_reads_both_channels_at_their_index_groups(tmp_path: Path) -> None
         head1 = next(csv.reader(f))
     with (tmp_path / "run.ch2.csv").open() as f:
         rows = list(csv.DictReader(f))
-    assert head1[:9] == ["t", "line", "x", "y", "z", "v_path", "override", "lift_active",
-                         "lift_suppressed"]  # fmt: skip
+    assert head1[:9] == [
+        "t",
+        "line",
+        "x",
+        "y",
+        "z",
+        "v_path",
+        "override",
+        "lift_active",
+        "lift_suppressed",
+    ]
     assert list(rows[0])[:5] == ["t", "line", "u", "v", "w"]
     assert any(r["lift_active"] == "1" for r in rows)
     assert any(rec.get("channel") == 2 and rec["event"] == "lift.start" for rec in d.logs)
@@ -142,20 +183,35 @@ def test_a_reload_reaches_each_channel_at_its_own_program_boundary(tmp_path: Pat
 def test_study_runs_a_channels_programs_in_that_channel(tmp_path: Path) -> None:
     head2 = str(REPO / "config" / "programs" / "two-head" / "head2.nc")
     base = [sys.executable, "-m", "liftd", "study", head2, "-c", str(SHIPPED), "--jobs", "1"]
-    ok = subprocess.run([*base, "--channel", "2", "--out", str(tmp_path / "ch2")],
-                        capture_output=True, text=True, timeout=120, check=False)  # fmt: skip
+    ok = subprocess.run(
+        [*base, "--channel", "2", "--out", str(tmp_path / "ch2")],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
     assert ok.returncode == 0, ok.stderr
     report = json.loads((tmp_path / "ch2" / "report.json").read_text())
     assert report["summary"]["compared"] == 3 and report["summary"]["status"]["ok"] == 1
     # in channel 1 (the default) U V W are no axes: the program is reported with its errors
-    wrong = subprocess.run([*base, "--out", str(tmp_path / "ch1")], capture_output=True,
-                           text=True, timeout=120, check=False)  # fmt: skip
+    wrong = subprocess.run(
+        [*base, "--out", str(tmp_path / "ch1")],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
     assert wrong.returncode == 1 and "990018" in wrong.stderr
 
 
 def liftd(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "liftd", *args], capture_output=True,
-                          text=True, timeout=120, check=False)  # fmt: skip
+    return subprocess.run(
+        [sys.executable, "-m", "liftd", *args],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
 
 
 def test_exit_codes_of_bad_channels(tmp_path: Path) -> None:

@@ -12,8 +12,13 @@ pytestmark = pytest.mark.integration
 
 
 def objects(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "liftd", "objects", *args],
-                          capture_output=True, text=True, timeout=60, check=False)  # fmt: skip
+    return subprocess.run(
+        [sys.executable, "-m", "liftd", "objects", *args],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
 
 
 def test_table_names_the_vendor_addresses() -> None:

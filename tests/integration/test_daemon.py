@@ -18,8 +18,8 @@ from typing import Any
 import pyads
 import pytest
 
-from bench.gen import nesting_program
 from tests.support.daemon import Daemon, Notify, write_config
+from tests.support.programs import nesting_program
 from tests.support.replay import WRITES, first_difference, simulate_logged_writes
 from tests.support.wait import wait_for
 
@@ -104,8 +104,13 @@ def test_run_trace_is_identical_to_simulate(tmp_path: Path, idle: str) -> None:
         assert d.stop() == 0
     sim = tmp_path / "sim.csv"
     demo = Path(cfg.read_text().split('file = "')[1].split('"')[0])
-    r = subprocess.run([sys.executable, "-m", "liftd", "simulate", str(demo), "-c", str(cfg),
-                        "--trace", str(sim)], capture_output=True, text=True, timeout=120, check=False)  # fmt: skip
+    r = subprocess.run(
+        [sys.executable, "-m", "liftd", "simulate", str(demo), "-c", str(cfg), "--trace", str(sim)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
     assert r.returncode == 0, r.stderr
     expected = sim.read_text().splitlines()
     got = trace.read_text().splitlines()
@@ -144,8 +149,12 @@ def test_a_spinning_loop_owns_its_cpu(tmp_path: Path) -> None:
         assert any(t.startswith("daemon_cpus: ok") for t in said), said
         with connect(d) as plc:  # a connection's threads too
             assert read(plc, "GEO.cycle") is not None
-        children = subprocess.run(["pgrep", "-P", str(d.proc.pid), "-f", "liftd.runtime"],
-                                  capture_output=True, text=True, check=False).stdout.split()  # fmt: skip
+        children = subprocess.run(
+            ["pgrep", "-P", str(d.proc.pid), "-f", "liftd.runtime"],
+            capture_output=True,
+            text=True,
+            check=False,
+        ).stdout.split()
         assert len(children) == 1, children
         assert set(cpus_allowed(int(children[0])).values()) == {frozenset({geo_cpu})}
         daemon = cpus_allowed(d.proc.pid)
@@ -177,8 +186,13 @@ def test_run_with_plc_writes_is_identical_to_simulate_with_their_schedule(tmp_pa
     expected, k_last = simulate_logged_writes(d.logs, cfg, tmp_path)
     got = trace.read_text().splitlines()
     first_diff = first_difference(got, expected, k_last)
-    assert first_diff is None, (first_diff, got[first_diff], expected[first_diff],
-                                missing_cycles(got), trace_logs(d.logs))  # fmt: skip
+    assert first_diff is None, (
+        first_diff,
+        got[first_diff],
+        expected[first_diff],
+        missing_cycles(got),
+        trace_logs(d.logs),
+    )
 
 
 def test_plc_inputs_reach_the_loop_and_bad_values_are_refused(tmp_path: Path) -> None:
@@ -260,8 +274,13 @@ def test_reloading_a_large_program_neither_stalls_the_daemon_nor_jumps_the_axes(
 
 
 def test_start_failures_have_clear_messages_and_exit_codes(tmp_path: Path) -> None:
-    missing = subprocess.run([sys.executable, "-m", "liftd", "run", "-c", str(tmp_path / "no.toml")],
-                             capture_output=True, text=True, timeout=60, check=False)  # fmt: skip
+    missing = subprocess.run(
+        [sys.executable, "-m", "liftd", "run", "-c", str(tmp_path / "no.toml")],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
     assert missing.returncode == 2 and "no.toml" in missing.stderr
     d = Daemon(write_config(tmp_path), "--trace", str(tmp_path / "nodir" / "t.csv"))
     assert d.wait() == 3
@@ -287,8 +306,12 @@ def test_prometheus_endpoint(tmp_path: Path) -> None:
         d.ready()
         body = urllib.request.urlopen(f"http://127.0.0.1:{port}/metrics", timeout=5).read().decode()
         # prometheus_client writes every sample as a float ("1.0"): Prometheus reads both
-        values = {k: float(v) for k, v in (line.rsplit(" ", 1) for line in body.splitlines()
-                                           if not line.startswith("#"))}  # fmt: skip
+        values = {
+            k: float(v)
+            for k, v in (
+                line.rsplit(" ", 1) for line in body.splitlines() if not line.startswith("#")
+            )
+        }
         assert values["liftd_geo_cycles_total"] > 0
         assert values["liftd_geo_running"] == 1
         count = values["liftd_geo_lateness_seconds_count"]
@@ -303,8 +326,9 @@ def test_a_stalled_geo_loop_stops_the_daemon_non_zero(tmp_path: Path) -> None:
     d = Daemon(write_config(tmp_path, rt={"stall_timeout_ms": 300}))
     try:
         d.ready()
-        geo = subprocess.run(["pgrep", "-P", str(d.proc.pid)], capture_output=True, text=True,
-                             check=False).stdout.split()  # fmt: skip
+        geo = subprocess.run(
+            ["pgrep", "-P", str(d.proc.pid)], capture_output=True, text=True, check=False
+        ).stdout.split()
         assert geo
         t0 = time.monotonic()
         for pid in geo:
@@ -323,8 +347,9 @@ def test_geo_process_death_stops_the_daemon_non_zero(tmp_path: Path) -> None:
     d = Daemon(write_config(tmp_path, program={"repeat": True}))
     try:
         d.ready()
-        children = subprocess.run(["pgrep", "-P", str(d.proc.pid)], capture_output=True,
-                                  text=True, check=False).stdout.split()  # fmt: skip
+        children = subprocess.run(
+            ["pgrep", "-P", str(d.proc.pid)], capture_output=True, text=True, check=False
+        ).stdout.split()
         geo = [int(p) for p in children]
         assert geo, "the GEO process is a child of the daemon"
         for pid in geo:

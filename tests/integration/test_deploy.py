@@ -47,8 +47,13 @@ def test_the_unit_verifies(tmp_path: Path) -> None:
     exe = Path(sys.executable).with_name("liftd")
     text = UNIT.read_text().replace("/opt/liftd/.venv/bin/liftd", str(exe))
     (tmp_path / "liftd.service").write_text(text)
-    r = subprocess.run(["systemd-analyze", "verify", str(tmp_path / "liftd.service")],
-                       capture_output=True, text=True, timeout=60, check=False)  # fmt: skip
+    r = subprocess.run(
+        ["systemd-analyze", "verify", str(tmp_path / "liftd.service")],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
     assert r.returncode == 0, r.stderr
     assert "liftd.service" not in r.stderr, r.stderr  # no warnings about our unit
 
@@ -64,15 +69,25 @@ def test_the_image_files_exist_and_its_configuration_loads(tmp_path: Path) -> No
     etc = tmp_path / "etc-liftd"  # the image's /etc/liftd: config/ with docker/liftd.toml over it
     shutil.copytree(REPO / "config", etc)
     shutil.copy(REPO / "docker" / "liftd.toml", etc / "liftd.toml")
-    r = subprocess.run([sys.executable, "-m", "liftd", "check", "-c", str(etc / "liftd.toml")],
-                       capture_output=True, text=True, timeout=60, check=False)  # fmt: skip
+    r = subprocess.run(
+        [sys.executable, "-m", "liftd", "check", "-c", str(etc / "liftd.toml")],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
     assert r.returncode == 0, r.stderr
 
 
 def _syscalls(group: str) -> set[str]:
     """The system calls of a systemd syscall group, groups expanded."""
-    out = subprocess.run(["systemd-analyze", "syscall-filter", "--no-pager", group],
-                         capture_output=True, text=True, timeout=60, check=True).stdout  # fmt: skip
+    out = subprocess.run(
+        ["systemd-analyze", "syscall-filter", "--no-pager", group],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=True,
+    ).stdout
     calls: set[str] = set()
     for line in out.splitlines()[1:]:
         word = line.strip().split("#")[0].strip()
@@ -87,8 +102,11 @@ def test_the_unit_is_hardened_as_issue_17_asks() -> None:
     svc = unit()["Service"]
     assert svc["RemoveIPC"] == "yes" and svc["ProtectProc"] == "invisible"
     assert svc["MemoryDenyWriteExecute"] == "yes"
-    filters = [line.split("=", 1)[1] for line in UNIT.read_text().splitlines()
-               if line.startswith("SystemCallFilter=")]  # fmt: skip
+    filters = [
+        line.split("=", 1)[1]
+        for line in UNIT.read_text().splitlines()
+        if line.startswith("SystemCallFilter=")
+    ]
     assert "~@privileged" in filters and "@system-service" in filters
     assert svc["ExecReload"].endswith("liftd reload")  # synchronous: its exit status counts
     assert svc["RuntimeDirectory"] == "liftd"
@@ -97,8 +115,16 @@ def test_the_unit_is_hardened_as_issue_17_asks() -> None:
 @pytest.mark.skipif(shutil.which("systemd-analyze") is None, reason="no systemd-analyze")
 def test_the_syscall_filter_keeps_what_the_loop_needs() -> None:
     allowed = _syscalls("@system-service") - _syscalls("@privileged")
-    for call in ("sched_setscheduler", "sched_setaffinity", "mlockall", "clock_nanosleep",
-                 "prctl", "memfd_create", "mmap", "ftruncate"):  # fmt: skip
+    for call in (
+        "sched_setscheduler",
+        "sched_setaffinity",
+        "mlockall",
+        "clock_nanosleep",
+        "prctl",
+        "memfd_create",
+        "mmap",
+        "ftruncate",
+    ):
         assert call in allowed, call
 
 
@@ -123,8 +149,11 @@ def test_the_image_is_reproducible_labelled_and_keeps_its_shipped_config() -> No
     assert "PIP_CONSTRAINT=/src/docker/constraints.txt" in dockerfile
     for label in ("title", "description", "version", "licenses"):
         assert f"org.opencontainers.image.{label}=" in dockerfile, label
-    pinned = dict(line.split("==") for line in (REPO / "docker" / "constraints.txt").read_text()
-                  .splitlines() if line and not line.startswith("#"))  # fmt: skip
+    pinned = dict(
+        line.split("==")
+        for line in (REPO / "docker" / "constraints.txt").read_text().splitlines()
+        if line and not line.startswith("#")
+    )
     project = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]
     for dep in project["dependencies"]:
         name = re.split(r"[<>=!~ ]", dep)[0].lower()
@@ -138,8 +167,13 @@ def test_the_daemon_runs_without_writable_executable_memory(tmp_path: Path) -> N
     systemd uses where the kernel has it) set before exec and inherited by the GEO process."""
     from tests.support.daemon import Daemon, write_config  # noqa: PLC0415
 
-    probe = subprocess.run([sys.executable, "-c", MDWE_WRAPPER, "true"], capture_output=True,
-                           text=True, timeout=30, check=False)  # fmt: skip
+    probe = subprocess.run(
+        [sys.executable, "-c", MDWE_WRAPPER, "true"],
+        capture_output=True,
+        text=True,
+        timeout=30,
+        check=False,
+    )
     if probe.returncode != 0:
         pytest.skip(f"PR_SET_MDWE not available: {probe.stderr.strip()}")
     cfg = write_config(tmp_path, program={"repeat": True})

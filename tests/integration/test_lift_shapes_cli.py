@@ -34,8 +34,11 @@ LISTS = {"advanced": "cnc/hochlauf.lis", "lifting": "cnc-lifting/hochlauf.lis"}
 def _simulate(cfg: Path, program: Path, *args: str) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
         [sys.executable, "-m", "liftd", "simulate", str(program), "-c", str(cfg), *args],
-        capture_output=True, text=True, timeout=120, check=False,
-    )  # fmt: skip
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
 
 
 @pytest.mark.parametrize("method", LISTS)

@@ -38,13 +38,22 @@ def small_pipe() -> tuple[int, int]:
 
 def test_unread_log_pipe_blocks_no_request(tmp_path: Path) -> None:
     port = free_port()
-    cfg = write_config(tmp_path, program={"repeat": True}, ads={"port": port},
-                       log={"format": "json", "queue_lines": 100})  # fmt: skip
+    cfg = write_config(
+        tmp_path,
+        program={"repeat": True},
+        ads={"port": port},
+        log={"format": "json", "queue_lines": 100},
+    )
     notify = Notify(tmp_path)
     (out_r, out_w), (err_r, err_w) = small_pipe(), small_pipe()
     env = {**os.environ, "NOTIFY_SOCKET": notify.path}
-    proc = subprocess.Popen([sys.executable, "-m", "liftd", "run", "-c", str(cfg)],
-                            stdout=out_w, stderr=err_w, env=env, cwd=REPO)  # fmt: skip
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "liftd", "run", "-c", str(cfg)],
+        stdout=out_w,
+        stderr=err_w,
+        env=env,
+        cwd=REPO,
+    )
     os.close(out_w)
     os.close(err_w)
     try:
@@ -56,8 +65,9 @@ def test_unread_log_pipe_blocks_no_request(tmp_path: Path) -> None:
             with socket.socket() as s:
                 s.bind((f"127.0.0.{2 + i % 200}", 0))
                 s.connect(("127.0.0.1", port))
-        net_id = next(line.split('"')[1] for line in cfg.read_text().splitlines()
-                      if line.startswith("net_id"))  # fmt: skip
+        net_id = next(
+            line.split('"')[1] for line in cfg.read_text().splitlines() if line.startswith("net_id")
+        )
         plc = pyads.Connection(net_id, 551, f"127.0.0.1:{port}")
         plc.open()
         try:

@@ -36,13 +36,23 @@ N100 M30
 
 
 def plc(cfg: Path, *args: str, timeout: float = 30) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "liftd", "plc", "-c", str(cfg), *args],
-                          capture_output=True, text=True, timeout=timeout, check=False)  # fmt: skip
+    return subprocess.run(
+        [sys.executable, "-m", "liftd", "plc", "-c", str(cfg), *args],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        check=False,
+    )
 
 
 def healthcheck(cfg: Path, *args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "liftd", "healthcheck", "-c", str(cfg), *args],
-                          capture_output=True, text=True, timeout=30, check=False)  # fmt: skip
+    return subprocess.run(
+        [sys.executable, "-m", "liftd", "healthcheck", "-c", str(cfg), *args],
+        capture_output=True,
+        text=True,
+        timeout=30,
+        check=False,
+    )
 
 
 def rising_edges_s(rows: list[dict[str, str]], column: str) -> list[float]:
@@ -62,12 +72,22 @@ def test_plc_sees_every_lift_and_its_writes_reach_the_loop(tmp_path: Path) -> No
     d = Daemon(cfg, "--trace", str(trace))
     try:
         port = d.ready()
-        r = plc(cfg, "--host", f"127.0.0.1:{port}", "--start", "--override", "0:50",
-                "--duration", "3", "--json")  # fmt: skip
+        r = plc(
+            cfg,
+            "--host",
+            f"127.0.0.1:{port}",
+            "--start",
+            "--override",
+            "0:50",
+            "--duration",
+            "3",
+            "--json",
+        )
         assert r.returncode == 0, r.stderr
         # a hold that outlasts the PLC: released when it exits, as it found it
-        held = plc(cfg, "--host", f"127.0.0.1:{port}", "--feedhold", "0:100", "--duration", "0.3",
-                   "--json")  # fmt: skip
+        held = plc(
+            cfg, "--host", f"127.0.0.1:{port}", "--feedhold", "0:100", "--duration", "0.3", "--json"
+        )
         assert held.returncode == 0, held.stderr
         after = plc(cfg, "--host", f"127.0.0.1:{port}", "--duration", "0.1", "--json")
         assert after.returncode == 0, after.stderr
@@ -76,15 +96,38 @@ def test_plc_sees_every_lift_and_its_writes_reach_the_loop(tmp_path: Path) -> No
         conn.open()
         try:
             conn.write_by_name("PLC.ch1.feed_hold", True, pyads.PLCTYPE_BOOL)
-            later = plc(cfg, "--host", f"127.0.0.1:{port}", "--feedhold", "5:1", "--override",
-                        "5:80", "--duration", "0.3", "--json")  # fmt: skip
+            later = plc(
+                cfg,
+                "--host",
+                f"127.0.0.1:{port}",
+                "--feedhold",
+                "5:1",
+                "--override",
+                "5:80",
+                "--duration",
+                "0.3",
+                "--json",
+            )
             assert later.returncode == 0, later.stderr
             assert conn.read_by_name("PLC.ch1.feed_hold") is True
             conn.write_by_name("PLC.ch1.feed_hold", False, pyads.PLCTYPE_BOOL)
             # stopped by a supervisor's SIGTERM inside its hold: released as on Ctrl-C
-            proc = subprocess.Popen([sys.executable, "-m", "liftd", "plc", "-c", str(cfg), "--host",
-                                     f"127.0.0.1:{port}", "--feedhold", "0:100", "--json"],
-                                    stdout=subprocess.DEVNULL)  # fmt: skip
+            proc = subprocess.Popen(
+                [
+                    sys.executable,
+                    "-m",
+                    "liftd",
+                    "plc",
+                    "-c",
+                    str(cfg),
+                    "--host",
+                    f"127.0.0.1:{port}",
+                    "--feedhold",
+                    "0:100",
+                    "--json",
+                ],
+                stdout=subprocess.DEVNULL,
+            )
             try:
                 assert wait_for(lambda: conn.read_by_name("PLC.ch1.feed_hold") is True, 10)
                 proc.send_signal(signal.SIGTERM)
@@ -102,10 +145,15 @@ def test_plc_sees_every_lift_and_its_writes_reach_the_loop(tmp_path: Path) -> No
     assert writes == [("PLC.ch1.override", 500), ("PLC.ch1.start", 1), ("PLC.ch1.override", 1000)]
     hold = [json.loads(line) for line in held.stdout.splitlines()]
     assert [(rec["write"], rec["value"]) for rec in hold if "write" in rec] == [
-        ("PLC.ch1.feed_hold", 1), ("PLC.ch1.feed_hold", 0)]  # fmt: skip
+        ("PLC.ch1.feed_hold", 1),
+        ("PLC.ch1.feed_hold", 0),
+    ]
     assert [rec["to"] for rec in hold if rec.get("object") == "feed_hold"][:2] == [0, 1]
-    assert [rec["to"] for rec in map(json.loads, after.stdout.splitlines())
-            if rec.get("object") == "feed_hold"] == [0]  # fmt: skip
+    assert [
+        rec["to"]
+        for rec in map(json.loads, after.stdout.splitlines())
+        if rec.get("object") == "feed_hold"
+    ] == [0]
     quiet = [json.loads(line) for line in later.stdout.splitlines()]
     assert not [rec for rec in quiet if "write" in rec]  # nothing before its first step
     assert [rec["to"] for rec in quiet if rec.get("object") == "feed_hold"] == [1]
@@ -177,8 +225,12 @@ def test_with_m_ack_plc_liftd_plc_acknowledges_each_m_function(tmp_path: Path) -
     and the channel waited for ever)."""
     program = tmp_path / "m.nc"
     program.write_text("N10 G01 X10 F6000\nN20 M4\nN30 G01 X20\nN40 M8\nN50 G01 X30\nN60 M30\n")
-    cfg = write_config(tmp_path, program_file=str(program), program={"autostart": False},
-                       plc={"m_ack": "plc", "m_ack_delay_ms": 50})  # fmt: skip
+    cfg = write_config(
+        tmp_path,
+        program_file=str(program),
+        program={"autostart": False},
+        plc={"m_ack": "plc", "m_ack_delay_ms": 50},
+    )
     d = Daemon(cfg)
     try:
         port = d.ready()

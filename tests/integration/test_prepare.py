@@ -13,12 +13,12 @@ from pathlib import Path
 import pyads
 import pytest
 
-from bench.gen import nesting_program
 from liftd.ads import wire
 from liftd.ads.client import RawClient
 from liftd.ads.wire import net_id_bytes
 from liftd.runtime.geo_loop import INPUTS_PER_CYCLE
 from tests.support.daemon import Daemon, write_config
+from tests.support.programs import nesting_program
 from tests.support.wait import wait_for
 
 # wall-clock latencies asserted: run alone, after the parallel part of `make test`
@@ -64,8 +64,11 @@ def test_a_start_after_reset_waits_for_its_run_built_off_the_cycle(tmp_path: Pat
         assert prepared < restart  # the START waited for its run
         rec = logs[prepared]
         assert rec["value"] > 0.0 and str(rec["text"]).startswith("run from ")
-        start = next(r for r in logs[reset:] if r.get("event") == "geo.plc_input"
-                     and r.get("text") == "start")  # fmt: skip
+        start = next(
+            r
+            for r in logs[reset:]
+            if r.get("event") == "geo.plc_input" and r.get("text") == "start"
+        )
         assert start["t"] < rec["t"]  # read while the run was still being built: held
         slow = [r for r in logs[reset:] if r.get("event") == "geo.compute_over"]
         starts = [r for r in slow if "geo.program_start" in kinds(r) or "reload" in kinds(r)]
@@ -104,8 +107,11 @@ def test_a_burst_of_plc_writes_is_read_a_bounded_number_a_cycle(tmp_path: Path) 
             plc.close()
 
         def writes_logged() -> list[dict[str, object]]:
-            return [r for r in list(d.logs) if r.get("event") == "geo.plc_input"
-                    and r.get("text") == "override"]  # fmt: skip
+            return [
+                r
+                for r in list(d.logs)
+                if r.get("event") == "geo.plc_input" and r.get("text") == "override"
+            ]
 
         assert wait_for(lambda: len(writes_logged()) >= n, 10)  # the log trails the objects
         writes = writes_logged()

@@ -45,18 +45,24 @@ def test_pyads_and_twincat_snippets_work_against_the_daemon(tmp_path: Path) -> N
         d.ready()
         code = block("python", "**pyads**")
         code = code.replace(SHIPPED_ADDRESS, d.address).replace(SHIPPED_NET_ID, d.net_id)
-        run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                             timeout=30, check=False)  # fmt: skip
+        run = subprocess.run(
+            [sys.executable, "-c", code], capture_output=True, text=True, timeout=30, check=False
+        )
         assert run.returncode == 0, run.stderr
-        assert run.stdout.split() in (["False", "False"], ["True", "False"], ["True", "True"],
-                                      ["False", "True"])  # fmt: skip
+        assert run.stdout.split() in (
+            ["False", "False"],
+            ["True", "False"],
+            ["True", "True"],
+            ["False", "True"],
+        )
         assert d.read_symbol("GEO.ch1.override_requested", "<H") == 500  # the snippet's write
 
         st = block("iecst", "**TwinCAT 3 PLC**")
         fields = dict(re.findall(r"(\w+)\s*:=\s*([^,;]+?)\s*(?:,|\);)", st))
         assert fields["NETID"].strip("'") == SHIPPED_NET_ID and fields["PORT"] == "551"
-        group, offset = (int(fields[k].replace("16#", "").replace("_", ""), 16)
-                         for k in ("IDXGRP", "IDXOFFS"))  # fmt: skip
+        group, offset = (
+            int(fields[k].replace("16#", "").replace("_", ""), 16) for k in ("IDXGRP", "IDXOFFS")
+        )
         assert fields["LEN"] == "SIZEOF(bLiftActive)"  # BOOL: 1 byte
         plc = pyads.Connection(d.net_id, int(fields["PORT"]), d.address)
         plc.open()

@@ -29,8 +29,12 @@ ERROR_PROGRAM = (  # an unknown word inside a lift range: exit 1, the range open
 def liftd(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
         [sys.executable, "-m", "liftd", *args],
-        capture_output=True, text=True, timeout=600, check=False, cwd=cwd,
-    )  # fmt: skip
+        capture_output=True,
+        text=True,
+        timeout=600,
+        check=False,
+        cwd=cwd,
+    )
 
 
 @pytest.fixture(scope="module")

@@ -60,8 +60,13 @@ def test_hello_has_every_object_and_updates_follow(daemon: Daemon) -> None:
     async def go() -> None:
         page = await open_page(ui_url(daemon))
         symbols = {o["symbol"] for o in page.hello["objects"]}
-        assert {"GEO.ch1.Z.lift_active", "GEO.ch1.Z.lift_count", "GEO.timing.lateness_max_us",
-                "GEO.ads.connections", "PLC.ch1.override"} <= symbols  # fmt: skip
+        assert {
+            "GEO.ch1.Z.lift_active",
+            "GEO.ch1.Z.lift_count",
+            "GEO.timing.lateness_max_us",
+            "GEO.ads.connections",
+            "PLC.ch1.override",
+        } <= symbols
         first = page.values["GEO.cycle"]
         end = time.monotonic() + 5
         while page.values["GEO.cycle"] == first and time.monotonic() < end:
@@ -105,12 +110,18 @@ def test_control_round_trip_and_bad_values(daemon: Daemon) -> None:
         page = await open_page(ui_url(daemon))
         await page.send({"op": "auth", "token": TOKEN})
         assert (await page.reply("auth"))["ok"] is True
-        for i, (symbol, value, code) in enumerate([
-            ("PLC.ch1.override", 5000, "0x706"), ("PLC.ch1.override", True, "0x706"),
-            ("PLC.ch1.feed_hold", 1, "0x706"), ("GEO.ch1.line", 3, "only PLC"),
-            ("PLC.ch1.nothing", 1, "0x710"), ("PLC.ch1.override", "x", "value"),
-            ("PLC.ch1.override", 1.5, "value"), (7, 1, "symbol"),
-        ]):  # fmt: skip
+        for i, (symbol, value, code) in enumerate(
+            [
+                ("PLC.ch1.override", 5000, "0x706"),
+                ("PLC.ch1.override", True, "0x706"),
+                ("PLC.ch1.feed_hold", 1, "0x706"),
+                ("GEO.ch1.line", 3, "only PLC"),
+                ("PLC.ch1.nothing", 1, "0x710"),
+                ("PLC.ch1.override", "x", "value"),
+                ("PLC.ch1.override", 1.5, "value"),
+                (7, 1, "symbol"),
+            ]
+        ):
             await page.send({"op": "write", "id": i, "symbol": symbol, "value": value})
             r = await page.reply("result")
             assert r["ok"] is False and code in r["detail"], (symbol, value, r)
@@ -146,8 +157,11 @@ def test_fuzz_malformed_oversized_and_many(daemon: Daemon) -> None:
             "\u0000" * 100,
         ]:
             await page.ws.send_str(bad)
-            r = await page.reply("error") if "auth" not in bad and "write" not in bad else (
-                await page.reply("auth" if "auth" in bad else "result"))  # fmt: skip
+            r = (
+                await page.reply("error")
+                if "auth" not in bad and "write" not in bad
+                else (await page.reply("auth" if "auth" in bad else "result"))
+            )
             assert r.get("ok") in (None, False), (bad, r)
         await page.ws.send_bytes(b"\x00\x01")
         assert (await page.reply("error"))["detail"] == "binary message"
@@ -228,8 +242,9 @@ def test_a_page_that_never_reads_is_dropped(daemon: Daemon) -> None:
     peer = "{}:{}".format(*sock.getsockname())
 
     def dropped() -> bool:
-        return any(r.get("event") == "ui.page_dropped" and r.get("peer") == peer
-                   for r in list(daemon.logs))  # fmt: skip
+        return any(
+            r.get("event") == "ui.page_dropped" and r.get("peer") == peer for r in list(daemon.logs)
+        )
 
     try:
         end = time.monotonic() + 60
@@ -268,8 +283,9 @@ def test_page_writes_keep_run_trace_equal_to_simulate(tmp_path: Path) -> None:
     """Override and feed hold from the page while `run --trace` records the demo: the loop
     logs the cycle each took effect in (geo.plc_input), and `simulate` with that schedule
     gives the same trace, row for row, as with writes over ADS (test_daemon.py)."""
-    cfg = write_config(tmp_path, ui={"enabled": True, "port": 0, "control": True, "token": TOKEN},
-                       rt=QUIET_RT)  # fmt: skip
+    cfg = write_config(
+        tmp_path, ui={"enabled": True, "port": 0, "control": True, "token": TOKEN}, rt=QUIET_RT
+    )
     trace = tmp_path / "run.csv"
     d = Daemon(cfg, "--trace", str(trace))
     try:
@@ -298,8 +314,11 @@ def test_page_writes_keep_run_trace_equal_to_simulate(tmp_path: Path) -> None:
 def test_simulate_view_serves_the_runs_trace(tmp_path: Path) -> None:
     cfg = write_config(tmp_path, ui={"port": 0})
     demo = cfg.read_text().split('file = "')[1].split('"')[0]
-    proc = subprocess.Popen([sys.executable, "-m", "liftd", "simulate", demo, "-c", str(cfg),
-                             "--view"], stdout=subprocess.PIPE, text=True)  # fmt: skip
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "liftd", "simulate", demo, "-c", str(cfg), "--view"],
+        stdout=subprocess.PIPE,
+        text=True,
+    )
     try:
         assert proc.stdout is not None
         url = None
@@ -327,13 +346,20 @@ def test_liftd_view_of_two_channels_and_a_sibling_left_out(tmp_path: Path) -> No
     config = str(REPO / "config" / "liftd-2ch.toml")
     head1 = str(REPO / "config" / "programs" / "two-head" / "head1.nc")
     trace = tmp_path / "t.csv"
-    subprocess.run([sys.executable, "-m", "liftd", "simulate", head1, "-c", config, "--trace",
-                    str(trace)], check=True, capture_output=True, timeout=120)  # fmt: skip
+    subprocess.run(
+        [sys.executable, "-m", "liftd", "simulate", head1, "-c", config, "--trace", str(trace)],
+        check=True,
+        capture_output=True,
+        timeout=120,
+    )
     for sibling in (True, False):
         if not sibling:
             (tmp_path / "t.ch2.csv").unlink()
-        proc = subprocess.Popen([sys.executable, "-m", "liftd", "view", str(trace), "-c", config,
-                                 "--port", "0"], stdout=subprocess.PIPE, text=True)  # fmt: skip
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "liftd", "view", str(trace), "-c", config, "--port", "0"],
+            stdout=subprocess.PIPE,
+            text=True,
+        )
         try:
             assert proc.stdout is not None
             found = re.search(r"http://\S+/", proc.stdout.readline())

@@ -92,15 +92,19 @@ def test_the_override_slider_reaches_the_geo_task(daemon: Daemon) -> None:
         page.fill(".control .token", TOKEN)
         page.click(".control .auth button")
         page.wait_for_selector(".control:not(.locked)")
-        page.eval_on_selector('[data-symbol="PLC.ch1.override"]',
-                              "el => { el.value = 450; el.dispatchEvent(new Event('input')); }")  # fmt: skip
+        page.eval_on_selector(
+            '[data-symbol="PLC.ch1.override"]',
+            "el => { el.value = 450; el.dispatchEvent(new Event('input')); }",
+        )
         end = time.monotonic() + 10
         while daemon.read_symbol("GEO.ch1.override_requested", "<H") != 450:
             assert time.monotonic() < end
             time.sleep(0.05)
         page.wait_for_selector('[data-symbol="GEO.ch1.override_requested"][data-value="450"]')
-        page.eval_on_selector('[data-symbol="PLC.ch1.override"]',
-                              "el => { el.value = 1000; el.dispatchEvent(new Event('input')); }")  # fmt: skip
+        page.eval_on_selector(
+            '[data-symbol="PLC.ch1.override"]',
+            "el => { el.value = 1000; el.dispatchEvent(new Event('input')); }",
+        )
         page.wait_for_selector('[data-symbol="GEO.ch1.override_requested"][data-value="1000"]')
 
 
@@ -169,10 +173,17 @@ def test_liftd_view_replays_a_trace(tmp_path: Path) -> None:
     trace = tmp_path / "demo.csv"
     config = str(REPO / "config" / "liftd.toml")
     demo = str(REPO / "config" / "programs" / "demo.nc")
-    subprocess.run([sys.executable, "-m", "liftd", "simulate", demo, "-c", config, "--trace",
-                    str(trace)], check=True, capture_output=True, timeout=120)  # fmt: skip
-    proc = subprocess.Popen([sys.executable, "-m", "liftd", "view", str(trace), "-c", config,
-                             "--port", "0"], stdout=subprocess.PIPE, text=True)  # fmt: skip
+    subprocess.run(
+        [sys.executable, "-m", "liftd", "simulate", demo, "-c", config, "--trace", str(trace)],
+        check=True,
+        capture_output=True,
+        timeout=120,
+    )
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "liftd", "view", str(trace), "-c", config, "--port", "0"],
+        stdout=subprocess.PIPE,
+        text=True,
+    )
     try:
         assert proc.stdout is not None
         line = proc.stdout.readline()
@@ -184,12 +195,17 @@ def test_liftd_view_replays_a_trace(tmp_path: Path) -> None:
             page.wait_for_selector("body[data-ready=true][data-mode=trace]")
             assert page.locator("#timeline").is_visible()
             assert page.get_attribute(f'[data-symbol="{LIFT}"]', "data-value") == "false"
-            assert page.get_attribute('[data-symbol="GEO.timing.lateness_max_us"]',
-                                      "data-missing") == "true"  # fmt: skip
+            assert (
+                page.get_attribute('[data-symbol="GEO.timing.lateness_max_us"]', "data-missing")
+                == "true"
+            )
             t_lift = _first_lift(trace)
             t1 = float(page.inner_text("#clock").split("/")[1].split()[0])
-            page.eval_on_selector("#scrub", f"el => {{ el.value = {round(1000 * t_lift / t1) + 2};"
-                                  " el.dispatchEvent(new Event('input')); }")  # fmt: skip
+            page.eval_on_selector(
+                "#scrub",
+                f"el => {{ el.value = {round(1000 * t_lift / t1) + 2};"
+                " el.dispatchEvent(new Event('input')); }",
+            )
             page.wait_for_selector(f'[data-symbol="{LIFT}"][data-value="true"]', timeout=10000)
             page.click("#play")
             cycle = '[data-symbol="GEO.cycle"]'

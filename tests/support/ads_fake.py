@@ -18,8 +18,13 @@ from tests.support.channel import make_channel
 
 NET = net_id_bytes("127.0.0.1.1.1")
 FRAME = 4096  # the server's max_frame_bytes; the service's reply cap follows from it
-LIMITS = ServiceLimits(max_handles=8, max_notifications=6, max_sum_subcommands=500,
-                       max_notification_payload=FRAME - 32, max_reply_payload=FRAME - 32)  # fmt: skip
+LIMITS = ServiceLimits(
+    max_handles=8,
+    max_notifications=6,
+    max_sum_subcommands=500,
+    max_notification_payload=FRAME - 32,
+    max_reply_payload=FRAME - 32,
+)
 QUEUE = 32
 
 
@@ -60,6 +65,11 @@ def make_server() -> AdsServer:
     catalog = Catalog(make_channel())
     view = GeoView(snapshot(), LoopStats(cycles=1))  # the loop after its first cycle
     provider = CncProvider(catalog, lambda: view, lambda w: None)
-    cfg = ServerConfig(host="127.0.0.1", port=0, net_ids=frozenset({NET}),
-                       max_frame_bytes=FRAME, write_queue_frames=QUEUE)  # fmt: skip
+    cfg = ServerConfig(
+        host="127.0.0.1",
+        port=0,
+        net_ids=frozenset({NET}),
+        max_frame_bytes=FRAME,
+        write_queue_frames=QUEUE,
+    )
     return AdsServer(cfg, AdsService(provider, LIMITS), structlog.wrap_logger(Silent()))

@@ -26,13 +26,31 @@ _net = itertools.count(10)
 
 def snapshot(**kw: Any) -> GeoSnapshot:
     base = GeoSnapshot(
-        cycle=1, t=0.001, state=ChannelState.ACTIVE, line=7, segment=2,
-        positions=(0.1, 0.02, 0.04), v_path=0.25, override=1.0, override_requested=1.0,
-        override_max=2.0, feed_hold=False, lift_active=False, lift_suppressed=False,
-        lift_phase=LiftPhase.NONE, lift_vz=0.0, lift_az=0.0, m_pending=-1, error_id=0,
-        error_line=0, events=(), v_block_max=0.4, v_block_end=0.1, lift_axis=2,
+        cycle=1,
+        t=0.001,
+        state=ChannelState.ACTIVE,
+        line=7,
+        segment=2,
+        positions=(0.1, 0.02, 0.04),
+        v_path=0.25,
+        override=1.0,
+        override_requested=1.0,
+        override_max=2.0,
+        feed_hold=False,
+        lift_active=False,
+        lift_suppressed=False,
+        lift_phase=LiftPhase.NONE,
+        lift_vz=0.0,
+        lift_az=0.0,
+        m_pending=-1,
+        error_id=0,
+        error_line=0,
+        events=(),
+        v_block_max=0.4,
+        v_block_end=0.1,
+        lift_axis=2,
         lift_counts=(0, 0, 4),
-    )  # fmt: skip
+    )
     return base._replace(**kw)
 
 

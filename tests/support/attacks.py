@@ -18,7 +18,7 @@ from liftd.ads.client import RawClient
 from liftd.ads.wire import net_id_bytes
 from tests.support.daemon import Daemon
 
-ATTACK_ADS = {
+ATTACK_ADS: dict[str, float] = {
     "max_connections": 64,
     "max_connections_per_ip": 64,
     "max_frame_bytes": 65536,
@@ -134,7 +134,7 @@ def notifications_beyond_cap(d: Daemon) -> str:
     spec = struct.pack("<IIIIII16s", 0x121301, 0x30095, 1, 4, 0, 100_000, bytes(16))
     codes = [
         wire.decode_add_notification_response(c.request(6, spec).payload)[0]
-        for _ in range(ATTACK_ADS["max_notifications_per_connection"] + 1)
+        for _ in range(int(ATTACK_ADS["max_notifications_per_connection"]) + 1)
     ]
     c.close()
     return f"{codes.count(0)} ok, then ADS 0x{codes[-1]:X}"
@@ -142,7 +142,7 @@ def notifications_beyond_cap(d: Daemon) -> str:
 
 def sum_beyond_cap(d: Daemon) -> str:
     c = client(d)
-    n = ATTACK_ADS["max_sum_subcommands"] + 1
+    n = int(ATTACK_ADS["max_sum_subcommands"]) + 1
     body = LIFT * n
     req = struct.pack("<IIII", 0xF080, n, 5 * n, len(body)) + body
     outcome = error_of(c.request(9, req))
@@ -189,7 +189,7 @@ def upload_notifications_unread(d: Daemon) -> str:
     c = client(d, rcvbuf=4096)
     _, info = c.read(0xF00C, 0, 8)
     size = struct.unpack("<II", info)[1]
-    n = ATTACK_ADS["max_notifications_per_connection"]
+    n = int(ATTACK_ADS["max_notifications_per_connection"])
     entry = struct.pack("<IIIIII16s", 0xF00B, 0, 0xFFFFFFFF, 3, 0, 10_000, bytes(16))
     reply = c.request(9, struct.pack("<IIII", 0xF085, n, 8 * n, 40 * n) + entry * n)
     code, data = wire.decode_read_response(reply.payload)
@@ -237,8 +237,9 @@ def plc_command_flood(d: Daemon) -> str:
         heads += struct.pack("<III", *_address(c, name), 1)
         data += b"\x01"
     for _ in range(200):
-        reply = c.request(9, struct.pack("<IIII", 0xF081, 256, 4 * 256, len(heads + data))
-                          + heads + data)  # fmt: skip
+        reply = c.request(
+            9, struct.pack("<IIII", 0xF081, 256, 4 * 256, len(heads + data)) + heads + data
+        )
         code, results = wire.decode_read_response(reply.payload)
         codes.add(code)
         codes.update(struct.unpack("<256I", results))
@@ -291,16 +292,26 @@ CASES = [
         foreign_addresses,
         "NetId AMS 0x7, port AMS 0x6, command AMS 0x8",
     ),
-    Case("sum read of one sub-command asking 2 GiB", sum_read_gigabytes(0xF080, 2 << 30),
-         "ADS 0x70A"),
-    Case("sum read-ex of one sub-command asking 4 GiB",
-         sum_read_gigabytes(0xF083, 0xFFFFFFF0), "ADS 0x70A"),
-    Case("notification sum on the symbol upload, client stops reading",
-         upload_notifications_unread, "closed"),
-    Case("60 kB frames routed to a registered port that does not read",
-         routed_to_a_reader_that_stalls, "receiver closed, sender served: ok"),
+    Case(
+        "sum read of one sub-command asking 2 GiB", sum_read_gigabytes(0xF080, 2 << 30), "ADS 0x70A"
+    ),
+    Case(
+        "sum read-ex of one sub-command asking 4 GiB",
+        sum_read_gigabytes(0xF083, 0xFFFFFFF0),
+        "ADS 0x70A",
+    ),
+    Case(
+        "notification sum on the symbol upload, client stops reading",
+        upload_notifications_unread,
+        "closed",
+    ),
+    Case(
+        "60 kB frames routed to a registered port that does not read",
+        routed_to_a_reader_that_stalls,
+        "receiver closed, sender served: ok",
+    ),
     Case("200 sum writes of 128 × (RESET, START)", plc_command_flood, "answered ok, 0x708"),
-]  # fmt: skip
+]
 
 
 def probe_ms(d: Daemon, n: int = 200) -> float:

@@ -1,4 +1,4 @@
-"""Headless Chromium for the live view's tests: Debian's `chromium` (make tools installs it)
+"""Headless Chromium for the live view's tests: Debian's `chromium` (`.ci/run` installs it)
 driven by Playwright with `executable_path`; no browser is downloaded. Skips with the reason
 where either is missing."""
 
@@ -14,13 +14,22 @@ from typing import Any
 import pytest
 
 CHROMIUM = "/usr/bin/chromium"
-FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-         "--disable-background-networking", "--disable-component-update", "--disable-sync"]  # fmt: skip
+FLAGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+]
 
 
 def chromium_version() -> str:
-    out = subprocess.run([CHROMIUM, "--version"], capture_output=True, text=True, timeout=30,
-                         check=False)  # fmt: skip
+    out = subprocess.run(
+        [CHROMIUM, "--version"], capture_output=True, text=True, timeout=30, check=False
+    )
     return out.stdout.strip()
 
 
@@ -28,14 +37,19 @@ def chromium_version() -> str:
 def browser() -> Iterator[Any]:
     """A Playwright Chromium browser on a fresh user-data dir."""
     if shutil.which(CHROMIUM) is None:
-        pytest.skip(f"no {CHROMIUM}: `make tools` installs Debian's chromium as root")
+        pytest.skip(f"no {CHROMIUM}: `.ci/run` installs Debian's chromium (as root)")
     sync_api = pytest.importorskip("playwright.sync_api", reason="pip install playwright")
-    with tempfile.TemporaryDirectory(prefix="liftd-chromium-") as profile, \
-            sync_api.sync_playwright() as p:  # fmt: skip
+    with (
+        tempfile.TemporaryDirectory(prefix="liftd-chromium-") as profile,
+        sync_api.sync_playwright() as p,
+    ):
         ctx = p.chromium.launch_persistent_context(
-            profile, executable_path=CHROMIUM, headless=True, args=FLAGS,
+            profile,
+            executable_path=CHROMIUM,
+            headless=True,
+            args=FLAGS,
             viewport={"width": 1400, "height": 1000},
-        )  # fmt: skip
+        )
         try:
             yield ctx
         finally:

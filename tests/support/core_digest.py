@@ -11,12 +11,12 @@ import io
 import json
 from collections.abc import Iterator
 
-from bench.gen import nesting_program
-from bench.stress_cases import scenario, wide_scenario
 from liftd.cnc.params import LiftMethod
 from liftd.cnc.plc import Schedule
 from tests.support.closed_loop import run_task
 from tests.support.paths import REPO
+from tests.support.programs import nesting_program
+from tests.support.scenarios import scenario, wide_scenario
 
 # random closed-loop runs: the wide ones that once found late lifts, and plain ones with both
 # lift methods; the demo; a nesting job under an override schedule with feed holds

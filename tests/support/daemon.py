@@ -86,15 +86,21 @@ def runtime_env(tmp: Path) -> dict[str, str]:
 
 class Daemon:
     def __init__(
-        self, config: Path, *args: str, env: dict[str, str] | None = None,
+        self,
+        config: Path,
+        *args: str,
+        env: dict[str, str] | None = None,
         wrapper: list[str] | None = None,
-    ) -> None:  # fmt: skip
+    ) -> None:
         """`wrapper`: a command that execs the rest (e.g. to set a process attribute first)."""
         full_env = {**os.environ, "PYTHONUNBUFFERED": "1", **(env or {})}
         self.proc = subprocess.Popen(
             [*(wrapper or []), sys.executable, "-m", "liftd", "run", "-c", str(config), *args],
-            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=full_env,
-        )  # fmt: skip
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            env=full_env,
+        )
         self.logs: list[dict[str, Any]] = []
         self.raw: list[str] = []
         self._reader = threading.Thread(target=self._read, daemon=True)

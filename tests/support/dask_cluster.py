@@ -20,8 +20,9 @@ START_TIMEOUT_S = 120.0  # the shared 2-vCPU VM under load: a scheduler took 14 
 
 def can_hide() -> bool:
     """`unshare -m` with a tmpfs mount works here (root on Linux)."""
-    probe = subprocess.run(["unshare", "-m", "mount", "-t", "tmpfs", "none", "/mnt"],
-                           capture_output=True, check=False)  # fmt: skip
+    probe = subprocess.run(
+        ["unshare", "-m", "mount", "-t", "tmpfs", "none", "/mnt"], capture_output=True, check=False
+    )
     return probe.returncode == 0
 
 
@@ -38,10 +39,21 @@ class DaskCluster:
         self.workers: list[subprocess.Popen[bytes]] = []  # alive, as far as we know
         self.started = 0
         self.scheduler = self._spawn(
-            ["distributed.cli.dask_scheduler", "--host", "127.0.0.1", "--port", "0",
-             "--no-dashboard", "--scheduler-file", str(self.file), "--idle-timeout", "600"],
-            root, "scheduler",
-        )  # fmt: skip
+            [
+                "distributed.cli.dask_scheduler",
+                "--host",
+                "127.0.0.1",
+                "--port",
+                "0",
+                "--no-dashboard",
+                "--scheduler-file",
+                str(self.file),
+                "--idle-timeout",
+                "600",
+            ],
+            root,
+            "scheduler",
+        )
         deadline = time.monotonic() + START_TIMEOUT_S
         while not self.file.exists() or not self.file.read_text().strip().endswith("}"):
             if self.scheduler.poll() is not None or time.monotonic() > deadline:
@@ -54,11 +66,17 @@ class DaskCluster:
         cmd = [sys.executable, "-m", *argv]
         if self.hide is not None and name.startswith("worker"):
             hide = shlex.quote(str(self.hide))
-            cmd = ["unshare", "-m", "sh", "-c",
-                   f"mount -t tmpfs none {hide} && exec {shlex.join(cmd)}"]  # fmt: skip
+            cmd = [
+                "unshare",
+                "-m",
+                "sh",
+                "-c",
+                f"mount -t tmpfs none {hide} && exec {shlex.join(cmd)}",
+            ]
         log = open(self.root / f"{name}.log", "wb")  # noqa: SIM115 (the process's stderr)
-        proc = subprocess.Popen(cmd, cwd=cwd, env=self.env, stdout=log, stderr=log,
-                                start_new_session=True)  # fmt: skip
+        proc = subprocess.Popen(
+            cmd, cwd=cwd, env=self.env, stdout=log, stderr=log, start_new_session=True
+        )
         self.procs.append(proc)
         return proc
 
@@ -73,10 +91,21 @@ class DaskCluster:
         k = self.started
         cwd = self.root / f"worker{k}"
         cwd.mkdir()
-        argv = ["distributed.cli.dask_worker", "--scheduler-file", str(self.file),
-                "--nthreads", "1", "--no-dashboard", "--host", "127.0.0.1",
-                "--local-directory", str(cwd), "--death-timeout", "60",
-                "--nanny" if nanny else "--no-nanny"]  # fmt: skip
+        argv = [
+            "distributed.cli.dask_worker",
+            "--scheduler-file",
+            str(self.file),
+            "--nthreads",
+            "1",
+            "--no-dashboard",
+            "--host",
+            "127.0.0.1",
+            "--local-directory",
+            str(cwd),
+            "--death-timeout",
+            "60",
+            "--nanny" if nanny else "--no-nanny",
+        ]
         if preload is not None:
             argv += ["--preload", str(preload)]
         proc = self._spawn(argv, cwd, f"worker{k}")

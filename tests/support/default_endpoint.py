@@ -18,8 +18,13 @@ DEFAULT_PORT, DEFAULT_NET_ID = 48898, "127.0.0.1.1.1"
 def private_network() -> str | None:
     """None when a private network namespace can be had here, else why not."""
     try:
-        r = subprocess.run(["unshare", "-rn", "ip", "link", "set", "lo", "up"],
-                           capture_output=True, text=True, timeout=10, check=False)  # fmt: skip
+        r = subprocess.run(
+            ["unshare", "-rn", "ip", "link", "set", "lo", "up"],
+            capture_output=True,
+            text=True,
+            timeout=10,
+            check=False,
+        )
     except (OSError, subprocess.TimeoutExpired) as exc:
         return f"unshare/ip: {exc}"
     return None if r.returncode == 0 else f"unshare -rn: {r.stderr.strip()}"
@@ -35,8 +40,17 @@ def main(config: Path) -> None:
         state = d.read_symbol("GEO.ch1.state", "<I")
     finally:
         code = d.stop()
-    print(json.dumps({"port": port, "state": state, "exit": code, "pid": d.proc.pid,
-                      "stderr": "".join(d.raw)}))  # fmt: skip
+    print(
+        json.dumps(
+            {
+                "port": port,
+                "state": state,
+                "exit": code,
+                "pid": d.proc.pid,
+                "stderr": "".join(d.raw),
+            }
+        )
+    )
 
 
 if __name__ == "__main__":

@@ -32,8 +32,13 @@ class PureCore:
         env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
         out = subprocess.run(
             [sys.executable, "-c", prologue + code],
-            capture_output=True, text=True, timeout=timeout, cwd=self.root, env=env, check=False,
-        )  # fmt: skip
+            capture_output=True,
+            text=True,
+            timeout=timeout,
+            cwd=self.root,
+            env=env,
+            check=False,
+        )
         if out.returncode != 0:
             raise AssertionError(f"pure core run failed:\n{out.stderr}")
         return out.stdout

@@ -11,19 +11,30 @@ from pathlib import Path
 from typing import Any
 
 # (seconds to wait, symbol, value) written during the demo
-WRITES = [(1.0, "PLC.ch1.override", 500), (1.5, "PLC.ch1.feed_hold", True),
-          (0.4, "PLC.ch1.feed_hold", False), (1.0, "PLC.ch1.override", 1250)]  # fmt: skip
+WRITES = [
+    (1.0, "PLC.ch1.override", 500),
+    (1.5, "PLC.ch1.feed_hold", True),
+    (0.4, "PLC.ch1.feed_hold", False),
+    (1.0, "PLC.ch1.override", 1250),
+]
 
 
-def simulate_logged_writes(logs: list[dict[str, Any]], cfg: Path, tmp: Path
-                           ) -> tuple[list[str], int]:  # fmt: skip
+def simulate_logged_writes(
+    logs: list[dict[str, Any]], cfg: Path, tmp: Path
+) -> tuple[list[str], int]:
     """The trace `simulate` writes with the writes `logs` show took effect, and the cycle of
     the last write."""
-    inputs = [(round(r["t"] * 1000), r["text"], r["value"]) for r in logs
-              if r.get("event") == "geo.plc_input"]  # fmt: skip
+    inputs = [
+        (round(r["t"] * 1000), r["text"], r["value"])
+        for r in logs
+        if r.get("event") == "geo.plc_input"
+    ]
     assert [(name, value) for _, name, value in inputs] == [
-        ("override", 0.5), ("feed_hold", 1.0), ("feed_hold", 0.0), ("override", 1.25)
-    ]  # fmt: skip
+        ("override", 0.5),
+        ("feed_hold", 1.0),
+        ("feed_hold", 0.0),
+        ("override", 1.25),
+    ]
     (k_ov1, _, _), (k_hold, _, _), (k_free, _, _), (k_ov2, _, _) = inputs
 
     def at(k: int) -> str:  # between cycle k − 1 and cycle k
@@ -31,11 +42,27 @@ def simulate_logged_writes(logs: list[dict[str, Any]], cfg: Path, tmp: Path
 
     sim = tmp / "sim.csv"
     demo = Path(cfg.read_text().split('file = "')[1].split('"')[0])
-    r = subprocess.run([sys.executable, "-m", "liftd", "simulate", str(demo), "-c", str(cfg),
-                        "--override", f"{at(k_ov1)}:50,{at(k_ov2)}:125",
-                        "--feedhold", f"{at(k_hold)}:{(k_free - k_hold) / 1000:.4f}",
-                        "--trace", str(sim)], capture_output=True, text=True, timeout=120,
-                       check=False)  # fmt: skip
+    r = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "liftd",
+            "simulate",
+            str(demo),
+            "-c",
+            str(cfg),
+            "--override",
+            f"{at(k_ov1)}:50,{at(k_ov2)}:125",
+            "--feedhold",
+            f"{at(k_hold)}:{(k_free - k_hold) / 1000:.4f}",
+            "--trace",
+            str(sim),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
     assert r.returncode == 0, r.stderr
     return sim.read_text().splitlines(), k_ov2
 

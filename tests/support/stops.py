@@ -5,10 +5,10 @@ from __future__ import annotations
 
 import random
 
-from bench.stress_cases import Scenario
 from liftd.cnc.plc import Schedule, SimPlc
 from liftd.cnc.snapshot import ChannelState, Command, GeoInputs, GeoSnapshot
 from tests.support.closed_loop import run_task
+from tests.support.scenarios import Scenario
 
 
 class StopThenStart:

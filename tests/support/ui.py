@@ -18,8 +18,12 @@ from tests.support.daemon import Daemon, write_config
 
 # the tests share 2 vCPUs with other sessions' suites: no RT settings, and a stall timeout that
 # a busy minute does not reach (the daemon would exit 3 under the test)
-QUIET_RT = {"sched_fifo_priority": 0, "hold_cpu_dma_latency": False, "lock_memory": False,
-            "stall_timeout_ms": 20000}  # fmt: skip
+QUIET_RT = {
+    "sched_fifo_priority": 0,
+    "hold_cpu_dma_latency": False,
+    "lock_memory": False,
+    "stall_timeout_ms": 20000,
+}
 
 
 def hops_program(parts: int = 60) -> str:
@@ -27,8 +31,12 @@ def hops_program(parts: int = 60) -> str:
     lines = ["%hops", "N10 G90 G17 G94", "#SLOPE[TYPE=TRAPEZ]", "N20 G00 X10 Y10 Z1"]
     x = 10
     for _ in range(parts):
-        lines += [f"G01 X{x + 10} F6000", "Z[LIFT_START POS=1 POS_LIMIT=20]",
-                  f"G01 X{x + 40} F24000", "Z[LIFT_END]"]  # fmt: skip
+        lines += [
+            f"G01 X{x + 10} F6000",
+            "Z[LIFT_START POS=1 POS_LIMIT=20]",
+            f"G01 X{x + 40} F24000",
+            "Z[LIFT_END]",
+        ]
         x += 40
         if x > 1200:
             lines.append("G00 X10")
@@ -43,9 +51,13 @@ def ui_daemon(tmp: Path, *args: str, hops: bool = False, **ui: object) -> Daemon
     if hops:
         program = tmp / "hops.nc"
         program.write_text(hops_program())
-    cfg = write_config(tmp, program_file=str(program) if program else None,
-                       program={"repeat": True}, ui={"enabled": True, "port": 0, **ui},
-                       rt=QUIET_RT)  # fmt: skip
+    cfg = write_config(
+        tmp,
+        program_file=str(program) if program else None,
+        program={"repeat": True},
+        ui={"enabled": True, "port": 0, **ui},
+        rt=QUIET_RT,
+    )
     d = Daemon(cfg, *args)
     d.ready()
     return d
@@ -131,9 +143,13 @@ def never_reading(url: str) -> socket.socket:
     s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
     s.connect((host, int(port)))
     key = base64.b64encode(os.urandom(16)).decode()
-    s.sendall((f"GET /ws HTTP/1.1\r\nHost: {host}:{port}\r\nUpgrade: websocket\r\n"
-               f"Connection: Upgrade\r\nSec-WebSocket-Key: {key}\r\n"
-               "Sec-WebSocket-Version: 13\r\n\r\n").encode())  # fmt: skip
+    s.sendall(
+        (
+            f"GET /ws HTTP/1.1\r\nHost: {host}:{port}\r\nUpgrade: websocket\r\n"
+            f"Connection: Upgrade\r\nSec-WebSocket-Key: {key}\r\n"
+            "Sec-WebSocket-Version: 13\r\n\r\n"
+        ).encode()
+    )
     head = s.recv(256)
     assert head.startswith(b"HTTP/1.1 101"), head
     return s

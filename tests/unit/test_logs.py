@@ -36,8 +36,13 @@ def run(fmt: str, journal: bool = False, **env: str) -> list[str]:
         st = os.fstat(write_end)
         env = {**env, "JOURNAL_STREAM": f"{st.st_dev}:{st.st_ino}"}
     with os.fdopen(read_end) as out:
-        proc = subprocess.Popen([sys.executable, "-c", SCRIPT, fmt], stderr=write_end,
-                                env={**clean, **env}, cwd=REPO, text=True)  # fmt: skip
+        proc = subprocess.Popen(
+            [sys.executable, "-c", SCRIPT, fmt],
+            stderr=write_end,
+            env={**clean, **env},
+            cwd=REPO,
+            text=True,
+        )
         os.close(write_end)
         text = out.read()
     assert proc.wait(60) == 0, text
@@ -57,8 +62,10 @@ def test_an_inherited_journal_stream_with_stderr_elsewhere_keeps_plain_json_line
     which made every line invalid JSON (systemd.exec(5): compare device and inode)."""
     lines = run("json", JOURNAL_STREAM="8:1234")
     assert len(lines) == 3 and [json.loads(line)["event"] for line in lines] == [
-        "t.info", "t.warning", "t.error",
-    ]  # fmt: skip
+        "t.info",
+        "t.warning",
+        "t.error",
+    ]
 
 
 def test_no_colour_for_no_color_and_for_a_pipe() -> None:
@@ -102,7 +109,13 @@ print(logs.dropped(), logs._lines._closed)
 def test_a_broken_stream_drops_its_lines_once_and_the_writer_rests() -> None:
     """Until 2026-12-02 the writer reported each drop in a log line that was dropped in turn:
     a loop of failed writes at 68 % of a CPU for as long as the daemon ran."""
-    r = subprocess.run([sys.executable, "-c", BROKEN], capture_output=True, text=True,
-                       cwd=REPO, timeout=60, check=False)  # fmt: skip
+    r = subprocess.run(
+        [sys.executable, "-c", BROKEN],
+        capture_output=True,
+        text=True,
+        cwd=REPO,
+        timeout=60,
+        check=False,
+    )
     assert r.returncode == 0, r.stderr
     assert r.stdout.split() == ["1", "True"]  # one line dropped; flush found the writer done

@@ -40,9 +40,16 @@ class FakePlc:
         self.log.append("read")
         if 0.029 < t < 0.031:
             self.clock.now += 0.025  # a slow answer: this PLC cycle overruns
-        return {"lift_active": 0.045 <= t < 0.075, "lift_suppressed": False, "state": 4,
-                "feed_hold": False, "error_id": 0, "line": 10, "override": 1000,
-                "m_pending": -1}  # fmt: skip
+        return {
+            "lift_active": 0.045 <= t < 0.075,
+            "lift_suppressed": False,
+            "state": 4,
+            "feed_hold": False,
+            "error_id": 0,
+            "line": 10,
+            "override": 1000,
+            "m_pending": -1,
+        }
 
     def write_schedule(self, t: float) -> list[tuple[str, Any]]:
         self.log.append("write")

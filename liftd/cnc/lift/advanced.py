@@ -17,9 +17,10 @@ this class q = sign·z, so "up" is always +q. POS_LIMIT is enforced by construct
 never above it) and checked on every descent plan (community ruckig ignores position limits).
 """
 
+# `# fmt: skip` where it stays: ruff's one-item-per-line layout of those statements would
+# take this file past the house's ~450 lines a file (the others were removed, issue 40)
 from __future__ import annotations
 
-import enum
 from collections.abc import Callable
 from typing import Final
 
@@ -27,6 +28,7 @@ from ruckig import Trajectory
 
 from liftd.cnc.lift.profile import LiftProfiles, ProfileError, position_range, state_at
 from liftd.cnc.ruckig1 import Evaluator, Phases
+from liftd.cnc.snapshot import LiftPhase
 
 INF = float("inf")
 # the exact remaining path time, when the generator was given a lower bound of it and its
@@ -36,23 +38,15 @@ POS_TOL = 1e-7  # 0.1 µm: tolerance of the position checks
 TIME_TOL = 1e-9  # s
 
 
-class Phase(enum.IntEnum):
-    IDLE = 0
-    UP = 1
-    DOWN = 2
-    DONE = 3  # at the target, at rest
-    DIRECT = 4  # time-optimal straight to the target (suppressed, or POS beyond POS_LIMIT)
-    HOLD_LIMIT = 5  # program error inside the range: rise to POS_LIMIT and stay
-
-
-# The members as C statics of the compiled module: `Phase.UP` is a dict and a type lookup
-# (~80 ns), several a lift cycle.
-IDLE: Final = Phase.IDLE
-UP: Final = Phase.UP
-DOWN: Final = Phase.DOWN
-DONE: Final = Phase.DONE
-DIRECT: Final = Phase.DIRECT
-HOLD_LIMIT: Final = Phase.HOLD_LIMIT
+# The generator's phase is the snapshot's `LiftPhase` (NONE while idle); the members as C
+# statics of the compiled module: `LiftPhase.UP` is a dict and a type lookup (~80 ns), several
+# a lift cycle.
+IDLE: Final = LiftPhase.NONE
+UP: Final = LiftPhase.UP
+DOWN: Final = LiftPhase.DOWN
+DONE: Final = LiftPhase.DONE
+DIRECT: Final = LiftPhase.DIRECT
+HOLD_LIMIT: Final = LiftPhase.HOLD_LIMIT
 
 
 class FirstRise:

@@ -41,9 +41,22 @@ class LiftRecord:
     dataclass's generated `__init__` is a Python function even in the compiled core (~6 µs
     of every lift start, cold)."""
 
-    __slots__ = ("area", "arrival_error", "departure", "late", "nominal_time", "path_delay",
-                 "peak", "premature", "range", "t_end", "t_start", "waits", "z_a_max_ratio",
-                 "z_start")  # fmt: skip
+    __slots__ = (
+        "area",
+        "arrival_error",
+        "departure",
+        "late",
+        "nominal_time",
+        "path_delay",
+        "peak",
+        "premature",
+        "range",
+        "t_end",
+        "t_start",
+        "waits",
+        "z_a_max_ratio",
+        "z_start",
+    )
 
     def __init__(self, rng: LiftRange, t_start: float, z_start: float) -> None:
         self.range = rng
@@ -194,9 +207,15 @@ class LiftController:
                 # Z 24 mm down, toward the part, before it rose (bench_reset, path-based)
                 self.error_pending = True
                 return
-            m = self.motion = TimeBasedLift(self.generator(rng.start.axis),
-                                            self.guard(rng.start.axis), rng, max(m.t, t), m.z,
-                                            0.0, 0.0)  # fmt: skip
+            m = self.motion = TimeBasedLift(
+                self.generator(rng.start.axis),
+                self.guard(rng.start.axis),
+                rng,
+                max(m.t, t),
+                m.z,
+                0.0,
+                0.0,
+            )
         m.error_in_range(t)
 
     def finish(self, t: float) -> LiftRecord | None:
@@ -222,8 +241,16 @@ class LiftController:
         self.error_pending = False
 
     # -- cycle ------------------------------------------------------------------------------------
-    def step(self, t_new: float, s: float, v: float, a: float, t_rem: float,
-             override: float, refine: Refine | None = None) -> None:  # fmt: skip
+    def step(
+        self,
+        t_new: float,
+        s: float,
+        v: float,
+        a: float,
+        t_rem: float,
+        override: float,
+        refine: Refine | None = None,
+    ) -> None:
         """Move the lift axis to t_new: against the remaining path time t_rem (time-based) or
         to the path position s (coupled, path velocity v and acceleration a)."""
         m = self.motion

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from liftd.cnc import events
 from liftd.cnc.params import AxisParams
 
 POS_TOL = 1e-7  # 0.1 µm
@@ -17,7 +18,7 @@ POS_TOL = 1e-7  # 0.1 µm
 
 @dataclass(slots=True)
 class GuardFinding:
-    name: str  # "lift.guard_clamped" or "lift.fallback"
+    name: str  # events.LIFT_GUARD_CLAMPED or events.LIFT_FALLBACK
     value: float  # the offending position (m) or the number of fallbacks so far
 
 
@@ -57,9 +58,9 @@ class LiftGuard:
         findings: list[GuardFinding] = []
         if fallbacks > self.fallbacks_seen:
             self.fallbacks_seen = fallbacks
-            findings.append(GuardFinding("lift.fallback", float(fallbacks)))
+            findings.append(GuardFinding(events.LIFT_FALLBACK, float(fallbacks)))
         if z < self.lo or z > self.hi:
             self.clamped += 1
-            findings.append(GuardFinding("lift.guard_clamped", z))
+            findings.append(GuardFinding(events.LIFT_GUARD_CLAMPED, z))
             z = min(max(z, self.lo), self.hi)
         return z, findings

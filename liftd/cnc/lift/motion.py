@@ -20,7 +20,6 @@ from liftd.cnc.lift.advanced import (
     UP,
     AdvancedLift,
     FirstRise,
-    Phase,
     Refine,
 )
 from liftd.cnc.lift.guard import GuardFinding, LiftGuard
@@ -40,7 +39,6 @@ OVERRIDE_TRIALS = 6  # lower-bound evaluations to find the highest override Z st
 # 145.5 → 148.9 %, then a `lift.override_limited` event in each of the next 100 cycles; with
 # 1 % steps 7 re-plans for 145.8 → 152.7 %, with 5 % steps 2 for 145.8 → 150.8 %)
 OVERRIDE_STEP = 0.05
-_PHASES = tuple(LiftPhase(int(p)) for p in Phase)  # the generator's phase as reported
 
 
 class OverrideVerdict:
@@ -98,9 +96,15 @@ class LiftMotion:
         raise NotImplementedError
 
     def step(
-        self, t_new: float, s: float, v: float, a: float, t_rem: float, override: float,
+        self,
+        t_new: float,
+        s: float,
+        v: float,
+        a: float,
+        t_rem: float,
+        override: float,
         refine: Refine | None = None,
-    ) -> None:  # fmt: skip
+    ) -> None:
         """Move to t_new (`t_rem`: the path's remaining time to the horizon, time-based, or a
         lower bound of it that `refine()` makes exact when the decision needs it; s, v, a:
         the path's state, coupled; `override`: in effect)."""
@@ -111,7 +115,7 @@ class LiftMotion:
 
     def landing_time(self) -> float:
         """Time Z needs from its state now to be at POS: the descent in hand, or, while it
-        rises, the time-optimal one from here (`LiftAhead._flush_may_go`)."""
+        rises, the time-optimal one from here (`BoundaryActions.flush_may_go`)."""
         raise NotImplementedError
 
     def resume_in_range(self, t: float) -> None:
@@ -153,9 +157,17 @@ class TimeBasedLift(LiftMotion):
     """Advanced Lifting's generator for one range (docs/reference/design.md §4,
     docs/reference/lift-algorithm.md §3)."""
 
-    def __init__(self, gen: AdvancedLift, guard: LiftGuard, rng: LiftRange,
-                 t: float, z: float, vz: float, az: float,
-                 rise: FirstRise | None = None) -> None:  # fmt: skip
+    def __init__(
+        self,
+        gen: AdvancedLift,
+        guard: LiftGuard,
+        rng: LiftRange,
+        t: float,
+        z: float,
+        vz: float,
+        az: float,
+        rise: FirstRise | None = None,
+    ) -> None:
         self.gen = gen
         self.guard = guard
         self.rng = rng
@@ -199,12 +211,18 @@ class TimeBasedLift(LiftMotion):
 
     @property
     def phase(self) -> LiftPhase:
-        return _PHASES[self.gen.phase]  # an enum call per cycle costs more than the step
+        return self.gen.phase
 
     def step(
-        self, t_new: float, s: float, v: float, a: float, t_rem: float, override: float,
+        self,
+        t_new: float,
+        s: float,
+        v: float,
+        a: float,
+        t_rem: float,
+        override: float,
         refine: Refine | None = None,
-    ) -> None:  # fmt: skip
+    ) -> None:
         gen = self.gen
         was_down = gen.phase is DOWN
         gen.step(t_new, t_rem, refine)
@@ -325,8 +343,16 @@ class TimeBasedLift(LiftMotion):
 class CoupledLift(LiftMotion):
     """Path-based Lifting for one range: Z at z(s) of the path position."""
 
-    def __init__(self, plan: RangePlan, guard: LiftGuard, rng: LiftRange,
-                 t: float, z: float, vz: float, az: float) -> None:  # fmt: skip
+    def __init__(
+        self,
+        plan: RangePlan,
+        guard: LiftGuard,
+        rng: LiftRange,
+        t: float,
+        z: float,
+        vz: float,
+        az: float,
+    ) -> None:
         self.plan = plan
         self.guard = guard
         self.rng = rng
@@ -369,9 +395,15 @@ class CoupledLift(LiftMotion):
         return abs(self._z - self.rng.start.target) <= 1e-12 and self._vz == 0.0
 
     def step(
-        self, t_new: float, s: float, v: float, a: float, t_rem: float, override: float,
+        self,
+        t_new: float,
+        s: float,
+        v: float,
+        a: float,
+        t_rem: float,
+        override: float,
         refine: Refine | None = None,
-    ) -> None:  # fmt: skip
+    ) -> None:
         z, dz, ddz = self.plan.state(s)
         self._t, self._vz, self._az = t_new, dz * v, ddz * v * v + dz * a
         self._z, findings = self.guard.check(z, 0)

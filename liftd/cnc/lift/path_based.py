@@ -133,9 +133,15 @@ def _extremes(traj: Trajectory, t0: float, t1: float) -> tuple[float, float, flo
 
 
 def plan_part(
-    prof: LiftProfiles, s0: float, s1: float, z0: float, target: float, limit: float,
-    t_feed: float, direct: bool = False,
-) -> CoupledProfile:  # fmt: skip
+    prof: LiftProfiles,
+    s0: float,
+    s1: float,
+    z0: float,
+    target: float,
+    limit: float,
+    t_feed: float,
+    direct: bool = False,
+) -> CoupledProfile:
     """One coupled part: from z0 at s0 to target at s1 (at rest at both), as high as `limit`
     allows within the plan time max(t_feed, Z's time-optimal move); `direct`: straight to the
     target at the start of the part, then hold (suppressed lift, POS beyond POS_LIMIT).
@@ -182,8 +188,9 @@ def plan_part(
                 f_lo = f_lo * 0.5 if side == 1 else f_lo
                 side = 1
         t_switch = lo
-    return CoupledProfile(s0, s1, z0, target, t_plan, rise if t_switch > 0.0 else None,
-                          t_switch, fall)  # fmt: skip
+    return CoupledProfile(
+        s0, s1, z0, target, t_plan, rise if t_switch > 0.0 else None, t_switch, fall
+    )
 
 
 @dataclass(frozen=True, slots=True)
@@ -231,8 +238,9 @@ RHO_GAP = 1e-6  # keeps the searched velocities strictly inside the feasible ran
 GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
 
 
-def segment_cap(part: CoupledProfile, k: int, seg: PathSegment, v_cap: float,
-                z: ZLimits) -> SegmentCap:  # fmt: skip
+def segment_cap(
+    part: CoupledProfile, k: int, seg: PathSegment, v_cap: float, z: ZLimits
+) -> SegmentCap:
     """The path limits on segment k that keep the coupled Z within its acceleration and jerk
     at 100 % override, whatever the path does there (vendor §2.2.1: "Innerhalb des
     LIFT-Bereichs wird die zulässige Beschleunigung auf der Bahn so bestimmt, dass die
@@ -281,8 +289,9 @@ def segment_cap(part: CoupledProfile, k: int, seg: PathSegment, v_cap: float,
     return SegmentCap(k, v_ov, a, j, z.v_max / c1)
 
 
-def _path_budget(v: float, jerk: bool, c1: float, c2: float, c3: float,
-                 z: ZLimits) -> tuple[float, float]:  # fmt: skip
+def _path_budget(
+    v: float, jerk: bool, c1: float, c2: float, c3: float, z: ZLimits
+) -> tuple[float, float]:
     """The path acceleration and jerk Z leaves at path velocity v (`segment_cap`)."""
     a = (z.a_max - c2 * v * v) / c1
     if not jerk:
@@ -293,8 +302,7 @@ def _path_budget(v: float, jerk: bool, c1: float, c2: float, c3: float,
     return a, (rest - 3.0 * c2 * v * a) / c1
 
 
-def _segment_time(v: float, seg: PathSegment, c1: float, c2: float, c3: float,
-                  z: ZLimits) -> float:  # fmt: skip
+def _segment_time(v: float, seg: PathSegment, c1: float, c2: float, c3: float, z: ZLimits) -> float:
     """The estimate `segment_cap` minimises: cruise over the segment at v, one ramp pair."""
     a, j = _path_budget(v, seg.j_max != INF, c1, c2, c3, z)
     if a <= 0.0 or j <= 0.0:

@@ -28,12 +28,26 @@ class LiftProfiles:
         return self._calc.calls
 
     def to_rest(
-        self, p: float, v: float, a: float, target: float, min_duration: float | None = None,
+        self,
+        p: float,
+        v: float,
+        a: float,
+        target: float,
+        min_duration: float | None = None,
         into: Trajectory | None = None,
-    ) -> Trajectory:  # fmt: skip
+    ) -> Trajectory:
         """Time-optimal (or at least `min_duration` long) profile from (p, v, a) to target;
         `into`: a trajectory to overwrite (for a profile only asked for its duration)."""
         return self._calc.position(
-            p, v, a, target, 0.0, self._v, self._a, self._j,
-            forward_only=False, min_duration=min_duration, into=into,
-        )  # fmt: skip
+            p,
+            v,
+            a,
+            target,
+            0.0,
+            self._v,
+            self._a,
+            self._j,
+            forward_only=False,
+            min_duration=min_duration,
+            into=into,
+        )

@@ -146,8 +146,12 @@ class GFunctions:
                 f"line {rng.line} (vendor §2.4)",
             )
         if selects:
-            self._count(kind, column, f"{kind}: smoothing is not emulated by liftd; the path "
-                        "runs unsmoothed (exact contour, corners as programmed)")  # fmt: skip
+            self._count(
+                kind,
+                column,
+                f"{kind}: smoothing is not emulated by liftd; the path "
+                "runs unsmoothed (exact contour, corners as programmed)",
+            )
         return None
 
     def _tool(self, word: tuple[float, int]) -> None:
@@ -161,9 +165,14 @@ class GFunctions:
 
     def _select_trc(self, side: int, column: int) -> NcFault | None:
         if side != 0 and not self.tool_configured and self.trc.side == 0:
-            self._count(NO_RADIUS, column, "G41/G42: no tool radius configured for the selected "
-                        "D (liftd.toml [nc.tools] or the ISG tool list): the programmed "
-                        "contour runs uncompensated", ErrorId.TRC_NO_RADIUS)  # fmt: skip
+            self._count(
+                NO_RADIUS,
+                column,
+                "G41/G42: no tool radius configured for the selected "
+                "D (liftd.toml [nc.tools] or the ISG tool list): the programmed "
+                "contour runs uncompensated",
+                ErrorId.TRC_NO_RADIUS,
+            )
         if (
             side != 0
             and self.open_lift is not None

@@ -239,8 +239,11 @@ class ModalDecoder(GFunctions):
                 end = True
                 if self._depth() > 1:
                     # the manual: a program abort with M02/M30 in a subroutine gives a warning
-                    self._warn(ErrorId.PROGRAM_END_IN_SUBROUTINE, col,
-                               f"M{number:02d} in a subroutine ends the whole program")  # fmt: skip
+                    self._warn(
+                        ErrorId.PROGRAM_END_IN_SUBROUTINE,
+                        col,
+                        f"M{number:02d} in a subroutine ends the whole program",
+                    )
             numbers.append(number)
         return tuple(numbers), end
 
@@ -343,11 +346,19 @@ class ModalDecoder(GFunctions):
         refused = self.refused_lift
         try:
             self.open_lift = lift_rules.open_range(
-                self.ctx, words, axis=axis, z0=self.pos[zi], slope=self.slope,
-                open_lift=self.open_lift, lineno=lineno, column=column, warnings=warnings,
-                unit=self.unit, offset=self.offset[zi],
+                self.ctx,
+                words,
+                axis=axis,
+                z0=self.pos[zi],
+                slope=self.slope,
+                open_lift=self.open_lift,
+                lineno=lineno,
+                column=column,
+                warnings=warnings,
+                unit=self.unit,
+                offset=self.offset[zi],
                 refused_line=refused[1] if refused is not None else None,
-            )  # fmt: skip
+            )
         except NcFault:
             if words.keyword is LiftKeyword.START and self.open_lift is None and refused is None:
                 self.refused_lift = (axis, lineno)

@@ -48,14 +48,37 @@ class Element:
     (tangents and offset points at both ends computed once)."""
 
     __slots__ = (
-        "approach", "arc", "block", "ccw", "center", "direct", "p0", "p1", "q0", "q1", "r",
-        "roff", "side", "start", "sweep", "t0", "t1",
-    )  # fmt: skip
+        "approach",
+        "arc",
+        "block",
+        "ccw",
+        "center",
+        "direct",
+        "p0",
+        "p1",
+        "q0",
+        "q1",
+        "r",
+        "roff",
+        "side",
+        "start",
+        "sweep",
+        "t0",
+        "t1",
+    )
 
     def __init__(
-        self, block: Block, side: int, r: float, start: Point, p0: Point, p1: Point,
-        center: Point | None = None, sweep: float = 0.0, approach: bool = False,
-    ) -> None:  # fmt: skip
+        self,
+        block: Block,
+        side: int,
+        r: float,
+        start: Point,
+        p0: Point,
+        p1: Point,
+        center: Point | None = None,
+        sweep: float = 0.0,
+        approach: bool = False,
+    ) -> None:
         self.block = block
         self.side = side  # +1 left (G41), -1 right (G42)
         self.r = r  # tool radius, m

@@ -292,8 +292,9 @@ class Trc:
             sweep = arc_sweep(a.center, a.start, end, a.ccw, full_if_closed=True)
             if abs(sweep) > abs(a.sweep) + 1e-9:  # a full circle stays one
                 sweep = a.sweep
-            motion = Motion(m.kind, _with_xy(m.start, a.start), _with_xy(m.end, end), m.feed,
-                            a.center, sweep)  # fmt: skip
+            motion = Motion(
+                m.kind, _with_xy(m.start, a.start), _with_xy(m.end, end), m.feed, a.center, sweep
+            )
             out.append(_with_motion(block, motion))
         elif abs(a.start[0] - end[0]) > EPS or abs(a.start[1] - end[1]) > EPS:
             out.append(_with_motion(block, _line_motion(m, a.start, end)))
@@ -306,8 +307,9 @@ class Trc:
             for waiting in self.after:
                 bm = waiting.motion
                 if bm is not None:
-                    moved = bm._replace(start=_with_xy(bm.start, where),
-                                        end=_with_xy(bm.end, where))  # fmt: skip
+                    moved = bm._replace(
+                        start=_with_xy(bm.start, where), end=_with_xy(bm.end, where)
+                    )
                     waiting = _with_motion(waiting, moved)  # noqa: PLW2901
                 out.append(waiting)
             self.after = []

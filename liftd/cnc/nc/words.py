@@ -27,9 +27,19 @@ class Words:
     (a subroutine line's Words are reused for every call)."""
 
     __slots__ = (
-        "bare", "call", "command", "fast_g", "faults", "gcodes", "lift", "m", "n",
-        "refused_start", "simple", "values",
-    )  # fmt: skip
+        "bare",
+        "call",
+        "command",
+        "fast_g",
+        "faults",
+        "gcodes",
+        "lift",
+        "m",
+        "n",
+        "refused_start",
+        "simple",
+        "values",
+    )
 
     def __init__(self) -> None:
         self.n: int | None = None

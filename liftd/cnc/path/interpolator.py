@@ -44,9 +44,17 @@ class _Entry:
     __slots__ = ("a", "crossings", "k", "parked", "s", "seg", "stopped_at", "t", "v")
 
     def __init__(
-        self, k: int, t: float, s: float, v: float, a: float, seg: int,
-        crossings: tuple[Crossing, ...], stopped_at: int | None, parked: bool,
-    ) -> None:  # fmt: skip
+        self,
+        k: int,
+        t: float,
+        s: float,
+        v: float,
+        a: float,
+        seg: int,
+        crossings: tuple[Crossing, ...],
+        stopped_at: int | None,
+        parked: bool,
+    ) -> None:
         self.k = k  # cycle index (t = k·dt)
         self.t = t  # time of the state (the cycle's time, or when the path came to rest in it)
         self.s = s

@@ -59,9 +59,16 @@ class NominalRun:
             self._shadow = Tracker(table, self.prod.look_ahead, set(), self.acked_conditional)
 
     def nominal_start(
-        self, table: PathTable, target: int, t: float, s: float, v: float, a: float, seg: int,
+        self,
+        table: PathTable,
+        target: int,
+        t: float,
+        s: float,
+        v: float,
+        a: float,
+        seg: int,
         differs: bool = True,
-    ) -> None:  # fmt: skip
+    ) -> None:
         """Start the nominal run toward boundary `target` from the given state (the path
         leaving the range's start). Unless the lifts' limits change the path (`differs`), it
         is the path itself until they part (`nominal_step`): no second tracker meanwhile."""

@@ -35,13 +35,28 @@ class Plan:
     """A ruckig profile started at t0, extended at constant velocity after its end; its end
     snaps to the goal (target position, goal velocity) it was planned for."""
 
-    __slots__ = ("dur", "ev", "goal", "p_end", "serves", "soft_from", "t0", "traj", "v_end",
-                 "window")  # fmt: skip
+    __slots__ = (
+        "dur",
+        "ev",
+        "goal",
+        "p_end",
+        "serves",
+        "soft_from",
+        "t0",
+        "traj",
+        "v_end",
+        "window",
+    )
 
     def __init__(
-        self, traj: Trajectory, t0: float, goal: int, window: int, p_goal: float | None,
+        self,
+        traj: Trajectory,
+        t0: float,
+        goal: int,
+        window: int,
+        p_goal: float | None,
         v_goal: float,
-    ) -> None:  # fmt: skip
+    ) -> None:
         self.traj = traj
         self.t0 = t0
         self.goal = goal  # CRUISE, BRAKE or the target boundary

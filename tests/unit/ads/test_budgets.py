@@ -84,8 +84,11 @@ def server(**cfg: Any) -> AdsServer:
     view = GeoView(snapshot(), LoopStats(cycles=1))
     provider = CncProvider(catalog, lambda: view, lambda w: None)
     section = AdsSection(port=0, net_id="127.0.0.1.1.1", max_connections_per_ip=64, **cfg)
-    return AdsServer(server_config(section), AdsService(provider, service_limits(section)),
-                     structlog.wrap_logger(Silent()))  # fmt: skip
+    return AdsServer(
+        server_config(section),
+        AdsService(provider, service_limits(section)),
+        structlog.wrap_logger(Silent()),
+    )
 
 
 def connect(srv: AdsServer) -> tuple[AdsConnection, Peer]:
@@ -121,7 +124,9 @@ def result_of(f: wire.Frame) -> int:
 
 @pytest.mark.parametrize("ig", [IndexGroup.SUMUP_READ, IndexGroup.SUMUP_READEX])
 @pytest.mark.parametrize("length", [256 << 20, 2 << 30, 0xFFFFFFF0])
-def test_a_sum_read_asking_gigabytes_gets_0x70a_without_allocating_them(ig: int, length: int) -> None:  # fmt: skip
+def test_a_sum_read_asking_gigabytes_gets_0x70a_without_allocating_them(
+    ig: int, length: int
+) -> None:
     """The 66-byte frame of issue 41: one sub-command {lift_active, length L}, read length
     0xFFFFFFFF. It used to pad the reply to L (a 4 GiB peak for L = 2 GiB)."""
     srv = server()
@@ -186,8 +191,9 @@ def test_notification_frames_never_exceed_the_frame_cap() -> None:
     for ms in range(polls):  # the peer reads after each poll
         srv.poll_notifications(t0 + ms * 1_000_000, 0)
         frames = peer.read_all()
-        samples = [s for f in frames for st in wire.decode_notification(f.payload)
-                   for s in st.samples]  # fmt: skip
+        samples = [
+            s for f in frames for st in wire.decode_notification(f.payload) for s in st.samples
+        ]
         assert frames and all(wire.HEADER_SIZE - 6 + len(f.payload) <= cap for f in frames)
         assert sum(8 + len(s.data) for s in samples) <= cap + size + 8
         assert all(len(s.data) == size for s in samples)
@@ -208,8 +214,9 @@ def test_a_sample_that_cannot_fit_a_frame_is_refused_at_subscription() -> None:
 
 def subscribe_uploads(conn: AdsConnection, n: int) -> None:
     entry = struct.pack("<IIIIII16s", IndexGroup.SYM_UPLOAD, 0, 0xFFFFFFFF, 3, 0, 10_000, bytes(16))
-    conn.data_received(frame(9, struct.pack("<IIII", IndexGroup.SUMUP_ADDDEVNOTE, n, 8 * n,
-                                            40 * n) + entry * n))  # fmt: skip
+    conn.data_received(
+        frame(9, struct.pack("<IIII", IndexGroup.SUMUP_ADDDEVNOTE, n, 8 * n, 40 * n) + entry * n)
+    )
 
 
 def test_a_peer_that_stops_reading_is_closed_at_its_budget_not_its_frame_count() -> None:
@@ -233,8 +240,9 @@ def test_a_peer_that_stops_reading_is_closed_at_its_budget_not_its_frame_count()
 def test_the_server_budget_closes_the_connection_holding_most() -> None:
     """Four peers that stop reading, each under its own budget, together over the server's:
     the largest goes; a peer that reads is never the one."""
-    srv = server(connection_budget_bytes=4 << 20, budget_bytes=6 << 20,
-                 max_notifications_per_connection=512)  # fmt: skip
+    srv = server(
+        connection_budget_bytes=4 << 20, budget_bytes=6 << 20, max_notifications_per_connection=512
+    )
     hogs = [connect(srv) for _ in range(4)]
     plc, plc_peer = connect(srv)
     for k, (conn, peer) in enumerate(hogs):
@@ -269,7 +277,9 @@ def test_routed_frames_count_against_the_receiver() -> None:
     assert srv.counters.over_budget == 1 and srv.counters.routed < 40
 
 
-def test_an_exception_in_the_protocol_layer_closes_only_that_connection(monkeypatch: pytest.MonkeyPatch) -> None:  # fmt: skip
+def test_an_exception_in_the_protocol_layer_closes_only_that_connection(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
     """issue 41: a reply `wire.encode_frame` could not encode ended in asyncio's `Fatal error
     on transport` traceback; now any exception closes the connection, logged and counted."""
     srv = server()
@@ -291,8 +301,10 @@ def test_an_exception_in_the_protocol_layer_closes_only_that_connection(monkeypa
 
 def test_the_service_never_answers_more_than_a_frame() -> None:
     """The last check (a reply whose size no pre-check knew): 0x70A instead of the bytes."""
-    svc = AdsService(CncProvider(Catalog(make_channel()), lambda: None, lambda w: None),
-                     ServiceLimits(max_reply_payload=64))  # fmt: skip
+    svc = AdsService(
+        CncProvider(Catalog(make_channel()), lambda: None, lambda w: None),
+        ServiceLimits(max_reply_payload=64),
+    )
     s = svc.new_session()
     upload = wire.encode_read_request(wire.ReadRequest(IndexGroup.SYM_UPLOAD, 0, 1 << 20))
     header = wire.AmsHeader(NET, 551, SOURCE, 30000, 2, 4, 0, 0, 1)
@@ -300,7 +312,9 @@ def test_the_service_never_answers_more_than_a_frame() -> None:
     assert reply.failure is None and wire.decode_read_response(reply.payload)[0] == 0x70A
 
 
-def test_an_exception_while_sampling_closes_only_that_connection(monkeypatch: pytest.MonkeyPatch) -> None:  # fmt: skip
+def test_an_exception_while_sampling_closes_only_that_connection(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
     """The notification task polls every connection: one whose poll raises is closed, the
     task and the others go on (it used to end the task silently: no more notifications)."""
     srv = server()

@@ -32,11 +32,30 @@ SOURCE = bytes([10, 0, 0, 9, 1, 1])
 STATS = {"chunks": 0, "bytes": 0}  # for bench/fuzz_connection.py
 EXAMPLES = int(os.environ.get("LIFTD_FUZZ_EXAMPLES", "200"))
 
-IGS = [0x121301, 0x21301, 0x121401, 0x121501, 0x121601, 0x121701, 0x121801, 0x121901,
-       *[int(g) for g in IndexGroup], 0, 0xFFFFFFFF]  # fmt: skip
+IGS = [
+    0x121301,
+    0x21301,
+    0x121401,
+    0x121501,
+    0x121601,
+    0x121701,
+    0x121801,
+    0x121901,
+    *[int(g) for g in IndexGroup],
+    0,
+    0xFFFFFFFF,
+]
 IOS = [0x30095, 0x30094, 0x10095, 0xF, 0x10, 0x15, 0, 1, 0xFFFFFFFF]
-NAMES = [b"GEO.ch1.Z.lift_active\0", b"gpAx[3].ipo_state.lift_active\0", b"PLC.ch1.override\0",
-         b"PLC.ch1.start\0", b"GEO.cycle\0", b"nope\0", b"", b"GEO.ch1.Z.lift_active"]  # fmt: skip
+NAMES = [
+    b"GEO.ch1.Z.lift_active\0",
+    b"gpAx[3].ipo_state.lift_active\0",
+    b"PLC.ch1.override\0",
+    b"PLC.ch1.start\0",
+    b"GEO.cycle\0",
+    b"nope\0",
+    b"",
+    b"GEO.ch1.Z.lift_active",
+]
 
 
 payloads = st.one_of(
@@ -136,16 +155,21 @@ class ConnectionMachine(RuleBasedStateMachine):
         if self.transport.reading:
             self.collect()
 
-    @rule(dest=st.sampled_from([net_id_bytes("1.2.3.4.5.6"), NET]),
-          port=st.sampled_from([550, 551, 851, 0, 10000, 32768]),
-          command=st.integers(0, 12))  # fmt: skip
+    @rule(
+        dest=st.sampled_from([net_id_bytes("1.2.3.4.5.6"), NET]),
+        port=st.sampled_from([550, 551, 851, 0, 10000, 32768]),
+        command=st.integers(0, 12),
+    )
     def addressed(self, dest: bytes, port: int, command: int) -> None:
         routed = self.server.ports.route(dest, port) is not None
         self.send(self.frame(command, b"", dest, port), command, 1000, routed)
 
-    @rule(command=st.sampled_from([0x1000, 0x0001, 0x1002, 0x1001, 0x4321]),
-          payload=st.one_of(st.sampled_from([b"\0\0", b"\x00\x80", b"\x27\x02"]),
-                            st.binary(max_size=5)))  # fmt: skip
+    @rule(
+        command=st.sampled_from([0x1000, 0x0001, 0x1002, 0x1001, 0x4321]),
+        payload=st.one_of(
+            st.sampled_from([b"\0\0", b"\x00\x80", b"\x27\x02"]), st.binary(max_size=5)
+        ),
+    )
     def router(self, command: int, payload: bytes) -> None:
         if self.transport.reading:
             self.feed(struct.pack("<HI", command, len(payload)) + payload, 1000)
@@ -165,16 +189,22 @@ class ConnectionMachine(RuleBasedStateMachine):
         if self.transport.reading:
             self.collect()
 
-    @rule(mode=st.sampled_from([3, 4]), cycle_100ns=st.integers(0, 200_000),
-          io=st.sampled_from([0x30095, 0x10094, 0x15]))  # fmt: skip
+    @rule(
+        mode=st.sampled_from([3, 4]),
+        cycle_100ns=st.integers(0, 200_000),
+        io=st.sampled_from([0x30095, 0x10094, 0x15]),
+    )
     def subscribe(self, mode: int, cycle_100ns: int, io: int) -> None:
         n = 8 if io == 0x15 else 1
         spec = struct.pack("<IIIIII", 0x121301, io, n, mode, 0, cycle_100ns) + bytes(16)
         self.send(self.frame(6, spec), 6, 1000)
 
-    @rule(ig=st.sampled_from([0xF080, 0xF083, 0xF084]), n=st.integers(1, 4),
-          length=st.sampled_from([1, 2048, 5000, 1 << 20, 2 << 30, 0xFFFFFFF0]),
-          rlen=st.sampled_from([0xFFFFFFFF, 8, 4096]))  # fmt: skip
+    @rule(
+        ig=st.sampled_from([0xF080, 0xF083, 0xF084]),
+        n=st.integers(1, 4),
+        length=st.sampled_from([1, 2048, 5000, 1 << 20, 2 << 30, 0xFFFFFFF0]),
+        rlen=st.sampled_from([0xFFFFFFFF, 8, 4096]),
+    )
     def sum_asking_gigabytes(self, ig: int, n: int, length: int, rlen: int) -> None:
         """Issue 41: a sum read's reply is sized before it is built (0x70A above the cap)."""
         body = struct.pack("<III", 0x121301, 0x30095, length) * n
@@ -224,7 +254,9 @@ class ConnectionMachine(RuleBasedStateMachine):
 
 
 ConnectionMachine.TestCase.settings = settings(
-    max_examples=EXAMPLES, stateful_step_count=40, deadline=None,
+    max_examples=EXAMPLES,
+    stateful_step_count=40,
+    deadline=None,
     suppress_health_check=[HealthCheck.too_slow],
-)  # fmt: skip
+)
 test_connection_state_machine = ConnectionMachine.TestCase

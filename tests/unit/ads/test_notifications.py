@@ -31,7 +31,9 @@ def req(mode: int = 4, cycle_ms: float = 1.0, delay_ms: float = 0.0, n: int = 1)
     )
 
 
-def run(table: NotificationTable, value: Value, until_ms: int, change_at: dict[int, bytes]) -> list[tuple[int, tuple[wire.Stamp, ...]]]:  # fmt: skip
+def run(
+    table: NotificationTable, value: Value, until_ms: int, change_at: dict[int, bytes]
+) -> list[tuple[int, tuple[wire.Stamp, ...]]]:
     out = []
     for ms in range(until_ms + 1):
         if ms in change_at:

@@ -95,7 +95,9 @@ def read(svc: AdsService, s: Session, ig: int, io: int, n: int) -> tuple[int, by
     )
 
 
-def rw(svc: AdsService, s: Session, ig: int, io: int, n: int, data: bytes, w: bool = True) -> tuple[int, bytes]:  # fmt: skip
+def rw(
+    svc: AdsService, s: Session, ig: int, io: int, n: int, data: bytes, w: bool = True
+) -> tuple[int, bytes]:
     req = wire.encode_read_write_request(wire.ReadWriteRequest(ig, io, n, data))
     return wire.decode_read_response(call(svc, s, Command.READ_WRITE, req, w))
 
@@ -112,7 +114,12 @@ def test_every_command_has_a_handler(svc: AdsService) -> None:
 def test_device_info_state_and_write_control(svc: AdsService) -> None:
     s = svc.new_session()
     assert wire.decode_device_info_response(call(svc, s, Command.READ_DEVICE_INFO)) == (
-        0, 0, 1, 0, b"liftd GEO".ljust(16, b"\0"))  # fmt: skip
+        0,
+        0,
+        1,
+        0,
+        b"liftd GEO".ljust(16, b"\0"),
+    )
     assert wire.decode_state_response(call(svc, s, Command.READ_STATE)) == (0, 5, 0)
     ctl = wire.encode_write_control_request(wire.WriteControlRequest(5, 0, b""))
     assert wire.decode_result(call(svc, s, Command.WRITE_CONTROL, ctl)) == 0
@@ -159,7 +166,11 @@ def test_symbol_info_and_upload(svc: AdsService) -> None:
     entry, end = wire.decode_symbol_entry(raw)
     assert code == 0 and end == len(raw)  # exactly entryLength (pyads checks it)
     assert (entry.index_group, entry.index_offset, entry.size, entry.type_name) == (
-        0x10, 0, 4, b"UDINT")  # fmt: skip
+        0x10,
+        0,
+        4,
+        b"UDINT",
+    )
     assert entry.flags == 0x20  # read-only
     assert rw(svc, s, IndexGroup.SYM_INFOBYNAMEEX, 0, 10, b"Dev.counter\0") == (0x705, b"")
     code, info = read(svc, s, IndexGroup.SYM_UPLOADINFO2, 0, 24)
@@ -294,7 +305,9 @@ def test_data_type_and_location_by_name(svc: AdsService) -> None:
     assert rw(svc, s, IndexGroup.SYM_DT_INFOBYNAMEEX, 0, 10, b"BOOL\0")[0] == 0x705
     # 0xF007 as ads-rs get_location / get_size send it: no NUL, 12 bytes back
     assert rw(svc, s, IndexGroup.SYM_INFOBYNAME, 0, 12, b"Dev.setpoint") == (
-        0, struct.pack("<III", 0x10, 4, 2))  # fmt: skip
+        0,
+        struct.pack("<III", 0x10, 4, 2),
+    )
     assert rw(svc, s, IndexGroup.SYM_INFOBYNAME, 0, 11, b"Dev.setpoint")[0] == 0x705
     assert rw(svc, s, IndexGroup.SYM_INFOBYNAME, 0, 12, b"nope")[0] == 0x710
 

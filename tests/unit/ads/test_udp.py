@@ -26,9 +26,14 @@ class FakeTransport:
 
 def endpoint() -> tuple[UdpDiscovery, FakeTransport, list[str]]:
     events: list[str] = []
-    udp = UdpDiscovery(NET, lambda ip: ip.startswith("127."), lambda n: n == ALLOWED,
-                       lambda e, p, **k: events.append(e), lambda e, p, **k: events.append(e),
-                       host_name="cnc-box")  # fmt: skip
+    udp = UdpDiscovery(
+        NET,
+        lambda ip: ip.startswith("127."),
+        lambda n: n == ALLOWED,
+        lambda e, p, **k: events.append(e),
+        lambda e, p, **k: events.append(e),
+        host_name="cnc-box",
+    )
     transport = FakeTransport()
     udp.transport = transport  # type: ignore[assignment]
     return udp, transport, events

@@ -66,6 +66,7 @@ def test_the_build_reads_the_same_whatever_was_imported_first() -> None:
     group names liftd/liftd/cnc/…): the build is read from the import path, not from it."""
     for first in ("liftd.sim.simulate", "liftd.sim.compare", "liftd.cnc.geo_task"):
         code = f"import {first}; from liftd.runtime.core import core_build; print(core_build())"
-        out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                             check=True, cwd=REPO).stdout.strip()  # fmt: skip
+        out = subprocess.run(
+            [sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=REPO
+        ).stdout.strip()
         assert out == "compiled", first

@@ -29,8 +29,9 @@ def sched(override: str = "", hold: str = "") -> Schedule:
     return Schedule(tuple(parse_override_spec(override)), tuple(parse_feedhold_spec(hold)))
 
 
-def polyline_range(blocks: int, step_mm: float = 0.5, feed: int = 12000, pos: float = 1.0,
-                   limit: float = 60.0) -> str:  # fmt: skip
+def polyline_range(
+    blocks: int, step_mm: float = 0.5, feed: int = 12000, pos: float = 1.0, limit: float = 60.0
+) -> str:
     """A lift range over a straight polyline of `blocks` short blocks, then a cut."""
     lines = ["G01 X10 Y10 Z1 F6000", f"Z[LIFT_START POS={pos} POS_LIMIT={limit}]", f"F{feed}"]
     lines += [f"G01 X{10 + (i + 1) * step_mm:.4f}" for i in range(blocks)]
@@ -74,8 +75,9 @@ def test_a_range_longer_than_the_look_ahead_lands_on_time(look_ahead: int, facto
 @pytest.mark.parametrize("blocks", [1, 10, 400, 2000])
 def test_ranges_of_any_length_land_on_time(blocks: int) -> None:
     ch = make_channel(look_ahead=30)
-    task, snaps = run_task(ch, polyline_range(blocks, step_mm=2.0 if blocks < 20 else 0.5),
-                           max_time=60)  # fmt: skip
+    task, snaps = run_task(
+        ch, polyline_range(blocks, step_mm=2.0 if blocks < 20 else 0.5), max_time=60
+    )
     landing_checks(task, snaps)
 
 
@@ -103,8 +105,10 @@ def test_override_steps_in_every_lift_phase(phase: LiftPhase, step: str) -> None
 
 def test_an_override_increase_while_rising_is_limited_so_that_z_still_lands() -> None:
     ch = make_channel()
-    text = ("G01 X10 Y10 Z1 F6000\nZ[LIFT_START POS=1 POS_LIMIT=100]\nG01 X220 F30000\n"
-            "Z[LIFT_END]\nG01 Y20 F3000\nM30\n")  # fmt: skip
+    text = (
+        "G01 X10 Y10 Z1 F6000\nZ[LIFT_START POS=1 POS_LIMIT=100]\nG01 X220 F30000\n"
+        "Z[LIFT_END]\nG01 Y20 F3000\nM30\n"
+    )
     base_task, base = run_task(ch, text)
     up = _phase_times(base_task, base)[LiftPhase.UP]
     task, snaps = run_task(ch, text, sched(f"{up + 0.12:.3f}:200"))
@@ -125,8 +129,10 @@ def test_a_cut_override_request_costs_a_few_re_plans_not_one_a_cycle(after_up: f
     higher grant comes in steps of 5 %, each one event, the override in effect never falls while
     the request stands, and Z still lands."""
     ch = make_channel()
-    text = ("G01 X10 Y10 Z1 F6000\nZ[LIFT_START POS=1 POS_LIMIT=100]\nG01 X220 F30000\n"
-            "Z[LIFT_END]\nG01 Y20 F3000\nM30\n")  # fmt: skip
+    text = (
+        "G01 X10 Y10 Z1 F6000\nZ[LIFT_START POS=1 POS_LIMIT=100]\nG01 X220 F30000\n"
+        "Z[LIFT_END]\nG01 Y20 F3000\nM30\n"
+    )
     base_task, base = run_task(ch, text)
     t0 = _phase_times(base_task, base)[LiftPhase.UP] + after_up
     task, snaps = run_task(ch, text, sched(f"{t0:.3f}:200"))
@@ -147,8 +153,9 @@ def test_an_override_decrease_acts_at_once_and_never_dips(t_step: float) -> None
     (the only rise left is the jerk-limited ramp-down of the acceleration there was), the path
     comes down to the new velocity within the braking time of its limits, and never below it."""
     ch = make_channel()
-    task, snaps = run_task(ch, "G01 X10 Y10 F6000\nG01 X900 F20000\nM30\n",
-                           sched(f"0:150,{t_step}:100"))  # fmt: skip
+    task, snaps = run_task(
+        ch, "G01 X10 Y10 F6000\nG01 X900 F20000\nM30\n", sched(f"0:150,{t_step}:100")
+    )
     tb = task.prog.table
     a_max, j_max = tb.run_a[tb.run[1]], tb.run_j[tb.run[1]]
     v = np.array([s.v_path for s in snaps])
@@ -187,8 +194,9 @@ def test_a_straight_polyline_of_short_blocks_runs_at_its_look_ahead_bound() -> N
         task, snaps = run_task(ch, text)
         tb = task.prog.table
         a_max, j_max = tb.run_a[tb.run[5]], tb.run_j[tb.run[5]]
-        bound = min(feed / 60_000, tb.cap[5],
-                    reach_velocity(0.0, (look - 1) * step * 1e-3, a_max, j_max))  # fmt: skip
+        bound = min(
+            feed / 60_000, tb.cap[5], reach_velocity(0.0, (look - 1) * step * 1e-3, a_max, j_max)
+        )
         mid = [s.v_path for s in snaps if s.segment >= 1 and 0.12 < s.positions[0] < 0.2]
         assert mid and min(mid) >= 0.95 * bound, (step, feed, look, min(mid), bound)
         assert fd_ratios(ch, snaps).max() <= TOL
@@ -196,8 +204,10 @@ def test_a_straight_polyline_of_short_blocks_runs_at_its_look_ahead_bound() -> N
 
 def test_a_feed_hold_released_just_before_lift_end_makes_the_path_wait_there() -> None:
     ch = make_channel()
-    text = ("G01 X10 Y10 Z1 F6000\nZ[LIFT_START POS=1 POS_LIMIT=100]\nG01 X160 F30000\n"
-            "Z[LIFT_END]\nG01 Y20 F3000\nM30\n")  # fmt: skip
+    text = (
+        "G01 X10 Y10 Z1 F6000\nZ[LIFT_START POS=1 POS_LIMIT=100]\nG01 X160 F30000\n"
+        "Z[LIFT_END]\nG01 Y20 F3000\nM30\n"
+    )
     base_task, base = run_task(ch, text)
     rec = base_task.lift.records[0]
     hold = f"{rec.t_end - 0.09:.3f}:0.5"  # stops a few mm before LIFT_END, Z goes up meanwhile
@@ -209,8 +219,10 @@ def test_a_feed_hold_released_just_before_lift_end_makes_the_path_wait_there() -
 def test_path_delay_is_what_the_lift_cost() -> None:
     ch = make_channel()
     # Z must climb 80 mm over 20 mm of path: the path is slowed for it
-    slow = ("G01 X10 Y10 Z1 F6000\nZ[LIFT_START POS=81 POS_LIMIT=90]\nG01 X30 F30000\n"
-            "Z[LIFT_END]\nG01 Y20 F3000\nM30\n")  # fmt: skip
+    slow = (
+        "G01 X10 Y10 Z1 F6000\nZ[LIFT_START POS=81 POS_LIMIT=90]\nG01 X30 F30000\n"
+        "Z[LIFT_END]\nG01 Y20 F3000\nM30\n"
+    )
     task, snaps = run_task(ch, slow)
     landing_checks(task, snaps)
     rec = task.lift.records[0]
@@ -219,8 +231,9 @@ def test_path_delay_is_what_the_lift_cost() -> None:
     assert rec.path_delay == pytest.approx(rec.t_end - rec.t_start - rec.nominal_time, abs=1e-9)
     assert rec.path_delay > 0.05 and rec.nominal_time < z_time
     # a normal lift costs the path nothing
-    task, snaps = run_task(ch, slow.replace("POS=81 POS_LIMIT=90", "POS=1 POS_LIMIT=60")
-                           .replace("X30", "X300"))  # fmt: skip
+    task, snaps = run_task(
+        ch, slow.replace("POS=81 POS_LIMIT=90", "POS=1 POS_LIMIT=60").replace("X30", "X300")
+    )
     assert task.lift.records[0].path_delay == pytest.approx(0.0, abs=1e-9)
 
 
@@ -230,8 +243,10 @@ def test_path_delay_of_a_range_that_starts_at_a_waiting_point_is_not_the_wait(wa
     acknowledges) reported the wait as path delay (0.074 s for a 68 ms range); the delay is
     what the lift cost, measured from the moment the path leaves."""
     ch = make_channel()
-    text = (f"G01 X10 Y10 Z1 F6000\n{wait}\nZ[LIFT_START POS=1 POS_LIMIT=30]\n"
-            "G01 X60 F24000\nZ[LIFT_END]\nM30\n")  # fmt: skip
+    text = (
+        f"G01 X10 Y10 Z1 F6000\n{wait}\nZ[LIFT_START POS=1 POS_LIMIT=30]\n"
+        "G01 X60 F24000\nZ[LIFT_END]\nM30\n"
+    )
     task, snaps = run_task(ch, text)
     landing_checks(task, snaps)
     (rec,) = task.lift.records
@@ -252,15 +267,18 @@ def test_path_delay_of_a_range_that_ends_at_a_waiting_point_is_not_the_wait(
     without the wait (0 with Advanced Lifting; path-based Lifting's path runs slower in the
     range so that Z keeps its limits, issue 37 item 3)."""
     ch = make_channel(method)
-    text = (f"G01 X10 Y10 Z1 F6000\nZ[LIFT_START POS=1 POS_LIMIT=30]\n{path}{wait}\n"
-            "Z[LIFT_END]\nM30\n")  # fmt: skip
+    text = (
+        f"G01 X10 Y10 Z1 F6000\nZ[LIFT_START POS=1 POS_LIMIT=30]\n{path}{wait}\nZ[LIFT_END]\nM30\n"
+    )
     task, snaps = run_task(ch, text)
     assert snaps[-1].state is ChannelState.READY and not events(snaps, "lift.late")
     (rec,) = task.lift.records
     plain, _ = run_task(ch, text.replace(f"{wait}\n", ""))
     (without,) = plain.lift.records
-    assert rec.path_delay == pytest.approx(without.path_delay, abs=1e-9), (rec.t_end - rec.t_start,
-                                                                            rec.waits)  # fmt: skip
+    assert rec.path_delay == pytest.approx(without.path_delay, abs=1e-9), (
+        rec.t_end - rec.t_start,
+        rec.waits,
+    )
     assert without.path_delay == 0.0 or (method is LiftMethod.LIFTING and path)
 
 
@@ -283,8 +301,10 @@ def test_any_axis_of_the_channel_lifts_with_its_own_dynamics(method: LiftMethod)
     lands at its POS within its own limits, the flags and counters are that axis's, and the
     other axes never move in a range."""
     ch = make_channel(method)
-    text = ("G01 X10 Y10 Z1 F6000\nY[LIFT_START POS=40 POS_LIMIT=60]\nG01 X200 F20000\n"
-            "Y[LIFT_END]\nZ[LIFT_START POS=5 POS_LIMIT=50]\nG01 X300\nZ[LIFT_END]\nM30\n")  # fmt: skip
+    text = (
+        "G01 X10 Y10 Z1 F6000\nY[LIFT_START POS=40 POS_LIMIT=60]\nG01 X200 F20000\n"
+        "Y[LIFT_END]\nZ[LIFT_START POS=5 POS_LIMIT=50]\nG01 X300\nZ[LIFT_END]\nM30\n"
+    )
     task, snaps = run_task(ch, text)
     assert snaps[-1].state is ChannelState.READY and not events(snaps, "lift.late")
     assert [r.range.start.axis for r in task.lift.records] == ["Y", "Z"]
@@ -383,10 +403,12 @@ def test_a_lift_start_follows_the_rise_prepared_with_the_program() -> None:
     instead of solving it again; a lift whose Z does not start at rest (the path enters the
     range moving Z too) solves its own."""
     ch = make_channel(lift_min_dist=0.005)  # the last range (2 mm) is suppressed
-    text = ("G01 X10 Y10 Z1 F6000\nZ[LIFT_START POS=1 POS_LIMIT=30]\nG01 X60 F12000\n"
-            "Z[LIFT_END]\nZ[LIFT_START POS=1 POS_LIMIT=20]\nG01 Y40\nZ[LIFT_END]\n"
-            "Z[LIFT_START POS=1 POS_LIMIT=25]\nG01 X20\nZ[LIFT_END]\n"
-            "Z[LIFT_START POS=1 POS_LIMIT=20]\nG01 X22\nZ[LIFT_END]\nM30\n")  # fmt: skip
+    text = (
+        "G01 X10 Y10 Z1 F6000\nZ[LIFT_START POS=1 POS_LIMIT=30]\nG01 X60 F12000\n"
+        "Z[LIFT_END]\nZ[LIFT_START POS=1 POS_LIMIT=20]\nG01 Y40\nZ[LIFT_END]\n"
+        "Z[LIFT_START POS=1 POS_LIMIT=25]\nG01 X20\nZ[LIFT_END]\n"
+        "Z[LIFT_START POS=1 POS_LIMIT=20]\nG01 X22\nZ[LIFT_END]\nM30\n"
+    )
     task = GeoTask(ch, text)
     rises = task.prog.rises
     assert len(rises) == 4 and None not in rises[:3]

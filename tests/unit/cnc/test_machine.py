@@ -39,8 +39,9 @@ def run(machine: Machine, cycles: int) -> list[list[GeoSnapshot]]:
 
 
 def test_a_lift_in_channel_2_while_channel_1_cuts() -> None:
-    machine = Machine([ChannelProgram(make_channel(), CUT),
-                       ChannelProgram(make_second_channel(), LIFT)])  # fmt: skip
+    machine = Machine(
+        [ChannelProgram(make_channel(), CUT), ChannelProgram(make_second_channel(), LIFT)]
+    )
     cycles = run(machine, 400)
     lifting = [c for c in cycles if c[1].lift_active]
     assert lifting, "channel 2 never lifted"
@@ -70,8 +71,7 @@ def test_each_channel_runs_as_it_would_alone() -> None:
 
 def test_simulate_machine_gives_each_channel_its_own_summary() -> None:
     ch1, ch2 = make_channel(), make_second_channel()
-    both = simulate_machine([(ch1, CUT), (ch2, LIFT)], [Schedule(), Schedule()], 0.02,
-                            [None, None])  # fmt: skip
+    both = simulate_machine([(ch1, CUT), (ch2, LIFT)], [Schedule(), Schedule()], 0.02, [None, None])
     for (ch, text), result in zip(((ch1, CUT), (ch2, LIFT)), both, strict=True):
         alone = simulate(ch, text, Schedule(), 0.02)
         assert result.finished
@@ -82,8 +82,12 @@ def test_simulate_machine_gives_each_channel_its_own_summary() -> None:
 
 
 def test_an_idle_channel_without_a_program() -> None:
-    results = simulate_machine([(make_channel(), CUT), (make_second_channel(), "")],
-                               [Schedule(), Schedule()], 0.02, [None, None])  # fmt: skip
+    results = simulate_machine(
+        [(make_channel(), CUT), (make_second_channel(), "")],
+        [Schedule(), Schedule()],
+        0.02,
+        [None, None],
+    )
     assert results[0].finished and results[0].summary.cycles > 100
     assert results[1].summary.cycles == 0
 

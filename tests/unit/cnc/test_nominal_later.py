@@ -6,13 +6,13 @@ step in the event's cycle, also where the range ends or the next one starts righ
 
 from __future__ import annotations
 
-from bench.gen import nesting_program
 from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.lift.controller import LiftRecord
 from liftd.cnc.plc import Schedule, SimPlc
 from liftd.cnc.snapshot import ChannelState, GeoSnapshot
 from liftd.settings import load_settings
 from tests.support.paths import REPO
+from tests.support.programs import nesting_program
 
 CH = load_settings(str(REPO / "config" / "liftd.toml")).channel
 DEMO = (REPO / "config" / "programs" / "demo.nc").read_text()

@@ -10,11 +10,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from bench.gen import count_blocks, nesting_program
 from liftd.cnc import pause
 from liftd.cnc.geo_program import load_program
 from liftd.cnc.nc import sources
 from tests.support.channel import make_channel
+from tests.support.programs import count_blocks, nesting_program
 
 
 @pytest.fixture
@@ -63,8 +63,10 @@ def reference(text: str) -> list[str]:
 
 
 @settings(max_examples=300, deadline=None)
-@given(st.lists(st.sampled_from(["a", "%L x", " ", "\n", "\r", "\r\n", "ä", "\t"]), max_size=400),
-       st.sampled_from([1, 2, 3, 7, 64]))  # fmt: skip
+@given(
+    st.lists(st.sampled_from(["a", "%L x", " ", "\n", "\r", "\r\n", "ä", "\t"]), max_size=400),
+    st.sampled_from([1, 2, 3, 7, 64]),
+)
 def test_split_lines_in_pieces_is_one_split(parts: list[str], chunk: int) -> None:
     """Pieces end after a LF, so a CR LF is never cut and no empty line appears between."""
     text = "".join(parts)

@@ -11,7 +11,6 @@ import dataclasses
 
 import pytest
 
-from bench.gen import nesting_program
 from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.params import ChannelParams, MSync
 from liftd.cnc.plc import Schedule, SimPlc
@@ -19,6 +18,7 @@ from liftd.cnc.snapshot import ChannelState, GeoSnapshot
 from liftd.settings import load_settings
 from tests.support.channel import make_channel
 from tests.support.paths import REPO
+from tests.support.programs import nesting_program
 
 DEMO = (REPO / "config" / "programs" / "demo.nc").read_text()
 CH = load_settings(str(REPO / "config" / "liftd.toml")).channel

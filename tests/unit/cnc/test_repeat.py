@@ -6,13 +6,13 @@ from __future__ import annotations
 
 import itertools
 
-from bench.gen import nesting_program
 from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.params import LiftMethod
 from liftd.cnc.plc import Schedule, SimPlc
 from liftd.cnc.snapshot import ChannelState, Command, GeoInputs, GeoSnapshot
 from tests.support.channel import make_channel
 from tests.support.paths import REPO
+from tests.support.programs import nesting_program
 
 DEMO = (REPO / "config" / "programs" / "demo.nc").read_text()
 START = GeoInputs(command=Command.START)
@@ -42,8 +42,11 @@ def test_a_repeat_from_the_prepared_end_position_loads_nothing_and_equals_a_fres
     the previous START, while what that START replaced is released a few objects a cycle):
     each is the run a fresh task started there makes, bit for bit."""
     nesting = nesting_program(12)  # 11 lift records and a long queue to release in a run
-    for method, text, lifts in ((LiftMethod.ADVANCED, DEMO, 5), (LiftMethod.LIFTING, DEMO, 5),
-                                (LiftMethod.ADVANCED, nesting, 11)):  # fmt: skip
+    for method, text, lifts in (
+        (LiftMethod.ADVANCED, DEMO, 5),
+        (LiftMethod.LIFTING, DEMO, 5),
+        (LiftMethod.ADVANCED, nesting, 11),
+    ):
         ch = make_channel(method, lift_min_dist=0.005)
         dt = ch.cycle_time
         task = GeoTask(ch, text, autostart=False)
@@ -56,8 +59,10 @@ def test_a_repeat_from_the_prepared_end_position_loads_nothing_and_equals_a_fres
         )  # run 2's state, built before the loop, was kept for it
         end = first[-1]
         assert end.state is ChannelState.READY
-        assert max(abs(a - b) for a, b in zip(end.positions, task.prog.path.end_position,
-                                              strict=True)) <= 1e-9  # fmt: skip
+        assert (
+            max(abs(a - b) for a, b in zip(end.positions, task.prog.path.end_position, strict=True))
+            <= 1e-9
+        )
         for run in (2, 3):
             assert task.next_run_ready, (method, run)  # START only swaps it in
             k0 = k
@@ -82,8 +87,14 @@ def test_a_start_from_elsewhere_prepares_the_program_for_that_position() -> None
     assert len(third) == len(second)  # the same run again, an other time base (rounding only)
     # the tracker decides at sub-cycle instants against slack margins: rounding of the later
     # time base may shift a decision by ulps, which shows as nanometres, never more
-    assert max(abs(a - b) for s3, s2 in zip(third, second, strict=True)
-               for a, b in zip(s3.positions, s2.positions, strict=True)) < 1e-8  # fmt: skip
+    assert (
+        max(
+            abs(a - b)
+            for s3, s2 in zip(third, second, strict=True)
+            for a, b in zip(s3.positions, s2.positions, strict=True)
+        )
+        < 1e-8
+    )
 
 
 def test_a_task_created_mid_run_starts_its_path_in_its_first_cycle() -> None:
@@ -94,6 +105,8 @@ def test_a_task_created_mid_run_starts_its_path_in_its_first_cycle() -> None:
     _, snaps = run_once(task, 14_110, ch.cycle_time)
     first = snaps[0].positions
     assert max(abs(a - b) for a, b in zip(first, (0.02, 0.02, 0.05), strict=True)) < 1e-6
-    steps = [max(abs(a - b) for a, b in zip(p.positions, q.positions, strict=True))
-             for p, q in itertools.pairwise(snaps)]  # fmt: skip
+    steps = [
+        max(abs(a - b) for a, b in zip(p.positions, q.positions, strict=True))
+        for p, q in itertools.pairwise(snaps)
+    ]
     assert max(steps) <= max(ax.v_max for ax in ch.axes) * ch.cycle_time * (1 + 1e-9)

@@ -28,9 +28,17 @@ def _profiles(n: int, seed: int = 1) -> list[Trajectory]:
             else:
                 stretch = rng.choice([None, None, rng.uniform(0.0, 1.0)])
                 traj = calc.position(
-                    p0, v0, a0, rng.uniform(-0.1, 0.1), rng.choice([0.0, rng.uniform(0, v_max)]),
-                    v_max, a_max, j_max, forward_only=False, min_duration=stretch,
-                )  # fmt: skip
+                    p0,
+                    v0,
+                    a0,
+                    rng.uniform(-0.1, 0.1),
+                    rng.choice([0.0, rng.uniform(0, v_max)]),
+                    v_max,
+                    a_max,
+                    j_max,
+                    forward_only=False,
+                    min_duration=stretch,
+                )
         except ProfileError:
             continue
         out.append(traj)

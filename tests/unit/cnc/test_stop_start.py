@@ -9,15 +9,16 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from bench.bench_reset import nc_error_in_a_range, reset_in_a_range
-from bench.stress_cases import describe, violations, wide_scenario
 from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.params import LiftMethod
 from liftd.cnc.plc import Schedule, SimPlc
 from liftd.cnc.snapshot import ChannelState, Command, GeoInputs, GeoSnapshot
 from tests.support.channel import make_channel
 from tests.support.closed_loop import events, fd_ratios, run_task
+from tests.support.cycle_check import violations
 from tests.support.paths import REPO
+from tests.support.reset_runs import nc_error_in_a_range, reset_in_a_range
+from tests.support.scenarios import describe, wide_scenario
 from tests.support.stops import StopThenStart, stop_and_start
 
 DEMO = (REPO / "config" / "programs" / "demo.nc").read_text()
@@ -32,8 +33,9 @@ def _at(t: float | tuple[float, float], method: LiftMethod) -> float:
 
 @pytest.mark.parametrize("method", [LiftMethod.ADVANCED, LiftMethod.LIFTING])
 @pytest.mark.parametrize("held", [0.001, 0.27, 3.0])
-@pytest.mark.parametrize(("t_stop", "in_lift"), [(0.45, False), (5.6, True), (6.1, True),
-                                                 (LIFT_3, True)])  # fmt: skip
+@pytest.mark.parametrize(
+    ("t_stop", "in_lift"), [(0.45, False), (5.6, True), (6.1, True), (LIFT_3, True)]
+)
 def test_start_after_a_stop_goes_on_from_where_the_path_stopped(
     method: LiftMethod, held: float, t_stop: float | tuple[float, float], in_lift: bool
 ) -> None:
@@ -187,9 +189,10 @@ def test_a_reset_at_a_random_moment_of_a_wide_scenario_leaves_z_within_its_limit
     assert ratio <= 1.0 + 1e-6
 
 
-@pytest.mark.parametrize(("seed", "method"), [(591, LiftMethod.ADVANCED),
-                                              (15, LiftMethod.ADVANCED),
-                                              (844, LiftMethod.LIFTING)])  # fmt: skip
+@pytest.mark.parametrize(
+    ("seed", "method"),
+    [(591, LiftMethod.ADVANCED), (15, LiftMethod.ADVANCED), (844, LiftMethod.LIFTING)],
+)
 def test_an_nc_error_at_a_random_block_of_a_range_holds_z_at_its_limit_smoothly(
     seed: int, method: LiftMethod
 ) -> None:

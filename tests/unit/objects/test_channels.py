@@ -52,15 +52,17 @@ def test_each_channels_flags_at_its_own_index_group() -> None:
     """Channel 2 lifts W while channel 1 cuts: ch2's W flag at 0x121302 / 0x60095 (logical
     axis 6) and 0x21302 / 0x30095 (3rd axis of the 2nd channel), ch1's Z stays 0."""
     w = Machine2()
-    machine = Machine([ChannelProgram(make_channel(), CUT),
-                       ChannelProgram(make_second_channel(), LIFT)])  # fmt: skip
+    machine = Machine(
+        [ChannelProgram(make_channel(), CUT), ChannelProgram(make_second_channel(), LIFT)]
+    )
     plcs = [SimPlc(0.02), SimPlc(0.02)]
     last: list[GeoSnapshot | None] = [None, None]
     lifted = 0
     for k in range(1, 400):
         t = k * 1e-3
-        snaps = machine.step([p.inputs(s, t, Schedule()) for p, s in zip(plcs, last, strict=True)],
-                             t)  # fmt: skip
+        snaps = machine.step(
+            [p.inputs(s, t, Schedule()) for p, s in zip(plcs, last, strict=True)], t
+        )
         last = list(snaps)
         w.show(snaps)
         ch2_lifts = snaps[1].lift_active

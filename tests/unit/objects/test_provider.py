@@ -37,8 +37,12 @@ def w() -> World:
 
 def test_lift_objects_at_their_vendor_addresses(w: World) -> None:
     assert w.p.read(0x121301, 0x00030095, 1) == b"\x00"
-    w.view = w.view._replace(snapshot=w.view.snapshot._replace(lift_active=True,  # type: ignore[union-attr]
-                                                               lift_suppressed=True))  # fmt: skip
+    w.view = w.view._replace(
+        snapshot=w.view.snapshot._replace(
+            lift_active=True,  # type: ignore[union-attr]
+            lift_suppressed=True,
+        )
+    )
     assert w.p.read(0x121301, 0x00030095, 1) == b"\x01"  # lift_active, AID 3 (Z), logical
     assert w.p.read(0x121301, 0x00030094, 1) == b"\x01"  # lift_suppressed
     assert w.p.read(0x021301, 0x00030095, 1) == b"\x01"  # index based: channel index 1, 3rd axis
@@ -49,14 +53,21 @@ def test_lift_objects_at_their_vendor_addresses(w: World) -> None:
 def test_the_flags_belong_to_the_axis_that_lifts(w: World) -> None:
     """Any axis of the channel may lift (vendor §3): the flags, the phase and liftd's lift
     counter are the lifting axis's; the other axes read 0."""
-    snap = w.view.snapshot._replace(lift_active=True, lift_axis=0,  # type: ignore[union-attr]
-                                    lift_phase=LiftPhase.UP, lift_counts=(3, 0, 2))  # fmt: skip
+    snap = w.view.snapshot._replace(
+        lift_active=True,
+        lift_axis=0,  # type: ignore[union-attr]
+        lift_phase=LiftPhase.UP,
+        lift_counts=(3, 0, 2),
+    )
     w.view = w.view._replace(snapshot=snap)  # type: ignore[union-attr]
     assert w.p.read(0x121301, 0x00010095, 1) == b"\x01"  # X lifts
     assert w.p.read(0x121301, 0x00030095, 1) == b"\x00"  # Z does not, now
-    for name, value in (("X.lift_phase", b"\x01\x00"), ("Z.lift_phase", b"\x00\x00"),
-                        ("X.lift_count", struct.pack("<I", 3)),
-                        ("Z.lift_count", struct.pack("<I", 2))):  # fmt: skip
+    for name, value in (
+        ("X.lift_phase", b"\x01\x00"),
+        ("Z.lift_phase", b"\x00\x00"),
+        ("X.lift_count", struct.pack("<I", 3)),
+        ("Z.lift_count", struct.pack("<I", 2)),
+    ):
         sym = w.p.find_symbol(f"GEO.ch1.{name}")
         assert w.p.read(sym.index_group, sym.index_offset, 8) == value
 
@@ -79,7 +90,8 @@ def test_attributes_by_index_group(w: World) -> None:
     assert w.p.read(0x121701, 0x15, 1024) == "µm/s\0".encode("cp1252")  # CP1252 strings
     # object address of lift_active of axis 1 of channel 1 (ReadWrite: channel, axis)
     assert w.p.read_write(0x121901, io, 8, struct.pack("<II", 1, 1)) == struct.pack(
-        "<II", 0x121301, 0x00010095)  # fmt: skip
+        "<II", 0x121301, 0x00010095
+    )
 
 
 def test_error_codes(w: World) -> None:
@@ -102,9 +114,16 @@ def test_error_codes(w: World) -> None:
 def test_symbols_and_aliases_resolve_to_the_same_object(w: World) -> None:
     sym = w.p.find_symbol("GEO.ch1.Z.lift_active")
     assert (sym.index_group, sym.index_offset, sym.type_name, sym.size) == (
-        0x121301, 0x30095, "BOOL", 1)  # fmt: skip
-    for alias in ("gpAx[3].ipo_state.lift_active", "gpAx[3]^.ipo_state.lift_active",
-                  "geo.CH1.z.LIFT_ACTIVE"):  # fmt: skip
+        0x121301,
+        0x30095,
+        "BOOL",
+        1,
+    )
+    for alias in (
+        "gpAx[3].ipo_state.lift_active",
+        "gpAx[3]^.ipo_state.lift_active",
+        "geo.CH1.z.LIFT_ACTIVE",
+    ):
         got = w.p.find_symbol(alias)
         assert (got.index_group, got.index_offset) == (0x121301, 0x30095)
     assert w.code(w.p.find_symbol, "GEO.ch1.Q.lift_active") == AdsErr.SYMBOLNOTFOUND

@@ -38,5 +38,8 @@ def test_events_arrive_in_order_and_a_failing_consumer_does_not_end_their_delive
     finally:
         shared.close()
     assert [(e.name, e.line, len(e.text)) for e in got] == [
-        ("geo.program_start", 10, 0), ("lift.start", 11, 300), ("lift.end", 12, 600)]  # fmt: skip
+        ("geo.program_start", 10, 0),
+        ("lift.start", 11, 300),
+        ("lift.end", 12, 600),
+    ]
     assert len(errors) == 1 and isinstance(errors[0]["exception"], RuntimeError)

@@ -18,11 +18,23 @@ from tests.support.ads_harness import snapshot
 def test_snapshot_and_stats_round_trip_bit_exactly() -> None:
     codec = SnapshotCodec(3)
     snap = snapshot(
-        cycle=123_456, t=123.456, state=ChannelState.HOLD, positions=(0.1 + 0.2, -1e-7, 0.15),
-        v_path=0.123456789012345, override=0.75, lift_active=True, lift_suppressed=True,
-        lift_phase=LiftPhase.DOWN, lift_vz=-0.98, m_pending=8, error_id=21558, error_line=14,
-        events=(Event("lift.start", 1.0, 3),), lift_axis=0, lift_counts=(2, 0, 4_000_000_000),
-    )  # fmt: skip
+        cycle=123_456,
+        t=123.456,
+        state=ChannelState.HOLD,
+        positions=(0.1 + 0.2, -1e-7, 0.15),
+        v_path=0.123456789012345,
+        override=0.75,
+        lift_active=True,
+        lift_suppressed=True,
+        lift_phase=LiftPhase.DOWN,
+        lift_vz=-0.98,
+        m_pending=8,
+        error_id=21558,
+        error_line=14,
+        events=(Event("lift.start", 1.0, 3),),
+        lift_axis=0,
+        lift_counts=(2, 0, 4_000_000_000),
+    )
     stats = LoopStats(123_456, 7, 45.5, 130.25, 12.0, 480.0, 3, 210.5, 2)
     raw = codec.pack(snap, stats)
     assert len(raw) == codec.size

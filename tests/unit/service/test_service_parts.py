@@ -36,11 +36,19 @@ def test_buckets_are_cumulative_on_the_fixed_edges() -> None:
 
 
 def test_the_exposition_of_a_sample() -> None:
-    totals = LoopTotals(cycles=1000, exceeded=3, compute_over=7, regridded=0, events_dropped=0,
-                        compute_sum_ns=60_000_000, lateness_sum_ns=20_000_000,
-                        compute_cpu_over=2)  # fmt: skip
-    sample = Sample(totals, hist(*[60_000] * 1000), hist(*[20_000] * 1000), True,
-                    AdsStats(2, 500, 1, 40))  # fmt: skip
+    totals = LoopTotals(
+        cycles=1000,
+        exceeded=3,
+        compute_over=7,
+        regridded=0,
+        events_dropped=0,
+        compute_sum_ns=60_000_000,
+        lateness_sum_ns=20_000_000,
+        compute_cpu_over=2,
+    )
+    sample = Sample(
+        totals, hist(*[60_000] * 1000), hist(*[20_000] * 1000), True, AdsStats(2, 500, 1, 40)
+    )
     body = generate_latest(registry(lambda: sample, lambda: None)).decode()
     assert "liftd_geo_cycles_total 1000.0" in body
     assert "liftd_geo_compute_over_25pct_total 7.0" in body
@@ -83,9 +91,12 @@ def test_geo_events_become_log_lines_at_their_level_and_quiet_ones_are_limited()
         for _ in range(3):
             log(Event("lift.override_limited", 2.0, 7, 1.5))  # once a second
     assert [(r["event"], r["log_level"]) for r in logs] == [
-        ("geo.fault", "error"), ("geo.overrun", "warning"), ("geo.rt_setting", "warning"),
-        ("lift.start", "info"), ("lift.override_limited", "info"),
-    ]  # fmt: skip
+        ("geo.fault", "error"),
+        ("geo.overrun", "warning"),
+        ("geo.rt_setting", "warning"),
+        ("lift.start", "info"),
+        ("lift.override_limited", "info"),
+    ]
     assert logs[3]["value"] == 0.3  # no float noise
 
 
@@ -94,18 +105,25 @@ def test_a_reload_names_what_needs_a_restart_against_what_runs() -> None:
     changed by an earlier reload still needs the restart, and a port changed back does not
     (it compared with the last accepted file: 'restart for port' came and went wrongly)."""
     running = LiftdConfig.model_validate({"ads": {"port": 48898}})
-    moved = LiftdConfig.model_validate({"ads": {"port": 1}, "rt": {"sched_fifo_priority": 0},
-                                        "log": {"format": "json"}})  # fmt: skip
+    moved = LiftdConfig.model_validate(
+        {"ads": {"port": 1}, "rt": {"sched_fifo_priority": 0}, "log": {"format": "json"}}
+    )
     assert needs_restart(running, running) == []
     assert needs_restart(running, moved) == ["ads.port", "rt.sched_fifo_priority", "log.format"]
-    assert needs_restart(running, moved.model_copy(update={"ads": running.ads, "rt": running.rt,
-                                                           "log": running.log})) == []  # fmt: skip
+    assert (
+        needs_restart(
+            running,
+            moved.model_copy(update={"ads": running.ads, "rt": running.rt, "log": running.log}),
+        )
+        == []
+    )
 
 
 def test_a_reload_that_changes_the_live_view_needs_a_restart() -> None:
     """[ui] is read when the daemon starts (listener, token, control): a reload that changes it
     says so instead of seeming applied."""
     running = LiftdConfig.model_validate({"ui": {"enabled": True}})
-    changed = LiftdConfig.model_validate({"ui": {"enabled": True, "control": True,
-                                                 "token": "0123456789abcdef"}})  # fmt: skip
+    changed = LiftdConfig.model_validate(
+        {"ui": {"enabled": True, "control": True, "token": "0123456789abcdef"}}
+    )
     assert needs_restart(running, changed) == ["ui.control", "ui.token"]

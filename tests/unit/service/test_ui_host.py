@@ -40,21 +40,27 @@ def test_a_page_write_is_the_ads_write(daemon: Daemon) -> None:
     got = []
     while (raw := daemon.shared.inputs.get()) is not None:
         got.append(unpack_input(raw))
-    assert got == [PlcWrite(PlcSignal.OVERRIDE, 0.45), PlcWrite(PlcSignal.FEED_HOLD, 1.0),
-                   PlcWrite(PlcSignal.START, 1.0)]  # fmt: skip
+    assert got == [
+        PlcWrite(PlcSignal.OVERRIDE, 0.45),
+        PlcWrite(PlcSignal.FEED_HOLD, 1.0),
+        PlcWrite(PlcSignal.START, 1.0),
+    ]
     assert daemon.provider.levels[(0, PlcSignal.OVERRIDE)] == 450  # read back as written
 
 
 @pytest.mark.parametrize(
     ("symbol", "value", "fragment"),
     [
-        ("PLC.ch1.override", 2001, "0x706"), ("PLC.ch1.override", True, "0x706"),
-        ("PLC.ch1.feed_hold", 1, "0x706"), ("PLC.ch9.override", 10, "0x710"),
+        ("PLC.ch1.override", 2001, "0x706"),
+        ("PLC.ch1.override", True, "0x706"),
+        ("PLC.ch1.feed_hold", 1, "0x706"),
+        ("PLC.ch9.override", 10, "0x710"),
         ("GEO.ch1.override", 10, "only PLC"),
     ],
-)  # fmt: skip
-def test_refused_writes_reach_nothing(daemon: Daemon, symbol: str, value: bool | int,
-                                      fragment: str) -> None:  # fmt: skip
+)
+def test_refused_writes_reach_nothing(
+    daemon: Daemon, symbol: str, value: bool | int, fragment: str
+) -> None:
     with pytest.raises(Refused) as exc:
         host(daemon)._write(symbol, value)
     assert fragment in str(exc.value)
@@ -66,5 +72,6 @@ def test_the_access_policy_decides_who_controls(daemon: Daemon) -> None:
     assert ui._policy("127.0.0.1") == ""
     assert "allow_ips" in ui._policy("192.168.1.7")
     daemon.server.config = dataclasses.replace(
-        daemon.server.config, write_net_ids=frozenset({net_id_bytes("10.0.0.1.1.1")}))  # fmt: skip
+        daemon.server.config, write_net_ids=frozenset({net_id_bytes("10.0.0.1.1.1")})
+    )
     assert "write_net_ids" in ui._policy("127.0.0.1")

@@ -121,12 +121,20 @@ def test_repo_config_is_the_default_in_a_source_checkout() -> None:
 @pytest.mark.parametrize(
     ("keys", "key", "value", "fragment"),
     [
-        ("max_frame_bytes = 1048576\nconnection_budget_bytes = 2000000", "connection_budget_bytes",
-         "2000000", "below 2 × max_frame_bytes (2097152)"),
-        ("connection_budget_bytes = 8388608\nbudget_bytes = 4194304", "budget_bytes", "4194304",
-         "below connection_budget_bytes (8388608)"),
+        (
+            "max_frame_bytes = 1048576\nconnection_budget_bytes = 2000000",
+            "connection_budget_bytes",
+            "2000000",
+            "below 2 × max_frame_bytes (2097152)",
+        ),
+        (
+            "connection_budget_bytes = 8388608\nbudget_bytes = 4194304",
+            "budget_bytes",
+            "4194304",
+            "below connection_budget_bytes (8388608)",
+        ),
     ],
-)  # fmt: skip
+)
 def test_memory_budgets_below_what_they_must_hold(
     tmp_path: Path, keys: str, key: str, value: str, fragment: str
 ) -> None:

@@ -42,8 +42,10 @@ def test_list_flags_inaktiv_gueltig_inch_and_default_index(machine: Machine) -> 
     ch = load_settings(str(cfg)).channel
     # tool 2 is invalid; tool 3 is in 0.0001 inch: 1000 = 0.1 inch
     assert dict(ch.tool_radii) == pytest.approx({1: 0.1 * MM, 3: 2.54 * MM})
-    assert dict(ch.zero_offsets) == {0: pytest.approx((0.0, 0.0, 2 * MM)),
-                                     2: pytest.approx((3 * MM, 0.0, 0.0))}  # fmt: skip
+    assert dict(ch.zero_offsets) == {
+        0: pytest.approx((0.0, 0.0, 2 * MM)),
+        2: pytest.approx((3 * MM, 0.0, 0.0)),
+    }
     assert ch.zero_offset_default == 2 and ch.g53_offsets
 
 
@@ -71,12 +73,17 @@ def test_toml_values_override_the_lists(machine: Machine) -> None:
         ("[nc.tools]\nD1 = -0.1\n", 2, "nc.tools.D1", "-0.1", "greater than or equal to 0"),
         ("[nc]\ntools = { D1 = 'x' }\n", 2, "nc.tools.D1", "x", "valid number"),
         ("[nc.zero_offsets]\nG60 = { X = 1 }\n", 2, "nc.zero_offsets.G60", "G60", "G59"),
-        ("[nc.zero_offsets]\nG54 = { X = 2e6 }\n", 2, "nc.zero_offsets.G54.X", "2000000.0",
-         "less than or equal to 1000000"),
+        (
+            "[nc.zero_offsets]\nG54 = { X = 2e6 }\n",
+            2,
+            "nc.zero_offsets.G54.X",
+            "2000000.0",
+            "less than or equal to 1000000",
+        ),
         ("[nc]\nmax_executed_blocks = 10\n", 2, "nc.max_executed_blocks", "10", "1000"),
         ("[nc]\nsubroutine_dir = ['x']\n", 2, "nc.subroutine_dir", None, "unknown key"),
     ],
-)  # fmt: skip
+)
 def test_bad_nc_values_name_file_line_key_value(
     text: str, line: int, key: str, value: str | None, fragment: str
 ) -> None:

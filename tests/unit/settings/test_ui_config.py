@@ -22,7 +22,11 @@ def test_off_by_default_and_on_loopback_in_the_shipped_config() -> None:
     assert LiftdConfig().ui.enabled is False
     shipped = load_settings(str(REPO / "config" / "liftd.toml")).config.ui
     assert (shipped.enabled, shipped.host, shipped.port, shipped.control) == (
-        True, "127.0.0.1", 8551, False)  # fmt: skip
+        True,
+        "127.0.0.1",
+        8551,
+        False,
+    )
 
 
 @pytest.mark.parametrize(
@@ -90,7 +94,12 @@ def test_bad_token_files(tmp_path: Path, ui: str, content: str | None, fragment:
 
 def test_liftd_run_exits_2_naming_the_line(tmp_path: Path) -> None:
     path = _config(tmp_path, "enabled = true\nport = -1\n")
-    r = subprocess.run([sys.executable, "-m", "liftd", "run", "-c", str(path)],
-                       capture_output=True, text=True, timeout=60, check=False)  # fmt: skip
+    r = subprocess.run(
+        [sys.executable, "-m", "liftd", "run", "-c", str(path)],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
     assert r.returncode == 2
     assert f"{path}:6" in r.stderr and "ui.port" in r.stderr and "-1" in r.stderr

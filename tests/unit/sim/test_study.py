@@ -112,8 +112,9 @@ def test_an_unfinished_program_says_why_and_counts_its_open_range_once(tmp_path:
     """`why` of an unfinished row says the limit (it was empty), and the range both runs were
     inside when it stopped is one open range (it was counted once per run: open 2, lifts 1)."""
     program = tmp_path / "long.nc"
-    program.write_text("G01 X10 Y10 Z1 F6000\nZ[LIFT_START POS=1 POS_LIMIT=30]\n"
-                       "G01 X1000 F600\nZ[LIFT_END]\nM30\n")  # fmt: skip
+    program.write_text(
+        "G01 X10 Y10 Z1 F6000\nZ[LIFT_START POS=1 POS_LIMIT=30]\nG01 X1000 F600\nZ[LIFT_END]\nM30\n"
+    )
     row = study.run_one(config(max_time=1.5), str(program)).row
     assert row.status is Status.UNFINISHED
     assert row.why == "did not finish within 1.5 s simulated (--max-time)"
@@ -155,11 +156,17 @@ def _result(
 ) -> ProgramResult:
     n = len(ratios)
     row = ProgramRow(
-        name, status, lifts=n, compared=n, clearance_advanced_mm=2.0 if n else None,
-        clearance_lifting_mm=1.0 if n else None, duration_advanced_s=10.0,
-        duration_lifting_s=10.5, lifting_z_overload_cycles=overload,
+        name,
+        status,
+        lifts=n,
+        compared=n,
+        clearance_advanced_mm=2.0 if n else None,
+        clearance_lifting_mm=1.0 if n else None,
+        duration_advanced_s=10.0,
+        duration_lifting_s=10.5,
+        lifting_z_overload_cycles=overload,
         clearance_ratio_min=min(ratios, default=None),
-    )  # fmt: skip
+    )
     return ProgramResult(row, tuple((2.0, 1.0) for _ in ratios), ratios, 1000)
 
 

@@ -27,8 +27,25 @@ N70 M30
 
 def plain_row(s: GeoSnapshot, n_axes: int) -> str:
     """A row as docs/reference/design.md §3.2 lists its columns, one %-format per row (the reference)."""
-    fmt = ",".join(["%.6f", "%d", *["%.9f"] * n_axes, "%.9f", "%.6f", "%d", "%d", "%d",
-                    "%.9f", "%.9f", "%d", "%.6f"]) + "\n"  # fmt: skip
+    fmt = (
+        ",".join(
+            [
+                "%.6f",
+                "%d",
+                *["%.9f"] * n_axes,
+                "%.9f",
+                "%.6f",
+                "%d",
+                "%d",
+                "%d",
+                "%.9f",
+                "%.9f",
+                "%d",
+                "%.6f",
+            ]
+        )
+        + "\n"
+    )
     return fmt % (
         s.t,
         s.line,

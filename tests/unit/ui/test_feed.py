@@ -14,12 +14,35 @@ ACTIVE, SUPPRESSED = "GEO.ch1.Z.lift_active", "GEO.ch1.Z.lift_suppressed"
 COUNT = "GEO.ch1.Z.lift_count"
 
 
-def view(cycle: int, active: bool = False, suppressed: bool = False, count: int = 0,
-         x: float = 0.0) -> GeoView:  # fmt: skip
-    snap = GeoSnapshot(cycle, cycle * 1e-3, ChannelState.ACTIVE, 7, 0, (x, 0.0, 0.001), 0.1,
-                       1.0, 1.0, 2.0, False, active, suppressed,
-                       LiftPhase.UP if active else LiftPhase.NONE, 0.0, 0.0, -1, 0, 0, (), 0.0,
-                       0.0, 2, (0, 0, count))  # fmt: skip
+def view(
+    cycle: int, active: bool = False, suppressed: bool = False, count: int = 0, x: float = 0.0
+) -> GeoView:
+    snap = GeoSnapshot(
+        cycle,
+        cycle * 1e-3,
+        ChannelState.ACTIVE,
+        7,
+        0,
+        (x, 0.0, 0.001),
+        0.1,
+        1.0,
+        1.0,
+        2.0,
+        False,
+        active,
+        suppressed,
+        LiftPhase.UP if active else LiftPhase.NONE,
+        0.0,
+        0.0,
+        -1,
+        0,
+        0,
+        (),
+        0.0,
+        0.0,
+        2,
+        (0, 0, count),
+    )
     return GeoView(snap, LoopStats(cycles=cycle))
 
 

@@ -58,8 +58,7 @@ def test_a_lagging_page_gets_the_full_state_again() -> None:
 
 
 def test_peers_and_events_reach_the_page() -> None:
-    peers = [{"peer": "127.0.0.1:5000", "net_id": "1.2.3.4.1.1", "requests": 7,
-              "notifications": 0}]  # fmt: skip
+    peers = [{"peer": "127.0.0.1:5000", "net_id": "1.2.3.4.1.1", "requests": 7, "notifications": 0}]
     hub = LiveHub(Catalog(CH), lambda: view(1), lambda: peers)
     hub.on_event(Event("lift.start", 0.1, 19, 0.001, ""))
     hub.on_event(Event("geo.compute_over", 0.1, 19, 300.0, ""))  # counted, not listed

@@ -43,13 +43,17 @@ def test_a_row_gives_the_same_symbols_as_the_live_view(tmp_path: Path) -> None:
     ("text", "fragment"),
     [
         ("t,line,x,y,v_path,override,lift_active,lift_suppressed\n", "line 1: the columns"),
-        ("t,line,x,y,z,v_path,override,lift_active,lift_suppressed\n0.001,1,0,0,0,0,1,0\n",
-         "line 2: 8 fields"),
-        ("t,line,x,y,z,v_path,override,lift_active,lift_suppressed\n0.001,1,0,0,zz,0,1,0,0\n",
-         "line 2: could not convert"),
+        (
+            "t,line,x,y,z,v_path,override,lift_active,lift_suppressed\n0.001,1,0,0,0,0,1,0\n",
+            "line 2: 8 fields",
+        ),
+        (
+            "t,line,x,y,z,v_path,override,lift_active,lift_suppressed\n0.001,1,0,0,zz,0,1,0,0\n",
+            "line 2: could not convert",
+        ),
         ("t,line,x,y,z,v_path,override,lift_active,lift_suppressed\n", "no rows"),
     ],
-)  # fmt: skip
+)
 def test_not_a_trace_of_the_channel(tmp_path: Path, text: str, fragment: str) -> None:
     bad = tmp_path / "bad.csv"
     bad.write_text(text)

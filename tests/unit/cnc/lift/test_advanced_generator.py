@@ -11,8 +11,9 @@ import math
 import numpy as np
 import pytest
 
-from liftd.cnc.lift.advanced import AdvancedLift, Phase
+from liftd.cnc.lift.advanced import AdvancedLift
 from liftd.cnc.lift.profile import LiftProfiles
+from liftd.cnc.snapshot import LiftPhase
 from tests.support.pure_core import PureCore
 
 DT = 1e-3
@@ -101,7 +102,7 @@ def test_infinite_remaining_time_rises_to_the_limit_and_holds() -> None:
     gen.start(0.0, 0.0, 0.0, 0.0, 0.0, 0.05, False, direct=False)
     for k in range(1, 600):
         gen.step(k * DT, math.inf)
-    assert gen.z == pytest.approx(0.05, abs=1e-9) and gen.phase is Phase.UP
+    assert gen.z == pytest.approx(0.05, abs=1e-9) and gen.phase is LiftPhase.UP
 
 
 def test_override_lowered_while_descending_rises_again_and_still_lands() -> None:
@@ -153,11 +154,14 @@ print(json.dumps({"calls": calls["n"], "fallbacks": gen.fallbacks, "z_max": floa
     assert res["fd_max"] <= 1 + 1e-9
 
 
-@pytest.mark.parametrize(("z0", "target", "limit", "down"), [
-    (0.001, 0.001, 0.05, False),  # rise and land where it started
-    (0.0, 0.02, 0.05, False),  # POS above the start
-    (0.04, 0.01, 0.0, True),  # a downward lift (mirrored coordinates)
-])  # fmt: skip
+@pytest.mark.parametrize(
+    ("z0", "target", "limit", "down"),
+    [
+        (0.001, 0.001, 0.05, False),  # rise and land where it started
+        (0.0, 0.02, 0.05, False),  # POS above the start
+        (0.04, 0.01, 0.0, True),  # a downward lift (mirrored coordinates)
+    ],
+)
 def test_a_prepared_first_rise_gives_the_cycle_the_same_set_points(
     z0: float, target: float, limit: float, down: bool
 ) -> None:

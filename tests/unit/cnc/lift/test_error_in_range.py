@@ -31,15 +31,25 @@ def _after_error(task, snaps: list[GeoSnapshot], ch) -> np.ndarray:  # type: ign
         # §2.1.1: with the start beyond POS_LIMIT the limit is raised to the maximum of start
         # and POS: Z starts at 50, goes to POS = 10 at the start (special case 1); after the
         # error it goes back up to 50, not to the ineffective 30
-        ("G01 X0 Y0 Z50 F6000\nZ[LIFT_START POS=10 POS_LIMIT=30]\nG01 X100\nX200\n"
-         "X250 Q1 oops\nX300\nZ[LIFT_END]\nM30\n", 10, 50, 1.0),
+        (
+            "G01 X0 Y0 Z50 F6000\nZ[LIFT_START POS=10 POS_LIMIT=30]\nG01 X100\nX200\n"
+            "X250 Q1 oops\nX300\nZ[LIFT_END]\nM30\n",
+            10,
+            50,
+            1.0,
+        ),
         # DOWN (Advanced Lifting only): a lowering depth of 5 above POS = 2 has no effect; Z
         # goes to 2 at the start and stays there after an error, never back up toward 5
-        ("G01 X0 Y0 Z10 F6000\nZ[LIFT_START DOWN POS=2 POS_LIMIT=5]\nG01 X100\nX150 Q1 oops\n"
-         "X200\nZ[LIFT_END]\nM30\n", 2, 2, -1.0),
+        (
+            "G01 X0 Y0 Z10 F6000\nZ[LIFT_START DOWN POS=2 POS_LIMIT=5]\nG01 X100\nX150 Q1 oops\n"
+            "X200\nZ[LIFT_END]\nM30\n",
+            2,
+            2,
+            -1.0,
+        ),
     ],
     ids=["start above the limit", "down"],
-)  # fmt: skip
+)
 def test_the_limit_without_effect_is_the_height_an_error_holds(
     text: str, low: float, high: float, sign: float
 ) -> None:

@@ -1,17 +1,17 @@
 """A lift start's cycle takes the work the GEO task did for it in the two cycles before
-(`LiftAhead._prime_lift`): the first rising cycle's ruckig solve and the lower bound of the path's
+(`LiftAhead.prime`): the first rising cycle's ruckig solve and the lower bound of the path's
 arrival at the lift's horizon. Both are memos of pure functions, so a run that throws them away
 before every cycle is the same run, cycle for cycle, also where override steps and feed holds
 discard the committed future the memos were computed on."""
 
 from __future__ import annotations
 
-from bench.gen import nesting_program
 from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.plc import Schedule, SimPlc
 from liftd.cnc.snapshot import ChannelState, GeoSnapshot
 from liftd.settings import load_settings
 from tests.support.paths import REPO
+from tests.support.programs import nesting_program
 
 DEMO = (REPO / "config" / "programs" / "demo.nc").read_text()
 CH = load_settings(str(REPO / "config" / "liftd.toml")).channel

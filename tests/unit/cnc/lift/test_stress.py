@@ -11,12 +11,13 @@ import dataclasses
 import pytest
 
 import liftd.cnc.geo_program as geo_program
-from bench.gen import nesting_program
-from bench.stress_cases import describe, scenario, violations, wide_scenario
 from liftd.cnc.params import LiftMethod
 from liftd.cnc.plc import Schedule
 from tests.support.channel import make_channel
 from tests.support.closed_loop import run_task
+from tests.support.cycle_check import violations
+from tests.support.programs import nesting_program
+from tests.support.scenarios import describe, scenario, wide_scenario
 
 # 2306: ruckig's time for a position 1e-7 m ahead at 0.65 mm/s was 1.8 ms late, so a step cut
 # at a boundary held the path back by a micrometre (X at 4.1 × j_max); checked on the profile;
@@ -24,8 +25,27 @@ from tests.support.closed_loop import run_task
 # read that cap as violated (its slack under the 1 µm margin); the forced cruise dropped the
 # braking profile toward the dwell 0.4 mm behind it, which then could not be reached (120
 # refused targets, X at 2.0 × a_max, 79 × j_max across the stop)
-REGRESSIONS = [7, 8, 25, 26, 39, 145, 158, 159, 174, 254, 312, 432, 499, 666, 673, 730, 875, 1537,
-               2306]  # fmt: skip
+REGRESSIONS = [
+    7,
+    8,
+    25,
+    26,
+    39,
+    145,
+    158,
+    159,
+    174,
+    254,
+    312,
+    432,
+    499,
+    666,
+    673,
+    730,
+    875,
+    1537,
+    2306,
+]
 
 
 @pytest.mark.parametrize("seed", REGRESSIONS + list(range(2000, 2020)))
@@ -85,8 +105,11 @@ def test_random_wide_run_keeps_every_promise(seed: int) -> None:
     sc = wide_scenario(seed)
     task, snaps = run_task(sc.channel, sc.text, sc.schedule, max_time=300)
     bad = violations(sc, snaps, task.lift.records)
-    assert bad == [] and task.interp.plan_errors == 0, (bad, task.interp.last_plan_error,
-                                                        describe(sc))  # fmt: skip
+    assert bad == [] and task.interp.plan_errors == 0, (
+        bad,
+        task.interp.last_plan_error,
+        describe(sc),
+    )
 
 
 def _nesting(wait: bool) -> str:
@@ -108,8 +131,9 @@ def test_lazy_nominal_run_reports_what_a_full_shadow_run_reports(
     ch = make_channel()
     text = _nesting(wait)
     # override steps every 0.13 s through the job, in every phase of the lifts
-    schedule = Schedule(override=tuple((0.13 * (k + 1), steps[k % len(steps)])
-                                       for k in range(60)) if steps else ())  # fmt: skip
+    schedule = Schedule(
+        override=tuple((0.13 * (k + 1), steps[k % len(steps)]) for k in range(60)) if steps else ()
+    )
     lazy, _ = run_task(ch, text, schedule, max_time=300)
     assert any(not d for d in lazy.prog.nominal_differs)  # the lazy case is exercised
     load = geo_program.load_program

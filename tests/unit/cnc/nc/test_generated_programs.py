@@ -38,11 +38,19 @@ def errors(r: DecodeResult) -> list[tuple[int, int]]:
 def blocks(r: DecodeResult) -> list[tuple[object, ...]]:
     """What a block does, without where it is written (its line)."""
     return [
-        (b.n, b.motion, b.dwell, b.m_functions, b.flush, b.slope,
-         b.lift_start._replace(line=0) if b.lift_start else None,
-         b.lift_end._replace(start_line=0) if b.lift_end else None, b.program_end)
+        (
+            b.n,
+            b.motion,
+            b.dwell,
+            b.m_functions,
+            b.flush,
+            b.slope,
+            b.lift_start._replace(line=0) if b.lift_start else None,
+            b.lift_end._replace(start_line=0) if b.lift_end else None,
+            b.program_end,
+        )
         for b in r.blocks
-    ]  # fmt: skip
+    ]
 
 
 # -- a generated program: one block per entry, each a list of words -------------------------
@@ -235,11 +243,48 @@ def test_a_broken_line_is_reported_at_that_line(
 
 # -- any text: never an exception, errors inside the text, finite positions ----------------------
 GARBAGE = st.sampled_from(
-    ["\x00", "\x03", "\x0b", "\x0c", "\x1c", "\x85", "\u2028", "\ufeff", "é", "\\", "'", '"',
-     "nan", "NaN", "inf", "-inf", "1e999", "1e-999", "1e308", "-1e308", "(", ")", "[", "]",
-     "=", ";", "%", "$", "#", ",", "..", "--", "\r", "\n", "R1e300", "I1e300", "R-1e200",
-     "X1e300", "F1e-300"]
-)  # fmt: skip
+    [
+        "\x00",
+        "\x03",
+        "\x0b",
+        "\x0c",
+        "\x1c",
+        "\x85",
+        "\u2028",
+        "\ufeff",
+        "é",
+        "\\",
+        "'",
+        '"',
+        "nan",
+        "NaN",
+        "inf",
+        "-inf",
+        "1e999",
+        "1e-999",
+        "1e308",
+        "-1e308",
+        "(",
+        ")",
+        "[",
+        "]",
+        "=",
+        ";",
+        "%",
+        "$",
+        "#",
+        ",",
+        "..",
+        "--",
+        "\r",
+        "\n",
+        "R1e300",
+        "I1e300",
+        "R-1e200",
+        "X1e300",
+        "F1e-300",
+    ]
+)
 
 
 @FAST

@@ -82,8 +82,9 @@ def test_the_planner_hook_fills_peak_and_nominal_time() -> None:
     line = describe(hop, LiftMethod.ADVANCED, plan=lambda r: (0.0123, 0.456))
     assert line.endswith("lifts (planned peak 12.300 mm, nominal 0.456 s)")
     unplanned = describe(hop, LiftMethod.ADVANCED, plan=lambda r: None)  # beyond its horizon
-    assert unplanned.endswith("lifts (peak and nominal time: beyond what check plans; "
-                              "liftd simulate)")  # fmt: skip
+    assert unplanned.endswith(
+        "lifts (peak and nominal time: beyond what check plans; liftd simulate)"
+    )
     assert describe(hop, LiftMethod.LIFTING).endswith(", path 100.000 mm: lifts")
 
 
@@ -108,6 +109,7 @@ def test_the_state_names_the_ranges_own_lift_axis() -> None:
     lines = [describe(r, LiftMethod.ADVANCED) for r in on_w]
     assert lines[1].endswith("P-CHAN-00244): W goes to POS")
     assert lines[2].endswith(": W goes to POS at the start")
-    assert lines[4].endswith(": W goes to 60.000 mm, the maximum lift height, and stays "
-                             "(vendor §2.1.1, §2.4)")  # fmt: skip
+    assert lines[4].endswith(
+        ": W goes to 60.000 mm, the maximum lift height, and stays (vendor §2.1.1, §2.4)"
+    )
     assert not any(" Z " in line for line in lines)

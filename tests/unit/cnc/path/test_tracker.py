@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-from bench.gen import nesting_program
 from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.path.tracker import Tracker
 from liftd.settings import load_settings
 from tests.support.paths import REPO
+from tests.support.programs import nesting_program
 
 
 def test_a_brake_whose_projected_velocity_rounds_below_zero_targets_rest_without_a_refusal() -> (
@@ -21,8 +21,9 @@ def test_a_brake_whose_projected_velocity_rounds_below_zero_targets_rest_without
     task = GeoTask(ch, nesting_program(40))
     tracker = Tracker(task.interp.table, task.interp.prod.look_ahead)
     tracker.set_inputs(1.0, False)
-    tracker.set_state(23.309, 1.898609635519832, 0.006802381519592213, -1.4753854026218067,
-                      257, None)  # fmt: skip
+    tracker.set_state(
+        23.309, 1.898609635519832, 0.006802381519592213, -1.4753854026218067, 257, None
+    )
     tracker.advance(23.310, 0.001)
     assert tracker.last_error == ""  # nothing was refused on the way
     assert tracker.errors == 0

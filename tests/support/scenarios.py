@@ -1,5 +1,6 @@
-"""Seeded random lift scenarios and their checks (used by bench/bench_lift_safety.py and, with
-fewer seeds, by the test suite)."""
+"""Seeded random lift scenarios: a channel, an NC program and a PLC schedule from a seed (the
+test suite runs a few seeds, bench/bench_lift_safety.py thousands; checked by
+`tests.support.cycle_check.violations`). Moved from bench/stress_cases.py (issue 40)."""
 
 from __future__ import annotations
 
@@ -8,12 +9,8 @@ import math
 import random
 from dataclasses import dataclass
 
-import numpy as np
-
 from liftd.cnc.params import AxisParams, ChannelParams, LiftMethod, MSync, SlopeType
 from liftd.cnc.plc import Schedule
-
-POS_TOL = 1e-7  # 0.1 µm
 
 
 @dataclass
@@ -35,27 +32,44 @@ def _flush(fl: random.Random | None, lines: list[str], share: float = 0.15) -> N
         lines.append(fl.choice(["#FLUSH", "#FLUSH WAIT"]))
 
 
-def scenario(seed: int, method: LiftMethod = LiftMethod.ADVANCED, flush: bool = False) -> Scenario:
-    """`flush`: #FLUSH / #FLUSH WAIT after some motion blocks inside ranges."""
-    rng = random.Random(seed)
-    fl = _flusher(seed, flush)
+Z_LIMITS = (-0.05, 0.2)  # the lift axis's software limits (m)
+
+
+def _channel(rng: random.Random, method: LiftMethod, *, wide: bool) -> ChannelParams:
+    """X, Y and a lift axis Z of random v, a, j, a random cycle time and lift_min_dist (the
+    order of the draws is the scenarios'); `wide`: a random look-ahead and an M8 MNS_SNS."""
     zv, za = rng.uniform(0.3, 1.5), rng.uniform(3.0, 20.0)
     zj = rng.uniform(100.0, 2000.0)
-    z_neg, z_pos = -0.05, 0.2
+    cycle_time = rng.choice([1e-3, 1e-3, 1e-3, 5e-4, 2e-3])
+    lift_min_dist = rng.choice([0.0, 0.0, 0.003])
+    m_synch: tuple[tuple[int, MSync], ...] = ((4, MSync.MVS_SVS), (5, MSync.MOS))
     ch = ChannelParams(
         channel_id=1,
         axes=(
             AxisParams("X", 1, 1.5, 10.0, 500.0, -0.001, 3.01),
             AxisParams("Y", 2, 1.5, 8.0, 400.0, -0.001, 1.51),
-            AxisParams("Z", 3, zv, za, zj, z_neg, z_pos),
+            AxisParams("Z", 3, zv, za, zj, *Z_LIMITS),
         ),
         lift_axis="Z",
         lift_method=method,
-        cycle_time=rng.choice([1e-3, 1e-3, 1e-3, 5e-4, 2e-3]),
-        lift_min_dist=rng.choice([0.0, 0.0, 0.003]),
+        cycle_time=cycle_time,
+        lift_min_dist=lift_min_dist,
         slope=SlopeType.TRAPEZ,
-        m_synch=((4, MSync.MVS_SVS), (5, MSync.MOS)),
+        m_synch=m_synch,
     )
+    if not wide:
+        return ch
+    look = rng.choice([1, 3, 8, 30, 30, 120, 120, 190, 200])
+    m_synch += ((8, MSync.MNS_SNS),)
+    return dataclasses.replace(ch, look_ahead_blocks=look, m_synch=m_synch)
+
+
+def scenario(seed: int, method: LiftMethod = LiftMethod.ADVANCED, flush: bool = False) -> Scenario:
+    """`flush`: #FLUSH / #FLUSH WAIT after some motion blocks inside ranges."""
+    rng = random.Random(seed)
+    fl = _flusher(seed, flush)
+    z_neg, z_pos = Z_LIMITS
+    ch = _channel(rng, method, wide=False)
     z = rng.uniform(0.0, 0.03)
     x, y = 10.0, 10.0
     lines = [f"G01 X{x} Y{y} Z{z * 1e3:.3f} F6000"]
@@ -103,24 +117,8 @@ def wide_scenario(
     #FLUSH / #FLUSH WAIT inside ranges too."""
     rng = random.Random(seed)
     fl = _flusher(seed, flush)
-    zv, za = rng.uniform(0.3, 1.5), rng.uniform(3.0, 20.0)
-    zj = rng.uniform(100.0, 2000.0)
-    z_neg, z_pos = -0.05, 0.2
-    ch = ChannelParams(
-        channel_id=1,
-        axes=(
-            AxisParams("X", 1, 1.5, 10.0, 500.0, -0.001, 3.01),
-            AxisParams("Y", 2, 1.5, 8.0, 400.0, -0.001, 1.51),
-            AxisParams("Z", 3, zv, za, zj, z_neg, z_pos),
-        ),
-        lift_axis="Z",
-        lift_method=method,
-        cycle_time=rng.choice([1e-3, 1e-3, 1e-3, 5e-4, 2e-3]),
-        lift_min_dist=rng.choice([0.0, 0.0, 0.003]),
-        slope=SlopeType.TRAPEZ,
-        look_ahead_blocks=rng.choice([1, 3, 8, 30, 30, 120, 120, 190, 200]),
-        m_synch=((4, MSync.MVS_SVS), (5, MSync.MOS), (8, MSync.MNS_SNS)),
-    )
+    z_neg, z_pos = Z_LIMITS
+    ch = _channel(rng, method, wide=True)
     z = rng.uniform(0.0, 0.03)
     x, y = 10.0, 10.0 + rng.uniform(0.0, 400.0)
     lines = [f"G01 X{x} Y{y:.3f} Z{z * 1e3:.3f} F6000"]
@@ -185,73 +183,17 @@ def wide_scenario(
     return Scenario(seed, ch, "\n".join(lines) + "\n", Schedule(tuple(steps), holds))
 
 
-def violations(sc: Scenario, snaps: list, records: list) -> list[str]:  # type: ignore[type-arg]
-    """Every broken promise of a run, as text (empty: all good)."""
-    ch = sc.channel
-    out: list[str] = []
-    if snaps[-1].state.name != "READY":
-        out.append(f"ended in {snaps[-1].state.name} at t={snaps[-1].t}")
-    p = np.array([s.positions for s in snaps])
-    dt = ch.cycle_time
-    v = np.diff(p, axis=0) / dt
-    a = np.diff(v, axis=0) / dt
-    j = np.diff(a, axis=0) / dt
-    coupled = ch.lift_method is LiftMethod.LIFTING
-    ov = max([1.0, *(f for _, f in sc.schedule.override)])
-    for i, ax in enumerate(ch.axes):
-        checks = [("v", v, ax.v_max), ("a", a, ax.a_max), ("j", j, ax.j_max)]
-        if coupled and ax.name == ch.lift_axis:
-            # path-based Lifting: within a_max and j_max at 100 % override, whatever the path
-            # does (issue 37 item 3, lift/path_based.py `segment_cap`); an override above
-            # 100 % scales the plan's share with ov² (ov³): the overload band of P-AXIS-00442
-            big = max(1.0, ov)
-            checks = [("v", v, ax.v_max), ("a", a, ax.a_max * big * big),
-                      ("j", j, ax.j_max * big * big * big)]  # fmt: skip
-        for name, arr, lim in checks:
-            got = float(np.abs(arr[:, i]).max()) / lim
-            if got > 1 + 1e-9:
-                out.append(f"{ax.name} |{name}| ratio {got:.9f}")
-    z = p[:, 2]
-    zax = ch.axes[2]
-    if z.max() > zax.sw_limit_pos + POS_TOL or z.min() < zax.sw_limit_neg - POS_TOL:
-        out.append("software limit")
-    for rec in records:
-        spec = rec.range.start
-        mask = np.array([rec.t_start <= s.t <= rec.t_end for s in snaps])
-        if not mask.any():
-            continue
-        seg = z[mask]
-        top = max(spec.pos_limit, spec.target, rec.z_start)  # limit has no effect beyond it
-        bottom = min(spec.pos_limit, spec.target, rec.z_start)
-        tol = POS_TOL
-        if rec.range.direct:  # Z may enter moving with the path: allow its stopping distance
-            k = int(np.argmax(mask))
-            vz = abs(z[k] - z[k - 1]) / dt if k > 0 else 0.0
-            tol += vz * vz / (2 * zax.a_max) + vz * zax.a_max / zax.j_max
-        if (not spec.down and seg.max() > top + tol) or (spec.down and seg.min() < bottom - tol):
-            out.append(f"POS_LIMIT exceeded in lift line {spec.line}")
-        if rec.arrival_error > 1e-6:
-            out.append(f"arrival error {rec.arrival_error * 1e6:.3f} µm line {spec.line}")
-    late = [e for s in snaps for e in s.events if e.name == "lift.late"]
-    if late:
-        out.append(f"{len(late)} late lift(s)")
-    clamped = [e for s in snaps for e in s.events if e.name == "lift.guard_clamped"]
-    if clamped:
-        out.append(f"{len(clamped)} guard clamp(s)")
-    return out
-
-
 def describe(sc: Scenario) -> str:
-    ax = sc.channel.axes[2]
+    """The scenario as a failing test prints it: the lift axis, the cycle, the PLC, the
+    program."""
+    ax = sc.channel.axes[sc.channel.lift_axis_index]
     return (
-        f"seed {sc.seed}: Z {ax.v_max:.2f} m/s {ax.a_max:.1f} m/s² {ax.j_max:.0f} m/s³, "
+        f"seed {sc.seed}: {ax.name} {ax.v_max:.2f} m/s {ax.a_max:.1f} m/s² {ax.j_max:.0f} m/s³, "
         f"cycle {sc.channel.cycle_time * 1e3:g} ms, override {sc.schedule.override}, "
         f"hold {sc.schedule.feed_hold}\n{sc.text}"
     )
 
 
 def replace_method(sc: Scenario, method: LiftMethod) -> Scenario:
+    """The same scenario with the other lift method."""
     return dataclasses.replace(sc, channel=dataclasses.replace(sc.channel, lift_method=method))
-
-
-__all__ = ["Scenario", "describe", "replace_method", "scenario", "violations", "wide_scenario"]

@@ -1,4 +1,5 @@
-"""Generated NC programs for benchmarks and tests: nesting jobs of many small parts."""
+"""Generated NC programs for the tests and the benchmarks: nesting jobs of many small parts
+(bench/ imports them from here; moved from bench/gen.py, issue 40)."""
 
 from __future__ import annotations
 
@@ -76,8 +77,14 @@ def subroutine_program(parts: int, kerf: bool = False) -> str:
     blocks per placement from 6 main-program lines."""
     cols = max(1, min(160, int(math.sqrt(parts * 3))))
     pitch = 16.0
-    out = [_part(kerf) + "%nest", "N1 G90 G17 G71 G94", "#SLOPE[TYPE=TRAPEZ]", "D1",
-           "P3=10 P4=2 P5=3 P6=2", "G00 X5 Y5 Z1"]  # fmt: skip
+    out = [
+        _part(kerf) + "%nest",
+        "N1 G90 G17 G71 G94",
+        "#SLOPE[TYPE=TRAPEZ]",
+        "D1",
+        "P3=10 P4=2 P5=3 P6=2",
+        "G00 X5 Y5 Z1",
+    ]
     for k in range(parts):
         x = 10.0 + (k % cols) * pitch
         y = 10.0 + (k // cols) * pitch
