@@ -12,6 +12,7 @@ import numpy as np
 
 from liftd.cnc.params import AxisParams, ChannelParams, LiftMethod, MSync, SlopeType
 from liftd.cnc.plc import Schedule
+from tests.support.closed_loop import limit_problems
 
 POS_TOL = 1e-7  # 0.1 µm
 
@@ -178,9 +179,14 @@ def violations(sc: Scenario, snaps: list, records: list) -> list[str]:  # type: 
     j = np.diff(a, axis=0) / dt
     coupled = ch.lift_method is LiftMethod.LIFTING
     ov = max([1.0, *(f for _, f in sc.schedule.override)])
+    # the path axes: within their limits in a segment, within the block-transition parameters
+    # over a transition (issue 36)
+    out.extend(limit_problems(ch, snaps))
     for i, ax in enumerate(ch.axes):
+        if ax.name != ch.lift_axis:
+            continue
         checks = [("v", v, ax.v_max), ("a", a, ax.a_max), ("j", j, ax.j_max)]
-        if coupled and ax.name == ch.lift_axis:
+        if coupled:
             # path-based Lifting: plan a_max·P442/1000 × override², plus a_max for the path's
             # own acceleration (lift/path_based.py); the jerk is not bounded by the method
             checks = [("v", v, ax.v_max), ("a", a, ax.a_max * (1.0 + ax.dyn_a_err * ov * ov))]

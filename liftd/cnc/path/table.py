@@ -27,6 +27,15 @@ from liftd.cnc.path.program import PathProgram
 INF = float("inf")
 TANGENT_TOL = 1e-9  # |Δ direction cosine| below which a transition counts as tangent
 LIMIT_TOL = 1e-9  # relative difference below which two limits count as equal
+RUN_LIMIT_TOL = 0.05  # relative difference of the limits two segments of one run may have
+
+
+def _close(x: float, y: float) -> bool:
+    """Limits close enough for one run (which keeps the lower): the projections of the axis
+    limits on the two lines of a small kink differ by a few per cent."""
+    if x == y:
+        return True
+    return abs(x - y) <= RUN_LIMIT_TOL * max(abs(x), abs(y))
 
 
 def _same(x: float, y: float) -> bool:
@@ -89,8 +98,9 @@ def build_table(path: PathProgram) -> PathTable:
         t_in = prev.geom.tangent(prev.length)
         t_out = nxt.geom.tangent(0.0)
         tangent = all(abs(x - y) <= TANGENT_TOL for x, y in zip(t_in, t_out, strict=True))
-        limits = _same(prev.a_max, nxt.a_max) and _same(prev.j_max, nxt.j_max)
-        gate[k] = not (tangent and limits) or bounds[k].stop or bounds[k].conditional_stop
+        smooth = tangent or bounds[k].smooth
+        limits = _close(prev.a_max, nxt.a_max) and _close(prev.j_max, nxt.j_max)
+        gate[k] = not (smooth and limits) or bounds[k].stop or bounds[k].conditional_stop
     run_of = [0] * n
     run_a: list[float] = []
     run_j: list[float] = []

@@ -25,8 +25,10 @@ DEMO = (REPO / "config" / "programs" / "demo.nc").read_text()
 
 @pytest.mark.parametrize("method", [LiftMethod.ADVANCED, LiftMethod.LIFTING])
 @pytest.mark.parametrize("held", [0.001, 0.27, 3.0])
-@pytest.mark.parametrize(("t_stop", "in_lift"), [(0.45, False), (5.6, True), (6.1, True),
-                                                 (12.6, True)])  # fmt: skip
+# the moments in the demo's lift ranges 1 and 3 (rise, top, descent) since the path passes
+# kinks as the block-transition parameters allow (issue 36: the demo 14.26 → 14.02 s)
+@pytest.mark.parametrize(("t_stop", "in_lift"), [(0.45, False), (5.45, True), (5.95, True),
+                                                 (12.36, True)])  # fmt: skip
 def test_start_after_a_stop_goes_on_from_where_the_path_stopped(
     method: LiftMethod, held: float, t_stop: float, in_lift: bool
 ) -> None:
@@ -82,7 +84,7 @@ class ResetThenStart:
 
 
 @pytest.mark.parametrize("method", [LiftMethod.ADVANCED, LiftMethod.LIFTING])
-@pytest.mark.parametrize("t_reset", [5.45, 5.8, 6.1, 12.6])
+@pytest.mark.parametrize("t_reset", [5.3, 5.65, 5.95, 12.36])
 def test_a_reset_inside_a_lift_leaves_every_axis_at_rest_and_the_lift_ended(
     method: LiftMethod, t_reset: float
 ) -> None:
