@@ -1,0 +1,96 @@
+"""The GEO core's program time against the offline reference profile (issue 36, item 3) on
+CAM-shaped programs (bench/cam_cases.py) at constant overrides of 10–200 %.
+
+For each program: the time the core's path takes from its start to the program's end (the
+interpolator alone, cycle by cycle, as `GeoTask` drives it, without the lift: the same
+prepared path, its Advanced lift caps included) and the reference's (bench/reference_profile.py:
+time-optimal over the same ceilings, transition caps, run boundaries and look-ahead window).
+The ratio core / reference should be ≥ 1 (the core is never faster than the optimum) and at
+most 1.01. Prints one JSON line per program with --each, and one summary line: max, p99,
+median, how many below 1 and above 1.01, the worst programs.
+
+Run: .venv/bin/python bench/bench_reference.py [PROGRAMS [FIRST_SEED]]   (200: ~2 min)
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from bench.cam_cases import cam_scenario
+from bench.cli import parser
+from bench.reference_profile import reference_time
+from liftd.cnc.geo_task import GeoTask
+from liftd.cnc.path.interpolator import Interpolator
+
+
+def core_time(task: GeoTask, ov: float) -> tuple[float, int]:
+    """(seconds from the start to the program's end, tracker errors) of the core's path."""
+    prog = task.prog
+    ch = task.ch
+    ip = Interpolator(prog.path, prog.table, ch.look_ahead_blocks, ch.cycle_time, 300)
+    ip.set_inputs(ov, False)
+    ip.resume(0.0)
+    end = prog.table.n
+    t = 0.0
+    k = 0
+    while k < 10_000_000:
+        k += 1
+        t = k * ch.cycle_time
+        for c in ip.advance(t):
+            if c.boundary == end:
+                return c.t, ip.plan_errors
+        if ip.stopped_at is not None and ip.stopped_at != end:
+            ip.resume(t)  # a wait (none in the corpus but the end): go on at once
+    return float("inf"), ip.plan_errors
+
+
+def main() -> None:
+    ap = parser(__doc__)
+    ap.add_argument("programs", nargs="?", type=int, default=200)
+    ap.add_argument("first_seed", nargs="?", type=int, default=0)
+    ap.add_argument("--each", action="store_true", help="one JSON line per program")
+    args = ap.parse_args()
+    rows: list[dict[str, float | int]] = []
+    t0 = time.perf_counter()
+    for seed in range(args.first_seed, args.first_seed + args.programs):
+        sc = cam_scenario(seed, steps=False)
+        ov = sc.schedule.override_at(0.0)
+        task = GeoTask(sc.channel, sc.text)
+        core, errors = core_time(task, ov)
+        ref = reference_time(task.prog.path, task.prog.table, sc.channel.look_ahead_blocks, ov)
+        row = {"seed": seed, "core_s": round(core, 6), "reference_s": round(ref.time, 6),
+               "ratio": core / ref.time if ref.time > 0 else 1.0, "tracker_errors": errors,
+               "override": ov, "look_ahead": sc.channel.look_ahead_blocks,
+               "cycle_ms": sc.channel.cycle_time * 1e3, "blocks": task.prog.table.n,
+               "pieces_refused": ref.pieces_refused}  # fmt: skip
+        rows.append(row)
+        if args.each:
+            print(json.dumps({"bench": "reference_program", **row}), flush=True)
+    ratios = sorted(float(r["ratio"]) for r in rows)
+    by_ratio = sorted(rows, key=lambda r: float(r["ratio"]))
+    keys = ("seed", "ratio", "core_s", "reference_s", "look_ahead", "override", "blocks")
+    summary = {
+        "bench": "reference",
+        "programs": len(rows),
+        "first_seed": args.first_seed,
+        "ratio_max": round(ratios[-1], 5),
+        "ratio_p99": round(ratios[min(len(ratios) - 1, int(0.99 * len(ratios)))], 5),
+        "ratio_median": round(ratios[len(ratios) // 2], 5),
+        "ratio_min": round(ratios[0], 5),
+        "below_1": sum(1 for r in ratios if r < 1.0 - 1e-9),
+        "above_1_01": sum(1 for r in ratios if r > 1.01),
+        "tracker_errors": sum(int(r["tracker_errors"]) for r in rows),
+        "worst": [{k: r[k] for k in keys} for r in by_ratio[-5:][::-1]],
+        "fastest": [{k: r[k] for k in keys} for r in by_ratio[:3]],
+        "seconds": round(time.perf_counter() - t0, 1),
+    }
+    print(json.dumps(summary))
+
+
+if __name__ == "__main__":
+    main()
