@@ -35,10 +35,10 @@ The jump each axis may take is its transition allowance (`allowed_jump`):
   https://infosys.beckhoff.com/content/1033/tf5200_programming_manual/207486091.html
 
 The weights act with the non-linear (jerk-limited) slope; with the STEP slope a kink may step
-an axis' acceleration by its a_max. A kink small enough that the path's own acceleration,
-turned with the tangent, takes at most half of the allowance (a_run·|Δt_i| ≤ ½ jump) is not a
-run boundary: the path accelerates or brakes through it, and its velocity keeps the other half
-(`Transition.smooth`). Larger kinks are run boundaries: the path acceleration is zero there.
+an axis' acceleration by its a_max. Every kink is a run boundary: the path acceleration is zero
+there. (A kink small enough that the path's own acceleration, turned with the tangent, takes at
+most half of the allowance could carry it through, `SMOOTH_KINKS`: built and switched off, see
+there.)
 """
 
 from __future__ import annotations
@@ -111,6 +111,12 @@ class Transition:
 
 
 TANGENT_TOL = 1e-9  # |Δ direction cosine| at or below which a transition is tangential
+# Whether a small kink may carry the path acceleration (`Transition.smooth`). Off: with it, a
+# feed hold inside an Advanced lift range over a polyline of 0.2 mm blocks (rounding kinks of
+# 5e-4) let the path pass LIFT_END with Z 14 µm above POS (bench_lift_safety --wide seeds 340,
+# 572), a lift-side interaction not found in issue 36's time; every kink is a run boundary, as
+# before it (CAM polylines are slow: issue 36's report).
+SMOOTH_KINKS = False
 
 
 def allowed_jump(ax: AxisParams, dt: float, kink: bool, jerk_limited: bool, mode: int) -> float:
@@ -163,7 +169,7 @@ def transition(
             continue  # no slowdown at a tangential transition (P-CHAN-00009 off)
         budget = allowed_jump(ax, dt, kink, jerk_limited, mode) * SAFETY
         carry = a_carry * d_t
-        if carry > 0.5 * budget:
+        if not SMOOTH_KINKS or carry > 0.5 * budget:
             smooth = False
         else:
             budget -= carry

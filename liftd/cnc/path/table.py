@@ -4,12 +4,14 @@ preparation (never in the GEO cycle).
 * **Ceilings.** Segment k may run at V_k(ov) = min(F_k · ov, C_k): F_k the programmed feed
   (soft: scaled by the override; a path-based lift range's reduced feed is part of it), C_k the
   hard cap from the axes and an Advanced lift range (never scaled).
-* **Runs.** A boundary is *continuous* when the path is tangent there and both segments have the
-  same acceleration and jerk limits (collinear polyline blocks, pieces of one circle). A run is
-  a maximal sequence of segments joined by continuous boundaries: inside a run the path
-  acceleration is continuous; at a run boundary (a corner, a change of the limits, a stop) it is
-  zero, as the corner rule of `limits.py` assumes. Each run has one acceleration and one jerk
-  limit (the smallest of its segments).
+* **Runs.** A boundary is *continuous* when the path is tangent there (or, with
+  `limits.SMOOTH_KINKS`, its kink small enough to carry the path acceleration through:
+  `Boundary.smooth`), and both segments' acceleration and jerk limits agree within
+  RUN_LIMIT_TOL (collinear polyline blocks, pieces of one circle). A run is a maximal sequence of
+  segments joined by continuous boundaries: inside a run the path acceleration is continuous;
+  at a run boundary (a larger corner, a change of the limits, a stop) it is zero, as the
+  transition rule of `limits.py` assumes. Each run has one acceleration and one jerk limit (the
+  smallest of its segments).
 * **Constraints.** Boundary b is a constraint when the path may have to be slower there than in
   the segments around it: a stop, a conditional stop (MVS_SNS), a run boundary, a transition cap
   below the axis caps, or a ceiling drop. `next_constraint[b]` is the first constraint at or

@@ -86,6 +86,7 @@ class Tracker(Targets):
         self._clear_s = -INF
         self.parked = stopped_at is None and self.hold and v == 0.0 and a == 0.0
         self.plan = None
+        self._passed = None  # planned for another state: not to be kept (`_replan`)
 
     def set_inputs(self, ov: float, hold: bool) -> None:
         """Override (fraction) and feed hold. Override 0 acts as a hold; the caps keep the last
@@ -95,6 +96,7 @@ class Tracker(Targets):
         if cap_ov != self.ov or hold != self.hold:
             self.ov, self.hold = cap_ov, hold
             self.plan = None
+            self._passed = None  # planned under the old inputs: not to be kept
             self._clear_s = -INF
             if not hold:
                 self.parked = False

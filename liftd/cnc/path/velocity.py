@@ -232,22 +232,23 @@ def nearest_reachable(
     v_p = projected_velocity(v, a, j_max)
     h = _hump(v, a, a_max, j_max) if j_max != INF else 0.0
     if above or brake_distance(v, a, 0.0, a_max, j_max) > length:
-        lo, hi = max(top, h), v_p  # the falling side: far at lo, near at hi
-        for _ in range(50):
-            mid = 0.5 * (lo + hi)
-            if brake_distance(v, a, mid, a_max, j_max) <= length:
-                hi = mid
-            else:
-                lo = mid
-        return hi
-    lo, hi = 0.0, min(top, h)  # the rising side: near at lo, far at hi
+        return _edge(v, a, length, max(top, h), v_p, a_max, j_max)  # the falling side
+    return _edge(v, a, length, min(top, h), 0.0, a_max, j_max)  # the rising side
+
+
+def _edge(
+    v: float, a: float, length: float, far: float, near: float, a_max: float, j_max: float
+) -> float:
+    """The end velocity between `far` (its brake needs more than `length`) and `near` (within
+    it) where the brake from (v, a) needs exactly `length`: brake_distance is monotonic
+    between them (50 bisection steps); the last one within."""
     for _ in range(50):
-        mid = 0.5 * (lo + hi)
+        mid = 0.5 * (far + near)
         if brake_distance(v, a, mid, a_max, j_max) <= length:
-            lo = mid
+            near = mid
         else:
-            hi = mid
-    return lo
+            far = mid
+    return near
 
 
 def lowest_reachable_from(v: float, a: float, length: float, a_max: float, j_max: float) -> float:
@@ -256,34 +257,4 @@ def lowest_reachable_from(v: float, a: float, length: float, a_max: float, j_max
     v_p = projected_velocity(v, a, j_max)
     if v_p <= 0.0 or brake_distance(v, a, 0.0, a_max, j_max) <= length:
         return 0.0
-    lo, hi = 0.0, v_p  # brake_distance(.., hi) = ramp only ≤ … ; (.., lo) > length
-    for _ in range(50):
-        mid = 0.5 * (lo + hi)
-        if brake_distance(v, a, mid, a_max, j_max) <= length:
-            hi = mid
-        else:
-            lo = mid
-    return hi
-
-
-# -- caps are upper bounds: any end velocity below them will do ----------------------------------
-# With zero acceleration at both ends, the distance of a velocity change is not monotonic in the
-# end velocity near 0 (it rises from v1 = 0 to v1 = v/3, then falls): braking to rest can take
-# less distance than braking to a small positive velocity. A cap only asks for "at most", so
-# these take the better of the two ends of [0, cap].
-def reach_below(cap: float, length: float, a_max: float, j_max: float) -> float:
-    """Highest velocity (zero acceleration) from which some velocity ≤ cap (zero acceleration)
-    is reachable within `length`."""
-    best = reach_velocity(cap, length, a_max, j_max)
-    if cap > 0.0:
-        best = max(best, reach_velocity(0.0, length, a_max, j_max))
-    return best
-
-
-def brake_below(v: float, a: float, cap: float, a_max: float, j_max: float) -> float:
-    """Least distance in which the velocity from (v, a) gets to some value ≤ cap with zero
-    acceleration (the brake to cap or to rest, whichever is shorter)."""
-    d = brake_distance(v, a, cap, a_max, j_max)
-    if cap > 0.0:
-        d = min(d, brake_distance(v, a, 0.0, a_max, j_max))
-    return d
+    return _edge(v, a, length, 0.0, v_p, a_max, j_max)  # brake to v_p: the ramp only
