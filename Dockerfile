@@ -1,6 +1,9 @@
 # liftd in a container. Build: docker build -t liftd .
+# A worker for `liftd study --scheduler` (README "A study on a Dask cluster"):
+#   docker build --build-arg EXTRAS=cluster -t liftd-worker .
+#   docker run --rm --network host --entrypoint dask liftd-worker worker tcp://SCHEDULER:8786 --nthreads 1
 # Run (README "Docker"):
-#   docker run --rm --init -p 127.0.0.1:48898:48898 \
+#   docker run --rm --init -p 127.0.0.1:48898:48898 -p 127.0.0.1:8551:8551 \
 #     --ulimit rtprio=80 --ulimit memlock=-1 --cap-drop=ALL --security-opt no-new-privileges \
 #     --read-only --tmpfs /tmp -v "$PWD/myconfig:/etc/liftd:ro" liftd
 # The host kernel decides real-time latency; the flags above only let the GEO loop ask for
@@ -14,6 +17,8 @@
 ARG PYTHON_IMAGE=python:3.11-slim-bookworm
 
 FROM ${PYTHON_IMAGE} AS build
+# optional extras of liftd, e.g. cluster (distributed, for a Dask worker); none by default
+ARG EXTRAS=
 ENV PIP_NO_CACHE_DIR=1 PIP_DISABLE_PIP_VERSION_CHECK=1 \
     PIP_CONSTRAINT=/src/docker/constraints.txt
 # A C compiler for the compiled GEO core (mypyc, tools/compile_core.py), in this stage only
@@ -30,7 +35,7 @@ COPY tools ./tools
 # the extensions (pyproject: wheel artifacts), then drop mypy: the extensions do not need it.
 # `liftd --version` must say "GEO core: compiled", or the build fails.
 RUN python -m venv /opt/liftd \
- && /opt/liftd/bin/pip install --no-compile . mypy \
+ && /opt/liftd/bin/pip install --no-compile ".${EXTRAS:+[$EXTRAS]}" mypy \
  && /opt/liftd/bin/python tools/compile_core.py \
  && /opt/liftd/bin/pip install --no-compile --no-deps --force-reinstall . \
  && /opt/liftd/bin/pip uninstall -y mypy mypy-extensions librt ast-serialize pathspec \
@@ -60,7 +65,7 @@ RUN useradd --system --uid 10001 --no-create-home --shell /usr/sbin/nologin lift
  && mkdir -p /var/lib/liftd && chown liftd:liftd /var/lib/liftd
 USER 10001
 WORKDIR /var/lib/liftd
-EXPOSE 48898
+EXPOSE 48898 8551
 STOPSIGNAL SIGTERM
 # The daemon renews $LIFTD_HEARTBEAT every second while its GEO loop cycles (the condition of
 # systemd's WATCHDOG=1); healthy = renewed within 5 s. No Python start-up every 10 s;

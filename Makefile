@@ -12,7 +12,7 @@ NODE_STAMP := $(NODE_DIR)/node_modules/.installed
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[dev,plot]'
+	$(BIN)/python -m pip install --quiet -e '.[dev,plot,cluster]'
 	touch $(STAMP)
 
 # The GEO cycle's modules, simulate's per-cycle part and the GEO loop compiled with mypyc
@@ -35,7 +35,9 @@ run: $(STAMP) $(CORE_STAMP)
 	$(BIN)/liftd run
 
 # The interop tests' independent clients: Node ads-client from the committed lockfile, and
-# Debian's tshark (Wireshark's AMS dissector) when missing and we are root. Quick when present.
+# Debian's tshark (Wireshark's AMS dissector) when missing and we are root; the live view's
+# browser tests: Debian's chromium (Playwright drives /usr/bin/chromium; `playwright install`
+# is never run). Quick when present.
 $(NODE_STAMP): $(NODE_DIR)/package-lock.json
 	@command -v npm >/dev/null || { echo "npm missing: the Node interop tests will fail"; exit 0; }; \
 	  cd $(NODE_DIR) && npm ci --no-audit --no-fund --silent && touch node_modules/.installed
@@ -45,6 +47,10 @@ tools: $(NODE_STAMP)
 	  { DEBIAN_FRONTEND=noninteractive apt-get install -y -qq tshark >/dev/null 2>&1 || \
 	    { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq tshark >/dev/null; }; }; } || \
 	  echo "tshark missing and not root: the Wireshark interop test is skipped"
+	@command -v chromium >/dev/null || { [ "$$(id -u)" = 0 ] && \
+	  { DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium chromium-driver >/dev/null 2>&1 || \
+	    { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium chromium-driver >/dev/null; }; }; } || \
+	  echo "chromium missing and not root (or not installable): the browser tests are skipped"
 
 test: $(STAMP) $(CORE_STAMP) tools
 	$(BIN)/ruff check liftd tests bench

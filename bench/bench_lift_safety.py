@@ -5,12 +5,16 @@ and feed holds. Checks: |v|, |a|, |j| of every axis ≤ limit (+1e-9 relative, f
 differences), no excursion beyond POS_LIMIT or the software limits (+0.1 µm), arrival error
 ≤ 1 µm, never late (no lift.late). Prints one JSON line with the counts and the first failures.
 
-Path-based Lifting (METHOD = lifting) is checked the same way except Z's acceleration, which
-may reach a_max·(1 + P442/1000·override²) by the method's design (lift/path_based.py).
+Path-based Lifting (METHOD = lifting) is checked the same way, except that an override above
+100 % scales Z's acceleration and jerk with override² and override³ (the overload band the
+vendor allows for feed changes, §2.2.1; lift/path_based.py `segment_cap`).
 
 With --stops every run also gets a PLC STOP at a random moment (inside a lift range in two of
 three runs; the moment from a first run without it) and START after a random hold of 1 ms–2 s
 (tests/unit/cnc/test_stop_start.py runs the first seeds).
+
+With --flush (issue 37) #FLUSH / #FLUSH WAIT follow some motion blocks inside ranges (a
+generator of their own: each seed's program is otherwise the same).
 
 With --wide (issue 14) the scenarios cover the whole input space: ranges of up to 400 short
 blocks (longer than every look-ahead), slightly bent polylines, ranges without path motion,
@@ -18,7 +22,7 @@ ranges back to back, waits before and inside ranges, every look-ahead size, over
 0–200 % at random moments and feed holds. Every run (not only --wide) also fails on any error
 of the path tracker (a refused profile, a run boundary passed with acceleration).
 
-Run: .venv/bin/python bench/bench_lift_safety.py [--wide] [--stops] [RUNS [FIRST_SEED [advanced|lifting]]]
+Run: .venv/bin/python bench/bench_lift_safety.py [--wide] [--stops] [--flush] [RUNS [FIRST_SEED [advanced|lifting]]]
 """
 
 from __future__ import annotations
@@ -41,6 +45,8 @@ def main() -> None:
     ap = parser(__doc__)
     ap.add_argument("--wide", action="store_true", help="the whole input space (issue 14)")
     ap.add_argument("--stops", action="store_true", help="a PLC STOP and START in every run")
+    ap.add_argument("--flush", action="store_true",
+                    help="#FLUSH / #FLUSH WAIT inside ranges (issue 37)")  # fmt: skip
     ap.add_argument("runs", nargs="?", type=int, default=1000, help="seeded runs (1000)")
     ap.add_argument("first_seed", nargs="?", type=int, default=0, help="the first seed (0)")
     ap.add_argument("method", nargs="?", default="advanced", choices=["advanced", "lifting"],
@@ -52,7 +58,7 @@ def main() -> None:
     cycles = lifts = 0
     t0 = time.perf_counter()
     for seed in range(first, first + runs):
-        sc = make(seed, method)
+        sc = make(seed, method, args.flush)
         try:
             if args.stops:
                 task, snaps = run_task(sc.channel, sc.text, inputs=stop_and_start(sc, seed),
@@ -77,7 +83,8 @@ def main() -> None:
         json.dumps(
             {
                 "bench": ("lift_safety_wide" if wide else "lift_safety")
-                + ("_stops" if args.stops else ""),
+                + ("_stops" if args.stops else "")
+                + ("_flush" if args.flush else ""),
                 "method": method.value,
                 "runs": runs,
                 "first_seed": first,

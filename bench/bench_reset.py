@@ -5,8 +5,10 @@ JSON line: runs, failures, the longest wait from RESET to READY.
 
 With --nc-error an NC error takes the RESET's place: an unknown word in a random block of a
 random range (vendor §2.4: Z rises to POS_LIMIT and stays). ERROR must come, and `simulate`'s
-driver end with Z at rest at the range's limit, within its v, a, j from the error on (before
-e53490e Z lost the motion between the path's stop and its own last cycle in one cycle).
+driver end with Z at rest at the range's maximum lift height (POS_LIMIT, or the start or POS
+beyond it: §2.1.1, issue 37), never moving toward the part from the error on, within its v, a,
+j (before e53490e Z lost the motion between the path's stop and its own last cycle in one
+cycle).
 
 Run: .venv/bin/python bench/bench_reset.py [--nc-error] [RUNS [FIRST_SEED [advanced|lifting]]]
 """
@@ -102,8 +104,16 @@ def nc_error_in_a_range(seed: int, method: LiftMethod) -> dict[str, object] | No
     if last.lift_vz != 0.0 or last.lift_az != 0.0:
         problems["z_moving_at_end"] = (last.lift_vz, last.lift_az)
     spec = rng.start
-    if not rng.beyond_limit and not spec.down and abs(last.positions[2] - spec.pos_limit) > 1e-9:
-        problems["z_end"] = (last.positions[2], spec.pos_limit)
+    # the maximum lift height: POS_LIMIT, raised to the start or POS beyond it (vendor §2.1.1;
+    # issue 37 item 1), mirrored for DOWN; and from the error on Z never moves toward the part
+    far = min if spec.down else max
+    top = far(spec.pos_limit, spec.target, spec.z_start)
+    if abs(last.positions[2] - top) > 1e-9:
+        problems["z_end"] = (last.positions[2], top)
+    sign = -1.0 if spec.down else 1.0
+    z = np.array([sign * s.positions[2] for s in snaps[k:]])
+    if np.diff(z).min(initial=0.0) < -1e-12:
+        problems["z_toward_the_part"] = float(np.diff(z).min())
     ratio = z_ratio(sc, snaps)
     if ratio > 1.0 + 1e-6:
         problems["z_limit_ratio"] = ratio

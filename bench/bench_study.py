@@ -29,17 +29,23 @@ CONFIG = str(ROOT / "config" / "liftd.toml")
 TINY = "G90 G17 G94\nG00 X10 Y10 Z1\nZ[LIFT_START POS=1 POS_LIMIT=30]\nG00 X{x} Y20\nZ[LIFT_END]\nM30\n"
 
 
-def study(library: Path, jobs: int, out: Path) -> dict[str, object]:
+def run_study(library: Path, out: Path, *extra: str) -> tuple[float, dict]:
+    """`liftd study LIBRARY --out OUT EXTRA…` as a subprocess: its wall time and report.json
+    (exits when the study does not exit 0)."""
     t0 = time.perf_counter()
     r = subprocess.run(
-        [sys.executable, "-m", "liftd", "study", str(library), "-c", CONFIG,
-         "--jobs", str(jobs), "--out", str(out)],
+        [sys.executable, "-m", "liftd", "study", str(library), "-c", CONFIG, "--out", str(out),
+         *extra],
         capture_output=True, text=True, check=False,
     )  # fmt: skip
     wall = time.perf_counter() - t0
     if r.returncode != 0:
-        raise SystemExit(f"liftd study exited {r.returncode}: {r.stderr}")
-    report = json.loads((out / "report.json").read_text())
+        raise SystemExit(f"liftd study exited {r.returncode}: {r.stderr[-3000:]}")
+    return wall, json.loads((out / "report.json").read_text())
+
+
+def study(library: Path, jobs: int, out: Path) -> dict[str, object]:
+    wall, report = run_study(library, out, "--jobs", str(jobs))
     rows, summary, run = report["programs"], report["summary"], report["run"]
     simulated = sum(row["duration_advanced_s"] + row["duration_lifting_s"] for row in rows)
     return {

@@ -25,8 +25,21 @@ class Scenario:
     schedule: Schedule
 
 
-def scenario(seed: int, method: LiftMethod = LiftMethod.ADVANCED) -> Scenario:
+def _flusher(seed: int, on: bool) -> random.Random | None:
+    """Where #FLUSH / #FLUSH WAIT go inside ranges (issue 37 item 2): a generator of its own,
+    so that a seed's program without them stays the one it always was."""
+    return random.Random(seed * 7919 + 37) if on else None
+
+
+def _flush(fl: random.Random | None, lines: list[str], share: float = 0.15) -> None:
+    if fl is not None and fl.random() < share:
+        lines.append(fl.choice(["#FLUSH", "#FLUSH WAIT"]))
+
+
+def scenario(seed: int, method: LiftMethod = LiftMethod.ADVANCED, flush: bool = False) -> Scenario:
+    """`flush`: #FLUSH / #FLUSH WAIT after some motion blocks inside ranges."""
     rng = random.Random(seed)
+    fl = _flusher(seed, flush)
     zv, za = rng.uniform(0.3, 1.5), rng.uniform(3.0, 20.0)
     zj = rng.uniform(100.0, 2000.0)
     z_neg, z_pos = -0.05, 0.2
@@ -61,6 +74,7 @@ def scenario(seed: int, method: LiftMethod = LiftMethod.ADVANCED) -> Scenario:
             x = min(x + rng.choice([0.5, 2.0, 20.0, 80.0, 250.0]) * rng.random(), 2900.0)
             y = min(max(y + rng.uniform(-40.0, 40.0), 1.0), 1400.0)
             lines.append(f"G01 X{x:.3f} Y{y:.3f} F{rng.choice([3000, 12000, 24000, 60000])}")
+            _flush(fl, lines)
             if rng.random() < 0.1:
                 lines.append(f"G04 {rng.uniform(0.01, 0.2):.3f}")
         lines.append("Z[LIFT_END]")
@@ -80,12 +94,16 @@ def scenario(seed: int, method: LiftMethod = LiftMethod.ADVANCED) -> Scenario:
     return Scenario(seed, ch, "\n".join(lines) + "\n", Schedule(steps, holds))
 
 
-def wide_scenario(seed: int, method: LiftMethod = LiftMethod.ADVANCED) -> Scenario:
+def wide_scenario(
+    seed: int, method: LiftMethod = LiftMethod.ADVANCED, flush: bool = False
+) -> Scenario:
     """The whole input space of issue 14: 1–4 ranges of few blocks, of long polylines (up to
     400 short blocks, longer than every look-ahead), of slightly bent polylines and without path
     motion; ranges back to back; waits (G04, synchronised M) before and inside ranges; every
-    look-ahead size; override steps (0–200 %) at random moments and feed holds."""
+    look-ahead size; override steps (0–200 %) at random moments and feed holds. `flush`:
+    #FLUSH / #FLUSH WAIT inside ranges too."""
     rng = random.Random(seed)
+    fl = _flusher(seed, flush)
     zv, za = rng.uniform(0.3, 1.5), rng.uniform(3.0, 20.0)
     zj = rng.uniform(100.0, 2000.0)
     z_neg, z_pos = -0.05, 0.2
@@ -126,6 +144,7 @@ def wide_scenario(seed: int, method: LiftMethod = LiftMethod.ADVANCED) -> Scenar
                 x = min(x + rng.choice([0.5, 2.0, 20.0, 80.0, 250.0]) * rng.random(), 2900.0)
                 y = min(max(y + rng.uniform(-40.0, 40.0), 1.0), 1400.0)
                 lines.append(f"G01 X{x:.3f} Y{y:.3f} F{rng.choice([3000, 12000, 24000, 60000])}")
+                _flush(fl, lines)
                 if rng.random() < 0.1:
                     lines.append(rng.choice(["G04 0.03", "M04", "M08"]))
         elif kind in ("polyline", "bent"):
@@ -141,6 +160,7 @@ def wide_scenario(seed: int, method: LiftMethod = LiftMethod.ADVANCED) -> Scenar
                 x = min(x + step * math.cos(a), 2900.0)
                 y = min(max(y + step * math.sin(a), 1.0), 1400.0)
                 lines.append(f"G01 X{x:.4f} Y{y:.4f}")
+                _flush(fl, lines, 0.01)
                 if i == n // 2 and rng.random() < 0.1:
                     lines.append(rng.choice(["G04 0.03", "M04"]))
         lines.append("Z[LIFT_END]")
@@ -186,10 +206,13 @@ def violations(sc: Scenario, snaps: list, records: list) -> list[str]:  # type: 
         if ax.name != ch.lift_axis:
             continue
         checks = [("v", v, ax.v_max), ("a", a, ax.a_max), ("j", j, ax.j_max)]
-        if coupled:
-            # path-based Lifting: plan a_max·P442/1000 × override², plus a_max for the path's
-            # own acceleration (lift/path_based.py); the jerk is not bounded by the method
-            checks = [("v", v, ax.v_max), ("a", a, ax.a_max * (1.0 + ax.dyn_a_err * ov * ov))]
+        if coupled and ax.name == ch.lift_axis:
+            # path-based Lifting: within a_max and j_max at 100 % override, whatever the path
+            # does (issue 37 item 3, lift/path_based.py `segment_cap`); an override above
+            # 100 % scales the plan's share with ov² (ov³): the overload band of P-AXIS-00442
+            big = max(1.0, ov)
+            checks = [("v", v, ax.v_max), ("a", a, ax.a_max * big * big),
+                      ("j", j, ax.j_max * big * big * big)]  # fmt: skip
         for name, arr, lim in checks:
             got = float(np.abs(arr[:, i]).max()) / lim
             if got > 1 + 1e-9:

@@ -145,6 +145,7 @@ class AdsErr(enum.IntEnum):
     INVALIDDATA = 0x706
     NOTREADY = 0x707
     BUSY = 0x708
+    NOMEMORY = 0x70A  # a reply the server cannot hold (liftd: above max_frame_bytes)
     SYMBOLNOTFOUND = 0x710
     INVALIDSTATE = 0x712
     TRANSMODENOTSUPP = 0x713

@@ -80,6 +80,9 @@ class ServiceLimits:
     min_notification_cycle_ns: int = 1_000_000
     max_notification_length: int = 65536
     max_notification_payload: int = 256 * 1024
+    # the AMS data of one reply (a frame's AMS/TCP length less the 32-byte AMS header): a reply
+    # that would be larger is answered 0x70A instead (`max_frame_bytes` of the server)
+    max_reply_payload: int = (1 << 20) - 32
 
 
 @dataclass(frozen=True, slots=True)

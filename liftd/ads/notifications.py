@@ -10,7 +10,10 @@ Rules (reference/ads.md §1.5–§1.6, Beckhoff "ADS Add Device Notification"):
   FIRST_SAMPLE_DELAY after subscribing: AdsLib registers its dispatcher only after it has read
   the handle from the response and drops a notification that comes earlier (seen with pyads);
 * a sample may wait up to its max delay, so samples of several cycles and handles share frames
-  (one stamp per poll, several samples per stamp); with max delay 0 it goes out at once;
+  (one stamp per poll, several samples per stamp); with max delay 0 it goes out at once; no
+  frame carries more than `max_payload` bytes (the server's frame cap less the AMS header): a
+  poll's samples are split over several stamps and frames where needed, and a subscription
+  whose sample could not fit a frame alone is refused (0x717);
 * the subscribed length is a maximum, as a Read's is: a sample carries the object's bytes, at
   most that many (TwinCAT.Ads: "Maximum amount of data in bytes to receive with this ADS
   Notification", infosys 1033/tc3_ads.net/21041338891; TwinCAT's logger sends samples shorter
@@ -33,6 +36,7 @@ from liftd.ads.wire import AddNotificationRequest, Sample, Stamp, encode_notific
 
 Reader = Callable[[int, int, int], bytes]  # (index group, index offset, length) → data
 FIRST_SAMPLE_DELAY_NS = 20_000_000
+SAMPLE_OVERHEAD = 28  # payload head (8), stamp (12) and sample head (8) around one sample
 
 
 class AmsAddr(NamedTuple):
@@ -76,11 +80,13 @@ class NotificationTable:
     ) -> None:
         self.max_handles = max_handles
         self.min_cycle_ns = min_cycle_ns
-        self.max_length = max_length
         self.max_payload = max_payload
+        # a sample alone in a frame: 8 bytes of payload head, 12 of stamp, 8 of sample head
+        self.max_length = min(max_length, max_payload - SAMPLE_OVERHEAD)
         self.subs: dict[int, Subscription] = {}
         self._next_handle = 1
         self._batches: dict[tuple[AmsAddr, AmsAddr], _Batch] = {}
+        self._cursor = 0  # where the next poll starts sampling (polls cut by max_payload)
 
     def __len__(self) -> int:
         return len(self.subs)
@@ -143,13 +149,23 @@ class NotificationTable:
 
     def poll(self, now_ns: int, unix_ns: int, read: Reader) -> list[Outgoing]:
         """Sample what is due at `now_ns` (monotonic) with stamps from `unix_ns` (wall clock);
-        return the frames whose max delay is up. A failing read skips that sample."""
+        return the frames whose max delay is up. A failing read skips that sample. At most
+        `max_payload` bytes of samples a poll: what is due beyond stays due, first in line at
+        the next poll (one connection's 512 subscriptions to a 5 kB object were 2.6 MB and
+        several ms of the event loop each millisecond, which every other client waited for)."""
         out: list[Outgoing] = []
         stamp_time = filetime(unix_ns)
         fresh: dict[tuple[AmsAddr, AmsAddr], list[Sample]] = {}
-        for sub in self.subs.values():
+        subs = list(self.subs.values())
+        start = self._cursor % len(subs) if subs else 0
+        taken = 0
+        for i in range(len(subs)):
+            sub = subs[(start + i) % len(subs)]
             if sub.next_due_ns > now_ns:
                 continue
+            if taken >= self.max_payload:
+                self._cursor = start + i  # the next poll begins here
+                break
             sub.next_due_ns += sub.cycle_ns
             if sub.next_due_ns <= now_ns:  # late (a busy loop): skip the missed cycles
                 sub.next_due_ns = now_ns + sub.cycle_ns
@@ -162,6 +178,7 @@ class NotificationTable:
             if sub.on_change and data == sub.last:
                 continue
             sub.last = data
+            taken += 8 + len(data)
             key = (sub.client, sub.server)
             fresh.setdefault(key, []).append(Sample(sub.handle, data))
             batch = self._batches.get(key)
@@ -169,13 +186,21 @@ class NotificationTable:
                 self._batches[key] = _Batch(now_ns + sub.max_delay_ns)
             else:
                 batch.deadline_ns = min(batch.deadline_ns, now_ns + sub.max_delay_ns)
-        for key, samples in fresh.items():
+        for key, samples in fresh.items():  # frames of at most max_payload: split stamps too
             batch = self._batches[key]
-            size = 12 + sum(8 + len(s.data) for s in samples)
-            if batch.stamps and batch.size + size > self.max_payload:
-                out.append(Outgoing(*key, encode_notification(batch.stamps)))
-                batch.stamps, batch.size = [], 8
-            batch.stamps.append(Stamp(stamp_time, tuple(samples)))
+            stamp: list[Sample] = []
+            size = 12
+            for sample in samples:
+                need = 8 + len(sample.data)
+                if batch.size + size + need > self.max_payload and (stamp or batch.stamps):
+                    if stamp:
+                        batch.stamps.append(Stamp(stamp_time, tuple(stamp)))
+                    out.append(Outgoing(*key, encode_notification(batch.stamps)))
+                    batch.stamps, batch.size = [], 8
+                    stamp, size = [], 12
+                stamp.append(sample)
+                size += need
+            batch.stamps.append(Stamp(stamp_time, tuple(stamp)))
             batch.size += size
         for key in [k for k, b in self._batches.items() if b.deadline_ns <= now_ns]:
             batch = self._batches.pop(key)

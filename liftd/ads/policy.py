@@ -20,6 +20,8 @@ class ServerConfig:
     max_connections: int = 64
     max_frame_bytes: int = 1 << 20
     write_queue_frames: int = 1024
+    connection_budget_bytes: int = 4 << 20  # held for one connection (in and out)
+    budget_bytes: int = 48 << 20  # held for all connections
     incomplete_frame_timeout_s: float = 10.0
     first_frame_timeout_s: float = 10.0  # no valid frame yet after this: closed
     max_connections_per_ip: int = 32
@@ -61,3 +63,5 @@ class Counters:
     internal_errors: int = 0
     evicted: int = 0
     routed: int = 0
+    over_budget: int = 0  # connections closed for holding more than their budget
+    protocol_errors: int = 0  # connections closed for an exception in the protocol layer

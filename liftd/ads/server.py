@@ -10,10 +10,21 @@ poll and shared between subscribers.
 
 As a router (router.py): AMS/TCP port connect/close and "get NetId"; frames for a port a client
 registered go to that client, responses back to whoever asked. Port 10000 is the system
-service (system.py). Nobody crowds out the PLC: a connection that has sent no valid frame yet
-("unidentified") is closed after `first_frame_timeout_s`, and when the table (or the peer
-address's share of it) is full, a new connection evicts the oldest unidentified one instead of
-being refused (sshd's MaxStartups idea). Connection events are logged rate-limited per peer.
+service (system.py).
+
+Memory is a budget in bytes: what liftd holds for a connection (the replies, notifications
+and routed frames its peer has not taken yet, in the transport's buffer and in the queue
+behind it, and a request not yet complete) stays under `connection_budget_bytes`, else the
+connection is closed; what it holds for all connections under `budget_bytes`, else the one
+holding most is closed. Routed frames count against the receiver. A reply is never larger than
+a frame (service.py refuses it with 0x70A before building it). Whatever the protocol layer
+raises for one connection closes that connection (logged, counted), never the transport's
+`Fatal error` path, so the others are served on.
+
+Nobody crowds out the PLC: a connection that has sent no valid frame yet ("unidentified") is
+closed after `first_frame_timeout_s`, and when the table (or the peer address's share of it)
+is full, a new connection evicts the oldest unidentified one instead of being refused (sshd's
+MaxStartups idea). Connection events are logged rate-limited per peer.
 """
 
 from __future__ import annotations
@@ -22,8 +33,10 @@ import asyncio
 import contextlib
 import ipaddress
 import socket
+import struct
 import time
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -58,6 +71,9 @@ __all__ = ["AdsConnection", "AdsServer", "Counters", "IpNetwork", "RateLimiter",
 # net.core.somaxconn, 4096 by default)
 LISTEN_BACKLOG = socket.SOMAXCONN
 IDLE_POLL_S = 0.1  # notification task wake-up when nothing is due (incomplete-frame checks)
+LINGER_RESET = struct.pack("ii", 1, 0)  # struct linger {l_onoff 1, l_linger 0}
+TURN_S = 0.00025  # a connection's frames handled at once before the others get a turn
+BUDGET_STEP = 256 * 1024  # growth of a connection's held bytes that makes the server check its own
 
 
 class AdsConnection(asyncio.Protocol):
@@ -68,12 +84,20 @@ class AdsConnection(asyncio.Protocol):
         self.framer = AmsFramer(server.config.max_frame_bytes)
         self.session: Session = server.service.new_session()
         self.queue: deque[bytes] = deque()
+        self.queued = 0  # bytes in `queue`
+        self.waiting_turn = False  # the frames received are handled on in a later turn
+        self.next_check = BUDGET_STEP  # held bytes at which the server's budget is looked at
         self.paused = False
         self.partial_since: float | None = None
         self.closed = False
         self.identified = False  # has sent a valid frame (or registered a port)
         self.opened_at = time.monotonic()
         self.ip = "?"
+        # read-only figures for the live view (AdsServer.peers): requests answered,
+        # notifications sent, the source NetId of its last request
+        self.requests = 0
+        self.notifications = 0
+        self.source = b""
 
     # -- asyncio.Protocol -------------------------------------------------------------------------
     def connection_made(self, base: asyncio.BaseTransport) -> None:
@@ -115,20 +139,80 @@ class AdsConnection(asyncio.Protocol):
         self.session.notifications.clear()
         self.session.handles.clear()
         self.queue.clear()
+        self.queued = 0
+        self.framer.clear()
 
     def data_received(self, data: bytes) -> None:
-        broken: FramingError | None = None
         try:
-            frames = self.framer.feed(data)
-        except FramingError as exc:  # answer what came before the break, then close
-            frames, broken = exc.frames, exc
-        self.partial_since = time.monotonic() if self.framer.pending else None
-        for raw in frames:
-            if self.closed:
+            self._received(data)
+        except Exception as exc:  # a bug or MemoryError: this connection only, never a traceback
+            self.fail(exc)  # through asyncio's `Fatal error on transport`
+
+    def _received(self, data: bytes) -> None:
+        self.framer.add(data)
+        self.grew()  # frames not handled yet, a request under way (at most a frame)
+        if not self.waiting_turn and not self.closed:
+            self._work()
+
+    def _work(self) -> None:
+        """Cut and handle the frames received, for TURN_S at most: then the other connections
+        get a turn (asyncio's next iteration) while this one reads nothing more; a chunk of
+        64 kB of small requests is ~1 500 frames, tens of ms, and one sum command of 1 000
+        sub-commands a few ms, which every other client's request waited for. A broken
+        stream is closed once the frames before the break are answered."""
+        self.waiting_turn = False
+        end = time.perf_counter() + TURN_S
+        framer = self.framer
+        while not self.closed:
+            try:
+                raw = framer.next()
+            except FramingError as exc:
+                self.close_for("ads.framing_error", str(exc))
                 return
+            if raw is None:
+                break
             self.handle(raw)
-        if broken is not None and not self.closed:
-            self.close_for("ads.framing_error", str(broken))
+            if framer.pending and time.perf_counter() > end and self._later(self._turn):
+                self.waiting_turn = True
+                if self.transport is not None:
+                    self.transport.pause_reading()
+                return
+        self.partial_since = time.monotonic() if framer.pending else None
+        if not self.paused and self.transport is not None and not self.closed:
+            self.transport.resume_reading()
+
+    def _turn(self) -> None:
+        try:
+            if not self.closed:
+                self._work()
+        except Exception as exc:  # as in data_received
+            self.fail(exc)
+
+    @staticmethod
+    def _later(fn: Callable[[], None]) -> bool:
+        """Run `fn` in the event loop's next iteration; False without a running loop (tests
+        that feed a connection directly: then everything is handled at once)."""
+        try:
+            asyncio.get_running_loop().call_soon(fn)
+        except RuntimeError:
+            return False
+        return True
+
+    def fail(self, exc: BaseException) -> None:
+        """Close this connection for an exception of the protocol layer."""
+        srv = self.server
+        srv.counters.protocol_errors += 1
+        srv.error("ads.protocol_error", self.peer, exc, 0)
+        if not self.closed:
+            self.close_for("ads.protocol_error", f"{type(exc).__name__}: {exc}")
+        self.queue.clear()
+        self.queued = 0
+
+    @property
+    def held(self) -> int:
+        """Bytes held for this connection: unsent output and an incomplete request."""
+        buffered = self.transport.get_write_buffer_size() if self.transport is not None else 0
+        return self.queued + buffered + self.framer.pending
 
     def pause_writing(self) -> None:
         self.paused = True
@@ -138,8 +222,11 @@ class AdsConnection(asyncio.Protocol):
     def resume_writing(self) -> None:
         self.paused = False
         while self.queue and not self.paused and self.transport is not None:
-            self.transport.write(self.queue.popleft())
-        if not self.paused and self.transport is not None and not self.closed:
+            frame = self.queue.popleft()
+            self.queued -= len(frame)
+            self.transport.write(frame)
+        if (not self.paused and not self.waiting_turn and self.transport is not None
+                and not self.closed):  # fmt: skip
             self.transport.resume_reading()
 
     # -- frames ------------------------------------------------------------------------------------
@@ -147,18 +234,49 @@ class AdsConnection(asyncio.Protocol):
         if self.closed or self.transport is None:
             return
         if not self.paused:
-            self.transport.write(frame)
-            return
-        self.queue.append(frame)
-        if len(self.queue) > self.server.config.write_queue_frames:
+            self.transport.write(frame)  # may call pause_writing: the peer does not keep up
+            if not self.paused:
+                return
+        else:
+            self.queue.append(frame)
+            self.queued += len(frame)
+        cfg = self.server.config
+        if len(self.queue) > cfg.write_queue_frames:
             self.close_for("ads.write_queue_full", f"{len(self.queue)} frames not read")
+        else:
+            self.grew()
+
+    def grew(self) -> None:
+        """Hold this connection to its budget, and the server to its own each time what this
+        connection holds grew by BUDGET_STEP (so a flood of small frames costs no scan of
+        every connection per frame, and the total exceeds `budget_bytes` by less than a step
+        per connection between two scans)."""
+        cfg = self.server.config
+        held = self.held
+        if held > cfg.connection_budget_bytes:
+            self.server.counters.over_budget += 1
+            self.close_for("ads.over_budget", f"{held} bytes held "
+                           f"(connection_budget_bytes {cfg.connection_budget_bytes})")  # fmt: skip
+        elif held >= self.next_check:
+            self.next_check = held + BUDGET_STEP
+            self.server.check_budget()
+        elif held + BUDGET_STEP < self.next_check:
+            self.next_check = held + BUDGET_STEP
 
     def close_for(self, event: str, detail: str, error: bool = True) -> None:
         self.server.warn(event, self.peer, detail=detail)
         self.server.counters.closed_for_errors += error
         self.closed = True
         if self.transport is not None:
-            self.transport.abort()
+            # a reset, not a close: the kernel would keep sending what a peer that does not
+            # read left in the socket's buffer (up to tcp_wmem's 4 MiB) and that peer would
+            # never see the end; with SO_LINGER 0 both go at once
+            sock = self.transport.get_extra_info("socket")
+            with contextlib.suppress(OSError, AttributeError):
+                sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, LINGER_RESET)
+            self.transport.abort()  # drops the transport's buffer at once
+        self.queue.clear()  # and what waited behind it
+        self.queued = 0
 
     def identify(self) -> None:
         if not self.identified:
@@ -203,6 +321,8 @@ class AdsConnection(asyncio.Protocol):
         if no_reply:
             return  # a stray response or a notification: nothing to answer
         srv.counters.requests += 1
+        self.requests += 1
+        self.source = header.source_net_id
         if header.target_net_id not in cfg.net_ids:
             self.reply(header, b"", AmsError.TARGET_MACHINE_NOT_FOUND)
         elif header.target_port == SYSTEM_SERVICE_PORT and cfg.system_service:
@@ -251,11 +371,18 @@ class AdsConnection(asyncio.Protocol):
         self.send(wire.encode_frame(header, payload))
 
     def notify(self, out: Outgoing) -> None:
+        try:
+            self._notify(out)
+        except Exception as exc:  # as in data_received: this connection only
+            self.fail(exc)
+
+    def _notify(self, out: Outgoing) -> None:
         header = wire.AmsHeader(out.client.net_id, out.client.port, out.server.net_id,
                                 out.server.port, Command.NOTIFICATION, StateFlag.ADS_COMMAND,
                                 0, 0, 0)  # fmt: skip
         self.send(wire.encode_frame(header, out.payload))
         self.server.counters.notifications_sent += 1
+        self.notifications += 1
 
 
 @dataclass
@@ -332,6 +459,24 @@ class AdsServer:
                 conn.transport.abort()
         if self._server is not None:
             await self._server.wait_closed()
+
+    def check_budget(self) -> None:
+        """Close the connection holding most while all of them hold more than `budget_bytes`
+        (a connection that keeps up holds at most the transport's high-water mark, 64 KiB)."""
+        limit = self.config.budget_bytes
+        while True:
+            held = {c: c.held for c in self.connections if not c.closed}
+            if sum(held.values()) <= limit:
+                return
+            worst = max(held, key=held.__getitem__)
+            self.counters.over_budget += 1
+            worst.close_for("ads.over_budget", f"{held[worst]} bytes held of "
+                            f"{sum(held.values())} (budget_bytes {limit})")  # fmt: skip
+
+    def peers(self) -> list[tuple[str, str, int, int]]:
+        """(peer, source NetId, requests, notifications) of each open connection (read only)."""
+        return sorted((c.peer, wire.net_id_text(c.source) if c.source else "", c.requests,
+                       c.notifications) for c in self.connections)  # fmt: skip
 
     def ip_allowed(self, host: str) -> bool:
         if not self.config.allow_ips:
@@ -410,5 +555,10 @@ class AdsServer:
                     raise got
                 return got
 
-            for out in table.poll(now_ns, unix_ns, read):
+            try:
+                outgoing = table.poll(now_ns, unix_ns, read)
+            except Exception as exc:  # this connection's, never the notification task's end
+                conn.fail(exc)
+                continue
+            for out in outgoing:
                 conn.notify(out)

@@ -114,7 +114,10 @@ class AdsService:
         """Answer one request (the caller has checked the address and that the command is
         1..9 but 8). Never raises."""
         try:
-            return Reply(self.commands[header.command](session, header, payload, may_write, now_ns))
+            out = self.commands[header.command](session, header, payload, may_write, now_ns)
+            if len(out) > self.limits.max_reply_payload:  # checked before building where
+                raise AdsError(AdsErr.NOMEMORY, f"a reply of {len(out)} bytes")  # it can grow
+            return Reply(out)
         except AdsError as exc:
             return Reply(error_payload(header.command, exc.code))
         except Exception as exc:  # a bug: answer 0x700 (the client must not time out) and report
@@ -333,16 +336,22 @@ class AdsService:
         return bytes([self.provider.symbol_version & 0xFF])[:length]
 
     # -- sum commands (liftd/ads/sums.py has the layouts) -------------------------------------
+    @property
+    def _reply_cap(self) -> int:
+        """The data a ReadWrite reply may carry (its payload less result and length)."""
+        return self.limits.max_reply_payload - 8
+
     def _sum_read(self, s: Session, req: ReadWriteRequest, ctx: Context) -> bytes:
-        return sums.sum_read(req, self.limits.max_sum_subcommands, partial(self.read, s))
+        limit = self.limits.max_sum_subcommands
+        return sums.sum_read(req, limit, partial(self.read, s), self._reply_cap)
 
     def _sum_read_ex(self, s: Session, req: ReadWriteRequest, ctx: Context) -> bytes:
         limit = self.limits.max_sum_subcommands
-        return sums.sum_read_ex(req, limit, partial(self.read, s), padded=True)
+        return sums.sum_read_ex(req, limit, partial(self.read, s), True, self._reply_cap)
 
     def _sum_read_ex2(self, s: Session, req: ReadWriteRequest, ctx: Context) -> bytes:
         limit = self.limits.max_sum_subcommands
-        return sums.sum_read_ex(req, limit, partial(self.read, s), padded=False)
+        return sums.sum_read_ex(req, limit, partial(self.read, s), False, self._reply_cap)
 
     def _sum_write(self, s: Session, req: ReadWriteRequest, ctx: Context) -> bytes:
         def write(ig: int, io: int, data: bytes) -> None:
@@ -354,7 +363,8 @@ class AdsService:
         def read_write(sub: ReadWriteRequest) -> bytes:
             return self.read_write(s, sub, ctx)
 
-        return sums.sum_read_write(req, self.limits.max_sum_subcommands, read_write)
+        limit = self.limits.max_sum_subcommands
+        return sums.sum_read_write(req, limit, read_write, self._reply_cap)
 
     def _sum_add_notifications(self, s: Session, req: ReadWriteRequest, ctx: Context) -> bytes:
         def add(sub: AddNotificationRequest) -> int:

@@ -1,5 +1,5 @@
 """Command line (DESIGN.md §3.1): the parser and the dispatch here, one module per group of
-commands (`check`; `simulate` and `study`; the service commands; `common`: what they share).
+commands (`check`; `simulate`; `study`; the service commands; `common`: what they share).
 The only place that maps outcomes to exit codes: 0 ok, 1 NC program error, 2 configuration
 error, 3 runtime failure (`healthcheck`: 1 unhealthy). A configuration or schedule error
 raised by any command is printed once, in `main`."""
@@ -15,7 +15,9 @@ from liftd import __version__
 from liftd.cli.check import cmd_check
 from liftd.cli.common import EXIT_CONFIG, EXIT_SIGPIPE, EXIT_UNHEALTHY
 from liftd.cli.service import cmd_healthcheck, cmd_objects, cmd_plc, cmd_reload, cmd_run
-from liftd.cli.simulate import cmd_simulate, cmd_study
+from liftd.cli.simulate import cmd_simulate
+from liftd.cli.study import cmd_study
+from liftd.cli.view import cmd_view
 from liftd.runtime.core import core_build
 from liftd.settings import ConfigError
 
@@ -124,6 +126,11 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--plot", metavar="OUT.png", help="write a figure of the run")
     sim.add_argument("--json", action="store_true", help="print the JSON summary on stdout")
     sim.add_argument(
+        "--view", action="store_true",
+        help="then serve the run's trace in the browser (liftd view; a temporary trace "
+        "without --trace)",
+    )  # fmt: skip
+    sim.add_argument(
         "--compare",
         action="store_true",
         help="run Advanced Lifting and path-based Lifting on the same program and schedule; "
@@ -139,6 +146,17 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sim.set_defaults(func=cmd_simulate)
 
+    view = sub.add_parser(
+        "view", help="the live view's page over a recorded trace (simulate/run --trace)"
+    )
+    view.add_argument("trace", metavar="TRACE.csv", help="trace; OUT.chN.csv siblings too")
+    view.add_argument("-c", "--config", help="liftd.toml (the channels, axes and programs)")
+    view.add_argument("--program", help="NC program drawn (default: the configured one)")
+    view.add_argument("--host", help="listen address (default: [ui] host, 127.0.0.1)")
+    view.add_argument("--port", type=int, help="TCP port (default: [ui] port, 8551; 0 = any)")
+    view.add_argument("--duration", type=float, metavar="S", help=argparse.SUPPRESS)
+    view.set_defaults(func=cmd_view)
+
     st = sub.add_parser(
         "study",
         help="simulate --compare over a library of NC programs in parallel; a report in --out",
@@ -146,6 +164,16 @@ def build_parser() -> argparse.ArgumentParser:
     st.add_argument("paths", nargs="+", metavar="DIR|FILE", help="directories of *.nc, or programs")
     st.add_argument("-c", "--config", help="liftd.toml")
     st.add_argument("--jobs", type=int, metavar="N", help="worker processes (default: all cores)")
+    st.add_argument(
+        "--scheduler", metavar="ADDRESS",
+        help="run on the Dask cluster of this scheduler (e.g. tcp://10.0.0.5:8786) instead of "
+        "local processes; needs the cluster extra: pip install 'liftd[cluster]'",
+    )  # fmt: skip
+    st.add_argument(
+        "--timeout", type=float, metavar="S",
+        help="with --scheduler: seconds to wait for the scheduler, then for a worker "
+        "(default 30)",
+    )  # fmt: skip
     st.add_argument(
         "--channel", type=int, metavar="N", help="run the programs in channel N (default: [cnc])"
     )

@@ -39,7 +39,7 @@ def check_program(settings: Settings, path: Path, channel: ChannelParams | None 
     ranges = LiftRangeTracker(ch.lift_min_dist)
     for block in stream:
         blocks += 1
-        lifts += block.lift_start is not None and not block.lift_start.implicit
+        lifts += block.lift_start is not None
         ranges.feed(block)
     result = decoder.result(())
     errors = 0

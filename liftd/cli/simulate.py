@@ -1,21 +1,17 @@
-"""`liftd simulate` (one method, --compare, every channel of the machine) and `liftd study`."""
+"""`liftd simulate`: one method, --compare, every channel of the machine."""
 
 from __future__ import annotations
 
 import argparse
 import contextlib
-import functools
 import json
-import os
 import sys
-import time
-from collections.abc import Sequence
+import tempfile
 from pathlib import Path
 from typing import TYPE_CHECKING, TextIO
 
-from liftd import __version__
 from liftd.settings import Settings
-from liftd.settings.programs import program_channel, with_program
+from liftd.settings.programs import with_program
 
 if TYPE_CHECKING:
     from liftd.cnc.plc import Schedule
@@ -25,13 +21,34 @@ from liftd.cli.common import (
     EXIT_OK,
     EXIT_PROGRAM,
     EXIT_RUNTIME,
-    channel_arg,
     load_config,
     schedule_of,
 )
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
+    """simulate, then with --view its trace in the browser (a temporary one without --trace)."""
+    if not getattr(args, "view", False):
+        return _cmd_simulate(args)
+    if args.compare:
+        print("liftd simulate: --view shows one run; drop --compare", file=sys.stderr)
+        return EXIT_CONFIG
+    from liftd.cli.view import serve_trace  # noqa: PLC0415
+
+    with tempfile.TemporaryDirectory(prefix="liftd-view-") as tmp:
+        if not args.trace:
+            args.trace = str(Path(tmp) / "trace.csv")
+        code = _cmd_simulate(args)
+        if code not in (EXIT_OK, EXIT_PROGRAM):
+            return code
+        settings = load_config(args)
+        program = Path(args.program)
+        text = program.read_text(encoding="utf-8", errors="replace")
+        view = serve_trace(with_program(settings, program, text), args.trace, None, None)
+        return code if view == EXIT_OK else view
+
+
+def _cmd_simulate(args: argparse.Namespace) -> int:
     from liftd.sim import plot  # noqa: PLC0415
 
     schedule = schedule_of(args)
@@ -215,71 +232,3 @@ def _compare(
         plot.plot_compare(Path(args.plot), result, z.a_max, warn, title)
     text_out = json.dumps(summary.to_json()) if args.json else compare.describe(summary)
     return _output(text_out, result.program_error, result.finished)
-
-
-def _study_programs(paths: Sequence[str]) -> list[str]:
-    """The programs named: a directory stands for the *.nc files in it (not in its
-    subdirectories, where CAM libraries keep the subroutine files their jobs call)."""
-    out: list[str] = []
-    for name in paths:
-        path = Path(name)
-        if path.is_dir():
-            files = (f for f in path.iterdir() if f.suffix.lower() == ".nc" and f.is_file())
-            out.extend(sorted(str(f) for f in files))
-        else:
-            out.append(name)  # unreadable ones are reported as such, with the others
-    return list(dict.fromkeys(out))
-
-
-def cmd_study(args: argparse.Namespace) -> int:
-    """`simulate --compare` over a library of programs in parallel, into a report."""
-    from liftd.sim import plot, report, study  # noqa: PLC0415
-    from liftd.sim.progress import ProgressBar  # noqa: PLC0415
-
-    settings = load_config(args)
-    chosen = channel_arg(settings, args.channel)
-    programs = _study_programs(args.paths)
-    if not programs:
-        print(f"liftd study: no NC programs (*.nc) in {' '.join(args.paths)}", file=sys.stderr)
-        return EXIT_CONFIG
-    if (args.jobs is not None and args.jobs < 1) or args.max_time <= 0:
-        print("liftd study: --jobs must be >= 1 and --max-time > 0", file=sys.stderr)
-        return EXIT_CONFIG
-    jobs = min(args.jobs or len(os.sched_getaffinity(0)), len(programs))
-    cfg = study.StudyConfig(
-        # the channel's parameters with the subroutine files, read in the worker
-        functools.partial(program_channel, settings, channel=chosen.params),
-        settings.config.plc.m_ack_delay_ms * 1e-3,
-        args.max_time,
-    )
-    meta = {"liftd": __version__, "config": str(settings.path),
-            "method": chosen.params.lift_method.value, "programs": len(programs)}  # fmt: skip
-    out = Path(args.out)
-    bar = ProgressBar(len(programs), sys.stderr)
-
-    def done(result: study.ProgramResult) -> None:
-        bar.advance(failed=result.row.status is not study.Status.OK)
-
-    t0 = time.perf_counter()
-    try:
-        with report.ReportWriter(out, meta) as writer:
-            for result in study.run_programs(programs, cfg, jobs, done):
-                writer.add(result)
-            bar.close()
-            run = {
-                "jobs": jobs,
-                "wall_s": round(time.perf_counter() - t0, 3),
-                "max_rss_mib": {"parent": round(study.max_rss_kib() / 1024, 1),
-                                "worker": round(writer.aggregate.max_rss_kib / 1024, 1)},
-            }  # fmt: skip
-            figures = plot.study_figures(writer.aggregate) if plot.available() else None
-            summary = writer.finish(run, figures)
-    except OSError as exc:
-        bar.close()
-        name = exc.filename or out  # a failed write or close names no file
-        print(f"{name}: error: cannot write the report: {exc.strerror}", file=sys.stderr)
-        return EXIT_RUNTIME
-    for row in writer.aggregate.not_run:
-        print(f"{row.program}: {row.status.value}: {row.why}", file=sys.stderr)
-    print(report.describe(summary, run, out))
-    return EXIT_OK if summary["status"]["ok"] == summary["programs"] else EXIT_PROGRAM

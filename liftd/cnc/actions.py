@@ -52,6 +52,10 @@ class BoundaryActions:
         """The program ends (M30 reached, or an error stops it): `GeoTask`'s."""
         raise NotImplementedError
 
+    def _flush_may_go(self, now: float) -> bool:
+        """Whether the path may leave the #FLUSH it rests at (`LiftAhead`'s)."""
+        raise NotImplementedError
+
     def _emit(self, name: str, t: float, line: int, value: float = 0.0, text: str = "") -> None:
         self.events.append(new_event((name, t, line, value, text, 0)))
 
@@ -110,7 +114,27 @@ class BoundaryActions:
         elif kind is ActionKind.PROGRAM_END:
             self._end_of_program(t_at, action.line)
             return False
+        elif kind is ActionKind.FLUSH and crossing is None:
+            return self._flush_may_go(now)  # unless Z could not make it from here
         return True
+
+    def _resumed(self, k: int, rested: float) -> None:
+        """The path left boundary k, where it rested from `rested`, at `wait_since`. Inside a
+        lift range Z lifts again for the rest of it after a waiting point (its wait is the
+        program's, not the lift's); at a #FLUSH Z goes on as it was (vendor §2.1.3 case 3:
+        no influence on the lift profile), and a wait there was for Z, the lift's delay."""
+        rng = self.lift.current
+        rec = self.lift.record
+        if rng is None or rec is None:
+            return
+        if rng.k_start < k and (rng.k_end < 0 or k < rng.k_end):
+            if k in self.prog.flushes[rng.index]:
+                return
+            self.lift.resume_in_range(self.wait_since)
+            if k not in self.interp.lift_stops:
+                rec.waits += self.wait_since - rested
+        elif k == rng.k_start:
+            self._departure(rec, self.wait_since, None)
 
     def _lift_start(self, rng: LiftRange, t_at: float, crossing: Crossing | None) -> None:
         if self.reset_requested:  # the path brakes for a RESET: no range starts any more
@@ -220,9 +244,17 @@ class BoundaryActions:
             self.interp.nominal_flush()  # a step an event's cycle left (`nominal_step`)
             nominal = self.interp.nominal_arrival
             start = rec.departure if rec.departure is not None else rec.t_start
-            if rng is not None and rng.k_end > rng.k_start and nominal is not None:
-                rec.nominal_time = nominal - start
-                rec.path_delay = max(0.0, rec.t_end - start - rec.waits - rec.nominal_time)
+            if rng is not None and rng.k_end > rng.k_start:
+                if nominal is not None:
+                    rec.nominal_time = nominal - start
+                    rec.path_delay = max(0.0, rec.t_end - start - rec.waits - rec.nominal_time)
+                else:
+                    # the nominal run has not arrived yet (it was stepped to this cycle's end):
+                    # the path without the lift's limits is no faster, the lift cost nothing.
+                    # Its time is at least the path's own (issue 37 item 4: path-based Lifting
+                    # reported the whole range, 1.57 s, where its path arrived 0.4 ms early)
+                    rec.nominal_time = rec.t_end - start - rec.waits
+                    rec.path_delay = 0.0
             else:  # no path motion: all the time is the path waiting for Z
                 rec.path_delay = max(0.0, rec.t_end - rec.t_start - rec.waits)
             self.interp.nominal_stop()

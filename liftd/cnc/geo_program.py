@@ -16,9 +16,10 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from typing import cast
 
 from liftd.cnc.lift.advanced import FirstRise
-from liftd.cnc.lift.path_based import RangePlan, plan_range
+from liftd.cnc.lift.path_based import RangePlan, ZLimits, plan_range
 from liftd.cnc.lift.profile import LiftProfiles, ProfileError
 from liftd.cnc.lift.ranges import LiftRange, find_ranges
 from liftd.cnc.nc import DecoderContext, NcError, decode
@@ -28,6 +29,7 @@ from liftd.cnc.path.geometry import Vec, within
 from liftd.cnc.path.program import ActionKind, PathProgram, prepare
 from liftd.cnc.path.table import PathTable, build_table
 from liftd.cnc.path.velocity import brake_distance
+from liftd.cnc.pause import EVERY, pause, release
 from liftd.cnc.plc import MAX_OVERRIDE
 
 
@@ -39,6 +41,9 @@ class GeoProgram:
     warnings: tuple[NcError, ...]
     first_line: int
     stops: tuple[tuple[int, ...], ...]  # per range: waiting points strictly inside it
+    # per range: boundaries strictly inside it where the path stops only for a #FLUSH / #FLUSH
+    # WAIT (not waiting points of the lift: vendor §2.1.3 case 3, `LiftAhead._horizon`)
+    flushes: tuple[tuple[int, ...], ...]
     z_index: int
     plans: tuple[RangePlan | None, ...]  # per range: z(s) of path-based Lifting, else None
     table: PathTable  # what the path tracker reads (with the lift ranges' limits)
@@ -84,6 +89,7 @@ def _first_rises(
     profiles: dict[str, LiftProfiles] = {}
     out: list[FirstRise | None] = []
     for rng, plan in zip(ranges, plans, strict=True):
+        pause()  # a ruckig solve per range
         spec = rng.start
         if plan is not None or rng.suppressed:
             out.append(None)
@@ -110,6 +116,7 @@ def _cap_for_lifts(
     profiles: dict[str, LiftProfiles] = {}
     segs = list(path.segments)
     for rng in ranges:
+        pause()
         if rng.k_end <= rng.k_start or not rng.moves_z:
             continue
         axis = rng.start.axis
@@ -142,6 +149,7 @@ def _couple_lifts(
     plans: list[RangePlan | None] = [None] * len(ranges)
     profiles: dict[str, LiftProfiles] = {}
     for rng in ranges:
+        pause()  # a range's z(s) plan
         k_last = rng.k_end if rng.k_end >= 0 else len(path.segments)
         if k_last <= rng.k_start:  # no path motion in the range: time-based, the path waits
             continue
@@ -149,33 +157,57 @@ def _couple_lifts(
         z = ch.axis(axis)
         if axis not in profiles:
             profiles[axis] = lifting_profiles(ch, axis)
+        # Z within its limits at 100 % override: a_max, or P-AXIS-00442's planning
+        # acceleration where that is higher (the vendor's a_max,Lift, §4.1); v_max at any.
+        # P-AXIS-00442 (dyn_monitoring_a_err, 0.1 %, default 1000):
+        # https://infosys.beckhoff.com/content/1033/tf5200_axis_parameter/117565323.html,
+        # its use for the lift: https://infosys.beckhoff.com/content/1033/tf5200_lift_axis/223158923.html
+        keep = 1.0 - PLANNING_MARGIN
+        a_lift = max(z.a_max, profiles[axis].a_max)
+        z_lim = ZLimits(z.v_max * keep, a_lift * keep, z.j_max * keep)
         try:
-            plan, caps = plan_range(path, rng, profiles[axis])
+            plan, caps = plan_range(path, rng, profiles[axis], z_lim)
         except ProfileError:
             continue
         plans[rng.index] = plan
         for cap in caps:
             seg = segs[cap.k]
-            a, j, v = seg.a_max, seg.j_max, seg.v_lift
-            if cap.dz_ds > 0.0:  # the coupling term (dz/ds)·s̈ gets a_max of Z (see path_based)
-                a = min(a, z.a_max / cap.dz_ds)
-                j = min(j, z.j_max / cap.dz_ds)
-                # Z is coupled like a path axis: whatever the override, ż = (dz/ds)·ṡ ≤ v_max
-                v = min(v, z.v_max * (1.0 - PLANNING_MARGIN) / cap.dz_ds)
-            v_ov = min(seg.v_lift_ov, cap.v_cap)
-            segs[cap.k] = seg.limited(v_ov, a, j, v)
+            segs[cap.k] = seg.limited(
+                min(seg.v_lift_ov, cap.v_ov),
+                min(seg.a_max, cap.a),
+                min(seg.j_max, cap.j),
+                min(seg.v_lift, cap.v),
+            )
     return dataclasses.replace(path, segments=tuple(segs)), tuple(plans)
 
 
-def _stops_inside(path: PathProgram, rng: LiftRange) -> tuple[int, ...]:
+_WAITS = frozenset((ActionKind.M_WAIT, ActionKind.M00, ActionKind.DWELL, ActionKind.PROGRAM_END))
+
+
+def _flush_only(path: PathProgram, k: int) -> bool:
+    """Whether the path stops at boundary k for a #FLUSH and for nothing that waits."""
+    b = path.boundaries[k]
+    kinds = {a.kind for a in b.actions}
+    return ActionKind.FLUSH in kinds and not kinds & _WAITS and not b.conditional_stop
+
+
+def _stops_inside(path: PathProgram, rng: LiftRange, flush: bool) -> tuple[int, ...]:
+    """The boundaries strictly inside `rng` where the path stops: those that wait (`flush`
+    False) or those that stop only for a #FLUSH (`flush` True)."""
     if rng.k_end < 0:
         return ()
-    return tuple(k for k in range(rng.k_start + 1, rng.k_end) if path.boundaries[k].stop)
+    return tuple(
+        k
+        for k in range(rng.k_start + 1, rng.k_end)
+        if path.boundaries[k].stop and _flush_only(path, k) == flush
+    )
 
 
 def _conditional(path: PathProgram) -> dict[int, tuple[int, ...]]:
     out: dict[int, list[int]] = {}
     for b in path.boundaries:
+        if not b.index & EVERY:
+            pause()
         if b.conditional_stop:
             for a in b.actions:
                 if a.kind is ActionKind.M_WAIT:
@@ -207,7 +239,10 @@ def _limits_reach(rng: LiftRange, changed: list[int], nominal: PathTable,
 
 
 def load_program(text: str, ch: ChannelParams, start: Vec) -> GeoProgram:
+    """Decode and prepare `text` for a run from `start`, with pause points (pause.py)
+    between its stages and in their loops."""
     result = decode(text, DecoderContext.from_channel(ch, start))
+    blocks = list(result.blocks)  # freed a piece at a time below (pause.py)
     path = prepare(result.blocks, ch, start)
     nominal = build_table(path)
     ranges = find_ranges(path, ch)
@@ -217,26 +252,49 @@ def load_program(text: str, ch: ChannelParams, start: Vec) -> GeoProgram:
         path = _cap_for_lifts(path, ranges, ch)
     elif ch.lift_method is LiftMethod.LIFTING:
         path, plans = _couple_lifts(path, ranges, ch)
-    changed = [k for k, (a, b) in enumerate(zip(original, path.segments, strict=True)) if a != b]
-    differs = tuple(_limits_reach(r, changed, nominal, ch) for r in ranges)
+    changed = []
+    for k, (a, b) in enumerate(zip(original, path.segments, strict=True)):
+        if a != b:
+            changed.append(k)
+        if not k & EVERY:
+            pause()
+    differs = []
+    for r in ranges:
+        differs.append(_limits_reach(r, changed, nominal, ch))
+        pause()
     first = result.blocks[0].line if result.blocks else 1
     warnings = tuple(e for e in result.errors if e.severity is Severity.WARNING)
+    error = result.first_error
+    del result
+    release(cast(list[object], blocks))
+    stops, flushes = [], []
+    for r in ranges:
+        stops.append(_stops_inside(path, r, False))
+        flushes.append(_stops_inside(path, r, True))
+        pause()
+    table = build_table(path)
+    conditional = _conditional(path)
+    names = ch.axis_names  # a property that builds the tuple: once, not per range
+    entry_dir = []
+    for r in ranges:
+        entry_dir.append(_direction_into(path, r.k_start, names.index(r.start.axis)))
+        if not len(entry_dir) & EVERY:
+            pause()
     return GeoProgram(
         path=path,
         ranges=ranges,
-        error=result.first_error,
+        error=error,
         warnings=warnings,
         first_line=first,
-        stops=tuple(_stops_inside(path, r) for r in ranges),
+        stops=tuple(stops),
+        flushes=tuple(flushes),
         z_index=ch.lift_axis_index,
         plans=plans,
-        table=build_table(path),
+        table=table,
         nominal=nominal,
-        conditional=_conditional(path),
-        nominal_differs=differs,
-        entry_dir=tuple(
-            _direction_into(path, r.k_start, ch.axis_names.index(r.start.axis)) for r in ranges
-        ),
+        conditional=conditional,
+        nominal_differs=tuple(differs),
+        entry_dir=tuple(entry_dir),
         range_of={id(r.start): r.index for r in ranges},
         rises=_first_rises(ranges, plans, ch),
         lift_axes=tuple(dict.fromkeys(r.start.axis for r in ranges)),
@@ -278,7 +336,11 @@ class PreparedPrograms:
             return prog
         prog = load_program(self.text, self.ch, start)
         self.loads += 1
+        self.keep(start, prog)
+        return prog
+
+    def keep(self, start: Vec, prog: GeoProgram) -> None:
+        """Keep `prog`, prepared for `start` (by `from_start`, or off the cycle)."""
         if len(self._by_start) >= self.capacity:
             del self._by_start[next(iter(self._by_start))]
         self._by_start[start] = prog
-        return prog

@@ -15,19 +15,17 @@ same inputs give bit-identical snapshots. Order within a cycle:
 
 from __future__ import annotations
 
-import functools
 from typing import Final
 
-from liftd.cnc.geo_program import PreparedPrograms
+from liftd.cnc.geo_program import PreparedPrograms, same_start
 from liftd.cnc.lift.monitor import AccelMonitor
 from liftd.cnc.lift.profile import LiftProfiles, ProfileError
 from liftd.cnc.nc.blocks import ErrorId
 from liftd.cnc.params import ChannelParams
-from liftd.cnc.path.interpolator import Interpolator
 from liftd.cnc.path.program import PathProgram
 from liftd.cnc.plc import MAX_OVERRIDE
 from liftd.cnc.plc_commands import PlcCommands
-from liftd.cnc.runs import Runs
+from liftd.cnc.runs import Runs, RunState
 from liftd.cnc.snapshot import (
     ChannelState,
     GeoInputs,
@@ -36,7 +34,6 @@ from liftd.cnc.snapshot import (
     new_snapshot,
 )
 
-INF = float("inf")
 LIFT_LATE_ID = int(ErrorId.LIFT_LATE)  # the path passed LIFT_END with Z not at POS
 
 # Enum members as C statics of the compiled module: `ChannelState.ACTIVE` is a dict and a type
@@ -109,6 +106,29 @@ class GeoTask(PlcCommands):
         built in the cycles after it, a piece per cycle (`Runs.deferred`)."""
         # before the first START: the run after run 1
         self.next_runs.prepare(self.prog.path.end_position, max(self.runs, 1))
+
+    def wants_run(self) -> tuple[float, ...] | None:
+        """Where a START now would load the program from, when the run from there is not
+        built yet: the channel READY after a run (a RESET, an NC error's RESET, the end of
+        a program not repeated) with nothing built ahead for where its axes are; None
+        otherwise. The GEO process builds that run off the cycle (`build_run`, in a
+        thread) and hands it over (`offer_run`) before it lets the START through, so that
+        a START after a RESET costs its cycle what a repeat START does."""
+        if self.state is not READY or not self.runs or self.reset_requested:
+            return None
+        pos = self._positions()
+        ahead = self.next_runs.ahead
+        if ahead is not None and ahead.lift is not None and same_start(ahead.start, pos):
+            return None
+        return pos
+
+    def build_run(self, start: tuple[float, ...]) -> RunState:
+        """The run from `start` (see `wants_run`); reads only what does not change."""
+        return self.next_runs.build_for(start)
+
+    def offer_run(self, run: RunState) -> None:
+        """The run `build_run` built, for the next START (cheap: a GEO cycle may call it)."""
+        self.next_runs.offer(run, self.runs)
 
     @property
     def next_run_ready(self) -> bool:
@@ -223,12 +243,7 @@ class GeoTask(PlcCommands):
             ip = self.interp
             t_rem, refine = 0.0, None
             if m.uses_time:
-                k, t_z = self._horizon(), m.t
-                if k < 0:
-                    t_rem = INF
-                else:  # a bound that costs nothing while it still holds; exact on demand
-                    t_rem = ip.arrival_bound(k) - t_z
-                    refine = functools.partial(_remaining, ip, k, t_z)
+                t_rem, refine = self._lift_time(t, m.t)
             self.lift.step(t, ip.s, ip.v, ip.a, t_rem, self.ov_eff, refine)
             for finding in self.lift.findings:
                 self._emit(finding.name, t, self.line, finding.value)
@@ -277,14 +292,8 @@ class GeoTask(PlcCommands):
                 rested = self.interp.t_state
                 self.interp.resume(self.wait_since)
                 self.z_rest = None
-                rng = self.lift.current
-                rec = self.lift.record
-                if rng is not None and rng.k_start < k and (rng.k_end < 0 or k < rng.k_end):
-                    self.lift.resume_in_range(self.wait_since)
-                    if rec is not None and k not in self.interp.lift_stops:
-                        rec.waits += self.wait_since - rested
-                elif rng is not None and rec is not None and k == rng.k_start:
-                    self._departure(rec, self.wait_since, None)
+                if k is not None:
+                    self._resumed(k, rested)
             for crossing in self.interp.advance(t):
                 self._cross(crossing)
             if self.interp.stopped_at is None or self.state is not ACTIVE:
@@ -329,11 +338,6 @@ class GeoTask(PlcCommands):
                 lift.counts,
             )
         )
-
-
-def _remaining(interp: Interpolator, k: int, t_z: float) -> float:
-    """The path's remaining time to boundary k from the lift's time t_z (exact or its bound)."""
-    return interp.arrival(k) - t_z
 
 
 def lead_cycles(ch: ChannelParams, axis: str) -> int:

@@ -4,8 +4,14 @@ before it. Changes with how a lift looks ahead; the channel's cycle stays in `ge
 
 from __future__ import annotations
 
+import functools
+
 from liftd.cnc.actions import BoundaryActions
+from liftd.cnc.lift.advanced import Refine
 from liftd.cnc.lift.ranges import LiftRange
+from liftd.cnc.path.interpolator import Interpolator
+
+INF = float("inf")
 
 
 class LiftAhead(BoundaryActions):
@@ -26,7 +32,18 @@ class LiftAhead(BoundaryActions):
         self._prime_restarts = -1
 
     def _horizon(self) -> int:
-        """Boundary the lift plans for: LIFT_END, or an earlier waiting point of the range."""
+        """Boundary the lift plans for: LIFT_END, or an earlier waiting point of the range;
+        -1 where the path's time to it is unknown: a #FLUSH / #FLUSH WAIT lies before it.
+
+        A flush is no waiting point of the lift (vendor §2.1.3 case 3, written for Advanced
+        Lifting: it "may stop the path if the lift axis can no longer reach the lift position
+        in time; otherwise it has no influence on the lift profile"): Z neither lands there
+        nor starts again after it. The channel is emptied at a flush, so the lift does not
+        count on the blocks after it until the path is there: Z keeps rising toward POS_LIMIT
+        as in a feed hold, and at the flush the path waits if Z could not make it from there
+        (`_flush_may_go`). liftd follows this passage where the general one (§2.4: "the
+        programmed target position is reached briefly in the flush block") disagrees: the
+        method-specific passage first, and it keeps Z up (issue 37 item 2)."""
         rng = self.lift.current
         if rng is None or rng.k_end < 0:
             return -1
@@ -35,10 +52,62 @@ class LiftAhead(BoundaryActions):
         if stopped is not None and stopped in stops:
             return stopped  # waiting inside the range: Z goes to (and stays at) POS here
         ahead = self.interp.segment if stopped is None else stopped
+        horizon = rng.k_end
         for k in stops:
             if k > ahead:
-                return k
-        return rng.k_end
+                horizon = k
+                break
+        for k in self.prog.flushes[rng.index]:
+            if ahead < k < horizon:
+                return -1  # the path has not left this flush yet: beyond it is unknown
+        return horizon
+
+    def _at_flush(self) -> bool:
+        """Whether the path rests at a #FLUSH inside the current lift range."""
+        rng = self.lift.current
+        k = self.interp.stopped_at
+        return rng is not None and k is not None and k in self.prog.flushes[rng.index]
+
+    def _lift_time(self, t: float, t_z: float) -> tuple[float, Refine | None]:
+        """The remaining path time a time-based lift plans against, from Z's time t_z: to its
+        horizon, a lower bound that `refine` makes exact; inf where the horizon is unknown.
+        Where the path rests at a flush, the least time it needs from there if it left now
+        (at t): Z plans to land by then, the path waits until it can (`_flush_may_go`)."""
+        k = self._horizon()
+        if k < 0:
+            return INF, None
+        ip = self.interp
+        if self._at_flush():
+            return t + ip.lower_bound(k, self.ov_eff) - ip.t_state - t_z, None
+        # a bound that costs nothing while it still holds; exact on demand
+        return ip.arrival_bound(k) - t_z, functools.partial(_remaining, ip, k, t_z)
+
+    def _flush_may_go(self, now: float) -> bool:
+        """The path rests at a #FLUSH: it leaves unless it must wait for Z, that is unless Z,
+        as it is now, needs longer to reach POS than the path needs from here to the lift's
+        horizon (a lower bound at the override in effect). Then it leaves at the exact time
+        from which Z lands before the path can arrive (vendor §2.1.3 case 3: the flush "may
+        stop the path"); meanwhile Z descends against that time (`_lift_time`)."""
+        lift = self.lift
+        m = lift.motion
+        if m is None or not m.uses_time or not self._at_flush():
+            return True
+        k = self._horizon()
+        if k < 0:
+            return True  # another flush lies before the horizon: decided there
+        ip = self.interp
+        path_needs = ip.lower_bound(k, self.ov_eff) - ip.t_state
+        if path_needs == INF:
+            return True  # a feed hold or override 0: the override rule decides on release
+        leave = lift.t + m.landing_time() - path_needs
+        if leave <= self.wait_since:
+            return True
+        if leave > now:
+            return False
+        # never before the last cycle, where the path was published at rest (Z's need can
+        # fall by more than a cycle in one, when it turns to its descent)
+        self.wait_since = max(leave, now - self.dt)
+        return True
 
     def _prime_lift(self) -> None:
         """Work of the next lift start's cycle done in the two quiet cycles before it, once
@@ -76,4 +145,10 @@ class LiftAhead(BoundaryActions):
                 if b > rng.k_start:
                     horizon = b
                     break
-            ip.arrival_bound(horizon)
+            if not any(f < horizon for f in self.prog.flushes[rng.index]):
+                ip.arrival_bound(horizon)  # (beyond a flush the lift plans with no bound)
+
+
+def _remaining(interp: Interpolator, k: int, t_z: float) -> float:
+    """The path's remaining time to boundary k from the lift's time t_z (exact or its bound)."""
+    return interp.arrival(k) - t_z

@@ -18,11 +18,12 @@ from __future__ import annotations
 
 from collections import deque
 
-from liftd.cnc.geo_program import GeoProgram, PreparedPrograms
+from liftd.cnc.geo_program import GeoProgram, PreparedPrograms, load_program
 from liftd.cnc.lift.controller import LiftController
 from liftd.cnc.params import ChannelParams, LiftMethod
 from liftd.cnc.path.geometry import Vec, within
 from liftd.cnc.path.interpolator import Interpolator
+from liftd.cnc.pause import pause
 from liftd.cnc.release import ReleaseBins
 
 
@@ -64,6 +65,34 @@ class Runs:
         """A whole run from `start` (decodes unless a program is prepared for it)."""
         prog = self.programs.from_start(start)
         return RunState(start, prog, self._interpolator(prog), self._lift(prog))
+
+    def build_for(self, start: Vec) -> RunState:
+        """A whole run from `start`, decoded and planned from the program text, with pause
+        points (pause.py) between its pieces. Touches nothing of this object but what it
+        reads (the channel, the leads, the text): the GEO process builds it in a thread off
+        the cycle (runtime/preparer.py) and hands it over with `offer`."""
+        prog = load_program(self.programs.text, self.ch, start)
+        interp = self._interpolator(prog, nominal=False)
+        pause()
+        if prog.ranges:
+            interp.prepare_nominal(prog.nominal)
+            pause()
+        lift = self._lift(prog)
+        pause()
+        return RunState(start, prog, interp, lift)
+
+    def offer(self, run: RunState, runs: int) -> None:
+        """Take `run` (from `build_for`) as the next run, the one after run `runs`: what was
+        built ahead or was being built goes to the release bins. A few assignments: the GEO
+        cycle may call it."""
+        if self.ahead is not None:
+            self.released.put([self.ahead])
+        if self._building is not None:
+            self.released.put([self._building])
+            self._building = None
+        self.ahead = run
+        self._built_for = runs
+        self.programs.keep(run.start, run.prog)
 
     def prepare(self, end: Vec, run: int) -> None:
         """Build now, outside the cycle, the run from `end`, the one after run `run`."""

@@ -122,6 +122,20 @@ class CncProvider:
             raise AdsError(AdsErr.INVALIDACCESS, f"{obj.symbol} is read-only")
         self._submit(obj.signal, obj.type.unpack(data), obj.channel)
 
+    def write_symbol(self, name: str, raw: bool | int) -> None:
+        """A write by symbol name (the live view's control), down the same path as an ADS write
+        of that symbol: the same checks and errors, the same input for the GEO loop. A BOOL takes
+        true/false, a number an integer in its ADS unit (0x706 otherwise)."""
+        obj = self.catalog.object_of.get(normalise(name))
+        if obj is None:
+            raise AdsError(AdsErr.SYMBOLNOTFOUND, f"symbol {name!r}")
+        if obj.signal is None:
+            raise AdsError(AdsErr.INVALIDACCESS, f"{obj.symbol} is read-only")
+        if isinstance(raw, bool) != (obj.type.isg == "BOOLEAN"):
+            kind = "true or false" if obj.type.isg == "BOOLEAN" else "an integer"
+            raise AdsError(AdsErr.INVALIDDATA, f"{obj.symbol} takes {kind}")
+        self._submit(obj.signal, int(raw), obj.channel)
+
     def _submit(self, signal: PlcSignal, raw: float | int, channel: int) -> None:
         """A PLC write for channel `channel` (machine index) into the GEO loop's inputs."""
         if signal is PlcSignal.OVERRIDE:

@@ -11,17 +11,26 @@ lateness histograms. The timing policy is in cycle.py. A configuration sent by t
 (SIGHUP) takes effect in each channel at that channel's next program boundary. Memory is
 locked once the programs are prepared and the heap trimmed (rt.lock_memory), so the lock
 holds what the loop uses.
+
+What one cycle does is bounded, whatever the PLC and the daemon send: it reads at most
+INPUTS_PER_CYCLE PLC writes off the ring (levels written several times collapse to the last;
+commands keep their order, at most BACKLOG of them wait per channel, the rest stays in the
+ring, whose 256 records are the daemon's 0x708 BUSY when full), and it never decodes or plans
+a program: what a START after a RESET, an error or a program end and what a reload need is
+built by `Preparer` in the loop's idle time, the START held back until it is (preparer.py).
 """
 
 from __future__ import annotations
 
+import functools
 import gc
 import signal
 import time
-from typing import Final
+from typing import Final, cast
 
 from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.machine import ChannelProgram, Machine
+from liftd.cnc.runs import RunState
 from liftd.cnc.snapshot import (
     ChannelState,
     Command,
@@ -34,6 +43,7 @@ from liftd.runtime import rt
 from liftd.runtime.cycle import CycleClock, bucket
 from liftd.runtime.loop_config import ChannelConfig, LoopConfig
 from liftd.runtime.plc_inputs import PlcInputs
+from liftd.runtime.preparer import Preparer
 from liftd.runtime.records import INPUT_NAMES, pack_event, read_message, unpack_input
 from liftd.runtime.shared import (
     COMPUTE_CPU_OVER,
@@ -62,6 +72,10 @@ COMPUTE_OVER_BURST = 10
 PROGRAM_END: Final = "geo.program_end"  # the event of a program's end (a repeat starts it again)
 RESET_DONE: Final = "geo.reset"  # a RESET completed: READY stands until the PLC starts
 PROGRAM_START: Final = "geo.program_start"  # a START ran the program: a RESET's READY is over
+# PLC writes read off the input ring in one cycle (~2 µs each with their event): 256 written at
+# once (one sum write) cost a cycle ~0.5 ms before; now they take 16 cycles
+INPUTS_PER_CYCLE: Final = 16
+BACKLOG: Final = 8  # commands per channel waiting for the GEO task (it takes one a cycle)
 
 
 class _Events:
@@ -98,20 +112,98 @@ class GeoLoop:
         self.reset_ready = [False] * len(cfg.channels)
         self.pending_cfg = cfg
         self.reload_gen = 0
+        # off the cycle (preparer.py): the job each channel waits for (a run for its next
+        # START, or a reload's task), and the reload's task once built
+        self.preparer = Preparer(round(cfg.cycle_time * 1e9))
+        self.job_for: list[tuple[object, ...] | None] = [None] * len(cfg.channels)
+        self.built: list[GeoTask | None] = [None] * len(cfg.channels)
+        self.reading = False  # the daemon's configuration is being read off the pipe
+
+    def read_inputs(self, t_next: float) -> bool:
+        """Read at most INPUTS_PER_CYCLE PLC writes off the ring and stage them for the next
+        cycle (t_next), each logged with it; stop early when a channel has BACKLOG commands
+        waiting (the rest stays in the ring, in order). True if one changes what a channel
+        gets. The ring is empty but when the PLC writes."""
+        inputs, plcs, n = self.shared.inputs, self.plcs, len(self.plcs)
+        changed = False
+        for _ in range(INPUTS_PER_CYCLE):
+            raw = inputs.get()
+            if raw is None:
+                break
+            w = unpack_input(raw)
+            if w.channel < n and plcs[w.channel].apply(w):
+                changed = True
+                ev = new_event(("geo.plc_input", t_next, 0, w.value, INPUT_NAMES[w.signal], 0))
+                self.events.send(ev, self.tags[w.channel])
+                if plcs[w.channel].backlog >= BACKLOG:
+                    break
+        return changed
+
+    # -- preparation off the cycle ---------------------------------------------------------------
+    def _prepare_run(self, i: int) -> bool:
+        """Have the run a START of channel i would load built off the cycle; True while the
+        START must wait for it (or for a reload's task). Only in READY: a START that resumes
+        a HOLD loads nothing, and a reload waits for the program's end."""
+        task = self.machine.tasks[i]
+        if task.state is not ChannelState.READY:
+            return False
+        if self.job_for[i] is not None or self.pending[i] is not None:
+            return True
+        start = task.wants_run()
+        if start is None:
+            return False
+        key: tuple[object, ...] = ("run", i, task)
+        self.job_for[i] = key
+        self.preparer.submit(key, functools.partial(task.build_run, start))
+        return True
+
+    def _take_results(self, t: float) -> bool:
+        """What the preparer finished: a run for a START, the daemon's configuration, a
+        reload's task. True if any (the cycle names it in a geo.compute_over event). A run
+        is a geo.prepared event: how long its preparation took (ms), from where."""
+        results = self.preparer.results()
+        for key, result, took_ns in results:
+            if isinstance(result, Exception):
+                raise result  # a bug in the core, as it would have raised in the cycle
+            kind = key[0]
+            if kind == "message":
+                self.reading = False
+                self.reload_gen, cfg = cast(tuple[int, LoopConfig], result)
+                self.pending_cfg = cfg
+                self.pending = list(cfg.channels)
+                self.built = [None] * len(cfg.channels)
+                self.shared.words[RELOAD_TAKEN] = self.reload_gen
+                self.shared.words[LOADING] += 1
+                continue
+            if kind == "reload":
+                self.shared.words[LOADING] += 1  # (its submission was the first)
+            i = cast(int, key[1])
+            if self.job_for[i] is not key:
+                continue  # superseded (a newer configuration)
+            self.job_for[i] = None
+            if kind == "run":
+                if self.machine.tasks[i] is key[2]:
+                    run = cast(RunState, result)
+                    self.machine.tasks[i].offer_run(run)
+                    where = " ".join(f"{1e3 * x:.3f}" for x in run.start)
+                    self.events.send(Event("geo.prepared", t, run.prog.first_line,
+                                           round(took_ns / 1e6, 3), f"run from {where} mm"),
+                                     self.tags[i])  # fmt: skip
+            elif key[2] is self.pending[i]:
+                self.built[i] = cast(GeoTask, result)
+        return bool(results)
 
     def _check_reload(self, snaps: list[GeoSnapshot]) -> bool:
         """Take a configuration the daemon sent, and apply it to each channel at its program
-        boundary; True when this cycle did either (it may have decoded a program)."""
+        boundary; True when this cycle did either. Reading it and building a channel's task
+        are the preparer's (preparer.py): the swap is a few assignments."""
         words = self.shared.words
         took = False
-        if words[RELOAD] != self.reload_gen:
-            took = True
+        if words[RELOAD] != self.reload_gen and not self.reading:
+            took = self.reading = True
             words[LOADING] += 1  # a large program takes a while to arrive
-            self.reload_gen, cfg = read_message(self.control_fd)  # one per reload, in order
-            self.pending_cfg = cfg
-            self.pending = list(cfg.channels)
-            words[RELOAD_TAKEN] = self.reload_gen
-            words[LOADING] += 1
+            # one message per reload, in order, read by the preparer's thread
+            self.preparer.submit(("message",), functools.partial(read_message, self.control_fd))
         if self.pending_cfg is self.cfg:  # nothing waits for a program boundary (every cycle)
             return took
         for i, pending in enumerate(self.pending):
@@ -121,16 +213,22 @@ class GeoLoop:
             # the channel's program boundary: its new lists and program take effect from
             # where its axes are; the other channels go on. Not in ERROR: an NC error is
             # cleared by the PLC's RESET only (as on the CNC), whose READY is the boundary.
+            task = self.built[i]
+            if task is None:
+                job = self.job_for[i]
+                if job is None or job[0] != "reload":
+                    key: tuple[object, ...] = ("reload", i, pending)
+                    self.job_for[i] = key
+                    words[LOADING] += 1  # decoding and planning: tell the supervisor
+                    self.preparer.submit(key, functools.partial(
+                        build_task, pending, snap.positions))  # fmt: skip
+                    took = True
+                continue
             self.pending[i] = None
+            self.built[i] = None
             took = True
             self.current[i] = pending
-            words[LOADING] += 1  # decoding and planning: tell the supervisor it works
-            task = GeoTask(pending.channel, pending.program_text, autostart=False,
-                           start_position=snap.positions)  # fmt: skip
-            if pending.repeat:
-                task.prepare_next_run()
             self.machine.replace(i, task)
-            words[LOADING] += 1
             common = self.pending_cfg
             plc = PlcInputs(common.m_ack_auto, common.m_ack_delay_s)
             plc.carry_over(self.plcs[i])  # the PLC's levels, and what this cycle read
@@ -166,14 +264,20 @@ class GeoLoop:
         last: list[GeoSnapshot | None] = [None] * n
         last_overrun_event = -OVERRUN_EVENT_EVERY_NS
         staged = False  # a channel has PLC writes that take effect in the next cycle
+        jobs_seen = 0  # the preparer's finished jobs taken
         over_tokens, over_refilled = COMPUTE_OVER_BURST, 0
         sleep_until = rt.spin_until if self.spin else rt.sleep_until
         tags, plcs, step = self.tags, self.plcs, self.machine.step
         send = self.events.send
         start = Command.START
+        preparer = self.preparer
         while not words[STOP]:
             deadline = clock.deadline_ns
-            if deadline > now_ns():
+            if preparer.busy:  # its slice; and no spin: a spinning loop holds the GIL
+                preparer.grant(deadline)
+                if deadline > now_ns():
+                    rt.sleep_until(deadline)
+            elif deadline > now_ns():
                 sleep_until(deadline)
             wake = now_ns()
             wake_cpu = cpu_ns()
@@ -186,15 +290,16 @@ class GeoLoop:
                 for i in channels:
                     if plcs[i].staged:
                         plcs[i].take()
-            read = False
-            while (raw := shared.inputs.get()) is not None:  # rare: only when the PLC writes
-                w = unpack_input(raw)
-                if w.channel < n and plcs[w.channel].apply(w):  # logged with its cycle
-                    staged = read = True
-                    t_next = (k + 1) * dt
-                    send(new_event(("geo.plc_input", t_next, 0, w.value, INPUT_NAMES[w.signal],
-                                    0)), tags[w.channel])  # fmt: skip
-            inputs = [plcs[i].inputs(last[i], t) for i in channels]
+            prepared = preparer.running or preparer.jobs_done != jobs_seen
+            if preparer.jobs_done != jobs_seen:
+                jobs_seen = preparer.jobs_done
+                self._take_results(t)
+            read = self.read_inputs((k + 1) * dt)
+            staged = staged or read
+            inputs = [
+                plcs[i].inputs(last[i], t, plcs[i].start_next(last[i]) and self._prepare_run(i))
+                for i in channels
+            ]
             # a START may decode and plan the program
             starting = any(inp.command is start for inp in inputs)
             if starting:
@@ -220,6 +325,7 @@ class GeoLoop:
                         ends = [i] if ends is None else [*ends, i]
                     elif name == RESET_DONE:
                         self.reset_ready[i] = True
+                        self._prepare_run(i)  # ahead of the PLC's START
                     elif name == PROGRAM_START:
                         self.reset_ready[i] = False
             reloaded = self._check_reload(snaps)
@@ -227,6 +333,8 @@ class GeoLoop:
                 for i in ends:
                     if self.current[i].repeat:
                         plcs[i].request(start)
+                    else:
+                        self._prepare_run(i)  # ahead of a START that may come
             last = list(snaps)
             end_cpu = cpu_ns()
             end = now_ns()
@@ -253,7 +361,7 @@ class GeoLoop:
                     over_refilled += gained * COMPUTE_OVER_EVENT_EVERY_NS
                 if over_tokens:
                     over_tokens -= 1
-                    did = cycle_kinds(snaps, applied, read, reloaded)
+                    did = cycle_kinds(snaps, applied, read, reloaded or prepared)
                     pre_us = (step_start - wake) // 1000  # the PLC inputs' drain, the inputs
                     what = (f"{did}; cpu {compute_cpu // 1000} µs; step {step_ns // 1000} µs; "
                             f"before {pre_us} µs")  # fmt: skip
@@ -270,6 +378,15 @@ class GeoLoop:
                 regridded += skipped
                 words[REGRIDDED] = regridded
                 send(Event("geo.regrid", t, snaps[0].line, float(skipped)))
+
+
+def build_task(pending: ChannelConfig, start: tuple[float, ...]) -> GeoTask:
+    """A reloaded channel's task from where its axes are (in the preparer's thread)."""
+    task = GeoTask(pending.channel, pending.program_text, autostart=False,
+                   start_position=start)  # fmt: skip
+    if pending.repeat:
+        task.prepare_next_run()
+    return task
 
 
 def cycle_kinds(snaps: list[GeoSnapshot], applied: bool, read: bool, reloaded: bool) -> str:
@@ -308,10 +425,12 @@ def main(control_fd: int, shm_fd: int) -> bool:
     events = _Events(shared.events)
     ok = True
     state: rt.RtState | None = None
+    loop: GeoLoop | None = None
     try:
         loop = GeoLoop(shared, cfg, events, control_fd)
         gc.collect()
         state = rt.apply(cfg.rt)  # after preparing: mlockall locks what the loop really uses
+        loop.preparer.follow_affinity()
         loop.spin = state.spin
         for r in state.results:
             text = f"{r.setting}: {'ok' if r.ok else 'not permitted'} ({r.detail})"
@@ -323,6 +442,8 @@ def main(control_fd: int, shm_fd: int) -> bool:
         events.send(Event("geo.fault", 0.0, 0, 0.0, f"{type(exc).__name__}: {exc}"))
         ok = False
     finally:
+        if loop is not None:
+            loop.preparer.close()
         if state is not None:
             state.close()
         shared.close()

@@ -39,13 +39,13 @@ class PlcInputs:
         # in effect
         self.override = 1.0
         self.feed_hold = False
-        self.commands: deque[Command] = deque(maxlen=16)
+        self.commands: deque[Command] = deque()  # bounded by the loop's reading (BACKLOG)
         self.m_ack = False
         # written by the PLC, in effect from the next cycle (`take`)
         self.staged = False
         self.next_override = 1.0
         self.next_feed_hold = False
-        self.next_commands: deque[Command] = deque(maxlen=16)
+        self.next_commands: deque[Command] = deque()
         self.next_m_ack = False
         self.auto = SimPlc(ack_delay_s) if auto else None
         self.plc_stopped = False  # a STOP from the PLC: the automatic PLC must not continue
@@ -95,17 +95,38 @@ class PlcInputs:
             self.next_m_ack = old.next_m_ack
             self.next_commands.extend(old.next_commands)
 
+    @property
+    def backlog(self) -> int:
+        """Commands written and not yet delivered to the GEO task (one a cycle)."""
+        return len(self.commands) + len(self.next_commands)
+
+    def start_next(self, last: GeoSnapshot | None) -> bool:
+        """Whether the command the next `inputs` delivers may be a START (the PLC's, or the
+        automatic PLC's continuing after M00)."""
+        if self.commands:
+            return self.commands[0] is Command.START
+        return self.auto is not None and last is not None and last.state is ChannelState.HOLD
+
     def request(self, cmd: Command) -> None:
         """A command of the loop itself (program repeat, autostart after a reload): once."""
         if cmd not in self.commands:
             self.commands.append(cmd)
 
-    def inputs(self, last: GeoSnapshot | None, t: float) -> GeoInputs:
+    def inputs(self, last: GeoSnapshot | None, t: float, hold_start: bool = False) -> GeoInputs:
+        """This cycle's inputs. `hold_start`: a START waits (the loop prepares the program it
+        starts, preparer.py); it stays first in line, and the commands after it wait too."""
         base = _IDLE
         if self.auto is not None and not (
             self.plc_stopped and last is not None and last.state is ChannelState.HOLD
         ):
             base = self.auto.inputs(last, t, _NO_SCHEDULE)
+        if hold_start:
+            if base.command is Command.START:
+                base = new_inputs((base.override, base.feed_hold, Command.NONE, base.m_ack))
+            if self.commands and self.commands[0] is Command.START:
+                ack = self.m_ack or base.m_ack
+                self.m_ack = False
+                return new_inputs((self.override, self.feed_hold, Command.NONE, ack))
         if self.override == 1.0 and not self.feed_hold and not self.commands and not self.m_ack:
             return base
         command = self.commands.popleft() if self.commands else base.command

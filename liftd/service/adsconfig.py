@@ -6,7 +6,7 @@ import ipaddress
 
 from liftd.ads.server import ServerConfig
 from liftd.ads.service import ServiceLimits
-from liftd.ads.wire import net_id_bytes
+from liftd.ads.wire import AMS_SIZE, net_id_bytes
 from liftd.settings.model import AdsSection
 
 
@@ -19,6 +19,8 @@ def server_config(ads: AdsSection) -> ServerConfig:
         max_connections=ads.max_connections,
         max_frame_bytes=ads.max_frame_bytes,
         write_queue_frames=ads.write_queue_frames,
+        connection_budget_bytes=ads.connection_budget_bytes,
+        budget_bytes=ads.budget_bytes,
         incomplete_frame_timeout_s=ads.incomplete_frame_timeout_s,
         first_frame_timeout_s=ads.first_frame_timeout_s,
         max_connections_per_ip=ads.max_connections_per_ip,
@@ -38,5 +40,6 @@ def service_limits(ads: AdsSection) -> ServiceLimits:
         max_notifications=ads.max_notifications_per_connection,
         min_notification_cycle_ns=ads.min_notification_cycle_us * 1000,
         max_notification_length=min(65536, ads.max_frame_bytes // 4),
-        max_notification_payload=ads.max_frame_bytes // 2,
+        max_notification_payload=ads.max_frame_bytes - AMS_SIZE,
+        max_reply_payload=ads.max_frame_bytes - AMS_SIZE,
     )

@@ -22,6 +22,7 @@ import dataclasses
 import os
 import signal
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, TextIO
 
@@ -56,8 +57,10 @@ from liftd.settings import ConfigError, Settings, load_settings
 from liftd.settings.load import program_problem
 
 if TYPE_CHECKING:
+    from liftd.cnc.snapshot import Event
     from liftd.service.metrics import Sample
     from liftd.service.trace_recorder import TraceRecorder
+    from liftd.service.ui_host import UiHost
 
 TRACE_CAPACITY_S = 10.0  # trace ring: this many seconds of cycles
 
@@ -89,7 +92,11 @@ class Daemon:
                                       DeviceInfo())  # fmt: skip
             self.server = AdsServer(server_config(settings.config.ads), self.service,
                                     self.log.bind(part="ads"))  # fmt: skip
-            self.geo = GeoProcess(self.shared, GeoEventLog(self.log),
+            self.ui = self._ui(settings)
+            events: Callable[[Event], None] = GeoEventLog(self.log)
+            if self.ui is not None:
+                events = _tee(events, self.ui.on_event)
+            self.geo = GeoProcess(self.shared, events,
                                   settings.config.rt.stall_timeout_ms * 1e-3)  # fmt: skip
         except BaseException:
             self.shared.close()
@@ -101,6 +108,15 @@ class Daemon:
         self.udp: UdpDiscovery | None = None
         self._control_path: Path | None = None
         self._control_inode = 0  # the socket file it bound (removed at stop only if still it)
+
+    def _ui(self, settings: Settings) -> UiHost | None:
+        """The live view (`[ui] enabled`): aiohttp only when asked for."""
+        if not settings.config.ui.enabled:
+            return None
+        from liftd.service.ui_host import UiHost  # noqa: PLC0415
+
+        return UiHost(settings, self.catalog, self.provider, self.server, self._view,
+                      self.log.bind(part="ui"))  # fmt: skip
 
     # -- what the ADS provider sees -------------------------------------------------------------
     def _view(self) -> GeoView | None:
@@ -142,6 +158,7 @@ class Daemon:
             await self.geo.start(cfg)
             self._keep_off_geo_cpu()
             await self._listen()
+            await self._start_ui(cfg)
             self._start_trace(trace_file)
             await self._start_metrics()
             await self._start_control()
@@ -155,8 +172,9 @@ class Daemon:
             f"{','.join(map(str, ads.ams_ports))}"
         )
         core = core_build()
+        ui = {"ui": self.ui.url} if self.ui is not None else {}
         self.log.info("daemon.ready", seconds=round(time.monotonic() - t0, 3),
-                      ads_port=self.server.port, net_id=ads.net_id, core=core)  # fmt: skip
+                      ads_port=self.server.port, net_id=ads.net_id, core=core, **ui)  # fmt: skip
         if core == "stale":
             self.log.warning("geo.core_stale", hint="a compiled module is older than its "
                              "source, which does not run until `make core`")  # fmt: skip
@@ -248,6 +266,16 @@ class Daemon:
                              ) from None  # fmt: skip
         self.log.info("ads.udp_listening", host=ads.host, port=port)
 
+    async def _start_ui(self, cfg: LoopConfig) -> None:
+        if self.ui is None:
+            return
+        ui = self.settings.config.ui
+        try:
+            await self.ui.start(cfg)
+        except OSError as exc:
+            raise StartError(f"cannot listen on {ui.host}:{ui.port} ([ui]): {exc.strerror}"
+                             ) from None  # fmt: skip
+
     async def _start_metrics(self) -> None:
         m = self.settings.config.metrics
         if not m.prometheus_port:
@@ -332,6 +360,8 @@ class Daemon:
             write_net_ids=fresh.write_net_ids, reject=fresh.reject,
         )  # fmt: skip
         self.settings = new
+        if self.ui is not None:
+            self.ui.reloaded(new, cfg)
         self.log.info("config.reload_accepted", files=list(new.files),
                       detail="takes effect at the next program boundary")  # fmt: skip
         detail = "GEO process has it; it takes effect at the next program boundary"
@@ -343,6 +373,8 @@ class Daemon:
         t0 = time.monotonic()
         systemd.notify("STOPPING=1")
         self.stopping.set()
+        if self.ui is not None:
+            await self.ui.close()
         await self.server.close()
         if self.udp is not None:
             self.udp.close()
@@ -358,6 +390,15 @@ class Daemon:
                 self._control_path.unlink()
         self.log.info("daemon.stopped", **self.geo.summary().as_log(),
                       stop_seconds=round(time.monotonic() - t0, 3), rss_mb=daemon_rss)  # fmt: skip
+
+
+def _tee(first: Callable[[Event], None], second: Callable[[Event], None]
+         ) -> Callable[[Event], None]:  # fmt: skip
+    def both(ev: Event) -> None:
+        first(ev)
+        second(ev)
+
+    return both
 
 
 def run(settings: Settings, config_arg: str | None, program_arg: str | None,

@@ -16,7 +16,7 @@ from liftd.settings.model import LiftdConfig
 from liftd.settings.programs import program_channel, read_program
 
 RESTART_KEYS = ("host", "port", "net_id", "extra_net_ids", "ams_ports")
-RESTART_SECTIONS = ("rt", "log", "metrics")  # applied when the processes start
+RESTART_SECTIONS = ("rt", "log", "metrics", "ui")  # applied when the processes start
 
 
 def needs_restart(running: LiftdConfig, new: LiftdConfig) -> list[str]:

@@ -112,6 +112,8 @@ def parse_config_text(text: str, file: str) -> LiftdConfig:
             message = err["msg"].removeprefix("Value error, ")  # liftd's own validators' text
             if err["type"] == "extra_forbidden":
                 message = "unknown key"
+            if key == "ui.token":  # a secret: never printed, also not a wrong one
+                value = "(hidden)"
             problems.append(
                 Problem(Severity.ERROR, file, toml_line(text, loc), key, value, message)
             )

@@ -13,7 +13,8 @@ from liftd.cnc.params import AxisParams, ChannelParams
 from liftd.settings.cnc_lists import ChannelLists, read_channel_lists, startup_channels
 from liftd.settings.config_file import ConfigError, find_config, parse_config_text, toml_line
 from liftd.settings.isg_list import Problem, Severity
-from liftd.settings.model import ChannelSection, LiftdConfig
+from liftd.settings.model import AdsSection, ChannelSection, LiftdConfig
+from liftd.settings.ui import ui_token
 
 
 @dataclass(frozen=True, slots=True)
@@ -43,6 +44,10 @@ class Settings:
     subroutine_dirs: tuple[Path, ...] = ()  # [nc] subroutine_dirs, resolved
     channels: tuple[ChannelSettings, ...] = ()  # empty: only `channel`
     primary: int = 0  # index of `channel` in `channels`
+    ui_token: str | None = None  # [ui] token or the content of [ui] token_file
+
+    def __repr__(self) -> str:  # the token stays out of tracebacks and logs
+        return f"Settings(path={self.path!r})"
 
     @property
     def machine(self) -> tuple[ChannelSettings, ...]:
@@ -106,6 +111,8 @@ def load_settings(explicit: str | None = None, program: str | None = None) -> Se
     )
     problems += more
     where = _Where(str(path), text, problems)
+    _ads_budgets(config.ads, where)
+    token = ui_token(config.ui, base, str(path), text, problems)
     if lists is not None:
         names = [ax.name for ax in lists.axes]
         if config.cnc.lift_axis not in names:
@@ -160,7 +167,19 @@ def load_settings(explicit: str | None = None, program: str | None = None) -> Se
         subroutine_dirs=tuple(base / d for d in nc.subroutine_dirs),
         channels=tuple(machine),
         primary=[c.params.channel_id for c in machine].index(channel.channel_id),
+        ui_token=token,
     )
+
+
+def _ads_budgets(ads: AdsSection, where: _Where) -> None:
+    """A connection's budget holds a request and a reply of a frame each; the server's holds
+    a connection's."""
+    if ads.connection_budget_bytes < 2 * ads.max_frame_bytes:
+        where.error(("ads", "connection_budget_bytes"), ads.connection_budget_bytes,
+                    f"below 2 × max_frame_bytes ({2 * ads.max_frame_bytes})")  # fmt: skip
+    if ads.budget_bytes < ads.connection_budget_bytes:
+        where.error(("ads", "budget_bytes"), ads.budget_bytes,
+                    f"below connection_budget_bytes ({ads.connection_budget_bytes})")  # fmt: skip
 
 
 def _unreadable(file: Path) -> str | None:

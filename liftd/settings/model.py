@@ -84,6 +84,12 @@ class AdsSection(_Section):
     max_notifications_per_connection: int = Field(512, ge=1, le=100000)
     min_notification_cycle_us: int = Field(1000, ge=100, le=10_000_000)
     write_queue_frames: int = Field(1024, ge=16, le=1_000_000)
+    # bytes held for one connection (its replies, notifications and routed frames not yet
+    # taken by its peer, and a request not yet complete): beyond it the connection is closed;
+    # at least 2 × max_frame_bytes
+    connection_budget_bytes: int = Field(4 << 20, ge=2048, le=1 << 34)
+    # bytes held for all connections together: beyond it the one holding most is closed
+    budget_bytes: int = Field(48 << 20, ge=2048, le=1 << 36)
     incomplete_frame_timeout_s: float = Field(10.0, gt=0.0, le=3600.0)
     # a connection that sent no valid AMS frame (nor a router port connect) is closed after this
     first_frame_timeout_s: float = Field(10.0, gt=0.0, le=3600.0)
@@ -159,6 +165,26 @@ class LogSection(_Section):
     queue_lines: int = Field(10_000, ge=100, le=1_000_000)
 
 
+class UiSection(_Section):
+    """The live view in the browser (liftd/ui/, README "Watching liftd live"): off unless asked
+    (the shipped liftd.toml asks, on loopback). Control from the page needs `control = true`,
+    a token (`token`, or `token_file` relative to liftd.toml: one of them) and a peer that
+    `[ads] allow_ips` admits."""
+
+    enabled: StrictBool = False
+    host: str = "127.0.0.1"
+    port: int = Field(8551, ge=0, le=65535)  # 0 = any free port (the real one is logged)
+    control: StrictBool = False
+    token: str | None = Field(None, min_length=16, max_length=256, pattern=r"^[!-~]+$")
+    token_file: str | None = Field(None, min_length=1)
+    # Host header names the page answers to besides IP literals and localhost (a name that
+    # resolves to this machine only through an attacker's DNS, "DNS rebinding", is refused)
+    hosts: tuple[str, ...] = ()
+    max_connections: int = Field(16, ge=1, le=1000)  # open WebSockets; beyond: HTTP 503
+    max_message_bytes: int = Field(4096, ge=256, le=1 << 20)  # a page's message; beyond: close
+    rate_hz: int = Field(50, ge=1, le=50)  # updates a second to each page
+
+
 class MetricsSection(_Section):
     prometheus_port: int = Field(0, ge=0, le=65535)  # 0 = off
     prometheus_host: str = "127.0.0.1"
@@ -197,5 +223,6 @@ class LiftdConfig(_Section):
     rt: RtSection = RtSection()
     log: LogSection = LogSection()
     metrics: MetricsSection = MetricsSection()
+    ui: UiSection = UiSection()
     nc: NcSection = NcSection()
     channel: tuple[ChannelSection, ...] = ()  # [[channel]] tables

@@ -362,7 +362,12 @@ def describe(summary: JsonObject, run: JsonObject, out: Path) -> str:
     status = ", ".join(f"{n} {k}" for k, n in summary["status"].items() if n)
     lines = [
         f"study: {summary['programs']} programs ({status}) in {run['wall_s']:.1f} s with "
-        f"{run['jobs']} jobs",
+        f"{run['jobs']} jobs"
+        + (
+            f" on the Dask cluster at {run['scheduler']} ({run['workers']} workers at the start)"
+            if "scheduler" in run
+            else ""
+        ),
     ]
     if summary["compared"]:
         lines.append(

@@ -8,14 +8,17 @@ so its memory does not grow with the library. A program that fails in any way (u
 an NC error, not finished within max_time, an exception in liftd, a worker process that died)
 is a row that says why, never the end of the study.
 
-May import the core and the rest of `liftd.sim`; the settings reach the workers as a callable
-(`StudyConfig.prepare`, the CLI's `program_channel`) so the subroutine files a program calls
-are read in the worker, outside the core.
+May import the core and the rest of `liftd.sim`; the settings reach the workers as values
+(`RunSettings`: the channel, the PLC's M acknowledge, max_time) and a callable
+(`StudyConfig.sources`, the CLI's `read_sources`) that reads the subroutine files a program
+calls, outside the core: in the pool's workers here, on the client for a Dask cluster
+(`liftd.sim.cluster`, whose workers get each program's text with its files).
 """
 
 from __future__ import annotations
 
 import concurrent.futures as cf
+import dataclasses
 import multiprocessing
 import resource
 from collections import deque
@@ -25,12 +28,12 @@ from dataclasses import dataclass
 from enum import StrEnum
 from pathlib import Path
 
-from liftd.cnc.params import ChannelParams
+from liftd.cnc.params import ChannelParams, NcSources
 from liftd.cnc.plc import Schedule
 from liftd.sim.compare import METHODS, Comparison, LiftPair, compare
 from liftd.sim.summary import JsonObject
 
-Prepare = Callable[[Path, str], ChannelParams]  # program path and text → its channel
+Sources = Callable[[Path, str], NcSources]  # program path and text → its subroutine files
 WINDOW_PER_JOB = 32
 MAX_POINTS_PER_PROGRAM = 400  # lift points a worker sends for the scatter figure
 MAX_WHY = 5  # errors spelt out per row (all are counted)
@@ -42,16 +45,36 @@ class Status(StrEnum):
     ERROR = "error"  # an NC error stopped the program in either run
     UNFINISHED = "unfinished"  # still running after max_time simulated seconds
     UNREADABLE = "unreadable"
-    FAILED = "failed"  # liftd raised, or the worker process died
+    FAILED = "failed"  # liftd raised, a worker died, or the cluster could not run it
+
+
+class StudyStopped(Exception):
+    """A study that stopped part way (`liftd.sim.cluster`: the scheduler went away, or a
+    worker of another liftd version); `results`: those received, in the order of the
+    programs, without gaps filled."""
+
+    def __init__(self, message: str, results: list[ProgramResult], lost: bool) -> None:
+        super().__init__(message)
+        self.results = results
+        self.lost = lost  # the scheduler went away (else: a worker of another liftd version)
+
+
+@dataclass(frozen=True, slots=True)
+class RunSettings:
+    """What running any program of the study takes besides its text and subroutine files,
+    the same for all: pickled once per worker process (scattered once to a cluster)."""
+
+    channel: ChannelParams  # the study's channel; each program's files go in its nc_sources
+    m_ack_delay: float  # s, the simulated PLC's M acknowledge
+    max_time: float  # simulated seconds per run
 
 
 @dataclass(frozen=True, slots=True)
 class StudyConfig:
-    """What every worker needs; pickled once per worker."""
+    """What every worker of the pool needs; pickled once per worker."""
 
-    prepare: Prepare
-    m_ack_delay: float  # s, the simulated PLC's M acknowledge
-    max_time: float  # simulated seconds per run
+    run: RunSettings
+    sources: Sources  # reads a program's subroutine files (IO: never in the core)
 
 
 @dataclass(frozen=True, slots=True)
@@ -230,22 +253,60 @@ def _open(pair: LiftPair) -> bool:
     return any(x is not None and x.open for x in (pair.advanced, pair.lifting))
 
 
-def run_one(cfg: StudyConfig, program: str) -> ProgramResult:
-    """`simulate --compare` of one program, as a result (never raises for the program's
-    sake: an exception in liftd becomes a FAILED row)."""
+def read_one(
+    cfg: StudyConfig, program: str, max_bytes: int | None = None
+) -> tuple[str, NcSources] | ProgramResult:
+    """A program's text (UTF-8, an undecodable byte replaced by U+FFFD as `simulate` reads it:
+    the decoder reports it where it is not in a comment) and its subroutine files, or the row
+    that says why not: unreadable, or more than `max_bytes` with its files."""
     path = Path(program)
     try:
+        size = path.stat().st_size
+        if max_bytes is not None and size > max_bytes:
+            return ProgramResult(
+                ProgramRow.failed(program, Status.FAILED, too_large(size, max_bytes))
+            )
         text = path.read_text(encoding="utf-8", errors="replace")
     except OSError as exc:
         reason = f"cannot read program: {exc.strerror or exc}"
         return ProgramResult(ProgramRow.failed(program, Status.UNREADABLE, reason))
     try:
-        ch = cfg.prepare(path, text)
-        cmp = compare(ch, text, Schedule(), cfg.m_ack_delay, None, cfg.max_time, path.name)
-        return ProgramResult.of(program, cmp, cfg.max_time)
+        files = cfg.sources(path, text)
     except Exception as exc:  # a bug in liftd, reported with the program that shows it
-        reason = f"liftd failed: {type(exc).__name__}: {exc}"
-        return ProgramResult(ProgramRow.failed(program, Status.FAILED, reason))
+        return ProgramResult(ProgramRow.failed(program, Status.FAILED, liftd_failed(exc)))
+    if max_bytes is not None:
+        size = len(text.encode()) + sum(len(f.text.encode()) for f in files.files if f.text)
+        if size > max_bytes:
+            return ProgramResult(
+                ProgramRow.failed(program, Status.FAILED, too_large(size, max_bytes))
+            )
+    return text, files
+
+
+def too_large(size: int, limit: int) -> str:
+    return (f"too large to send to the cluster: {size / 2**20:.1f} MiB with its subroutine "
+            f"files (at most {limit / 2**20:.0f} MiB); run it in a local study")  # fmt: skip
+
+
+def liftd_failed(exc: Exception) -> str:
+    return f"liftd failed: {type(exc).__name__}: {exc}"
+
+
+def run_text(run: RunSettings, program: str, text: str, files: NcSources) -> ProgramResult:
+    """`simulate --compare` of one program's text with its subroutine files, as a result
+    (never raises for the program's sake: an exception in liftd becomes a FAILED row)."""
+    try:
+        ch = dataclasses.replace(run.channel, nc_sources=files)
+        cmp = compare(ch, text, Schedule(), run.m_ack_delay, None, run.max_time, Path(program).name)
+        return ProgramResult.of(program, cmp, run.max_time)
+    except Exception as exc:  # a bug in liftd, reported with the program that shows it
+        return ProgramResult(ProgramRow.failed(program, Status.FAILED, liftd_failed(exc)))
+
+
+def run_one(cfg: StudyConfig, program: str) -> ProgramResult:
+    """Read one program and its files, then `run_text`: what a worker of the pool does."""
+    read = read_one(cfg, program)
+    return read if isinstance(read, ProgramResult) else run_text(cfg.run, program, *read)
 
 
 # -- the pool --------------------------------------------------------------------------------

@@ -7,6 +7,7 @@ from __future__ import annotations
 import struct
 import time
 from collections.abc import Iterator
+from typing import Any
 
 import pytest
 
@@ -139,3 +140,34 @@ def test_max_connections() -> None:
         a.close()
         time.sleep(0.1)
         still_served(h)
+
+
+def test_a_client_pipelining_thousands_of_requests_does_not_make_others_wait_for_them() -> None:
+    """Issue 41: a connection's received frames are handled for a turn of 0.25 ms at most, then
+    the others get theirs. A client sends 20 000 reads in one go (880 kB), another a single
+    read just after: in the order the server handles them, the single read comes before the
+    flood's 2 000th (asyncio reads 64–256 kB a time, 1 500–6 000 of these frames, which were
+    all handled before anyone else's)."""
+    with Harness(make_channel()) as h:
+        assert h.server is not None
+        order: list[int] = []  # the session of each request, in the order handled
+        handle = h.server.service.handle
+
+        def recording(session: Any, *args: Any) -> Any:
+            order.append(id(session))
+            return handle(session, *args)
+
+        h.server.service.handle = recording  # type: ignore[method-assign]
+        flood, probe = client(h), client(h)
+        assert probe.read(0x121301, 0x30095, 1)[0] == 0
+        first = order[-1]  # the probe's session
+        n = 20_000
+        flood.send(b"".join(flood.frame(2, LIFT) for _ in range(n)))
+        end = time.monotonic() + 10
+        while len(order) < 100 and time.monotonic() < end:
+            time.sleep(0.001)  # the flood is being handled
+        assert probe.read(0x121301, 0x30095, 1)[0] == 0
+        before = order[1:].index(first)  # flood requests handled before the probe's
+        assert before < 2_000, before
+        flood.close()
+        probe.close()

@@ -20,6 +20,7 @@ import pytest
 
 from bench.gen import nesting_program
 from tests.support.daemon import Daemon, Notify, write_config
+from tests.support.replay import WRITES, first_difference, simulate_logged_writes
 from tests.support.wait import wait_for
 
 pytestmark = pytest.mark.integration
@@ -164,44 +165,18 @@ def test_run_with_plc_writes_is_identical_to_simulate_with_their_schedule(tmp_pa
         d.ready()
         plc = connect(d)
         try:
-            for pause, name, value, plc_type in [
-                (1.0, "PLC.ch1.override", 500, pyads.PLCTYPE_UINT),
-                (1.5, "PLC.ch1.feed_hold", True, pyads.PLCTYPE_BOOL),
-                (0.4, "PLC.ch1.feed_hold", False, pyads.PLCTYPE_BOOL),
-                (1.0, "PLC.ch1.override", 1250, pyads.PLCTYPE_UINT),
-                (0.0, "PLC.ch1.override", 1250, pyads.PLCTYPE_UINT),  # unchanged: not logged
-            ]:
-                time.sleep(pause)
-                plc.write_by_name(name, value, plc_type)
+            for pause, name, value in [*WRITES, (0.0, "PLC.ch1.override", 1250)]:  # the last
+                time.sleep(pause)  # unchanged: not logged
+                kind = pyads.PLCTYPE_BOOL if isinstance(value, bool) else pyads.PLCTYPE_UINT
+                plc.write_by_name(name, value, kind)
         finally:
             plc.close()
         assert d.event("geo.program_end", 60) is not None
     finally:
         assert d.stop() == 0
-    inputs = [(round(r["t"] * 1000), r["text"], r["value"]) for r in d.logs
-              if r.get("event") == "geo.plc_input"]  # fmt: skip
-    assert [(name, value) for _, name, value in inputs] == [
-        ("override", 0.5), ("feed_hold", 1.0), ("feed_hold", 0.0), ("override", 1.25)
-    ]  # fmt: skip
-    (k_ov1, _, _), (k_hold, _, _), (k_free, _, _), (k_ov2, _, _) = inputs
-
-    def at(k: int) -> str:  # between cycle k − 1 and cycle k
-        return f"{(k - 0.5) / 1000:.4f}"
-
-    sim = tmp_path / "sim.csv"
-    demo = Path(cfg.read_text().split('file = "')[1].split('"')[0])
-    r = subprocess.run([sys.executable, "-m", "liftd", "simulate", str(demo), "-c", str(cfg),
-                        "--override", f"{at(k_ov1)}:50,{at(k_ov2)}:125",
-                        "--feedhold", f"{at(k_hold)}:{(k_free - k_hold) / 1000:.4f}",
-                        "--trace", str(sim)], capture_output=True, text=True, timeout=120, check=False)  # fmt: skip
-    assert r.returncode == 0, r.stderr
-    expected = sim.read_text().splitlines()
+    expected, k_last = simulate_logged_writes(d.logs, cfg, tmp_path)
     got = trace.read_text().splitlines()
-    assert len(got) >= len(expected) > k_ov2 + 1000  # every write fell inside the program
-    first_diff = next(
-        (i for i, (a, b) in enumerate(zip(got[: len(expected)], expected, strict=True)) if a != b),
-        None,
-    )
+    first_diff = first_difference(got, expected, k_last)
     assert first_diff is None, (first_diff, got[first_diff], expected[first_diff],
                                 missing_cycles(got), trace_logs(d.logs))  # fmt: skip
 

@@ -160,23 +160,15 @@ def test_without_a_program_the_daemon_idles_and_liftd_reload_brings_one(tmp_path
             assert time.monotonic() < deadline
             time.sleep(0.02)
         assert d.read_symbol("GEO.cycle", "<Q") > cycles  # GEO cycles since start: only rises
-        # the cycle that decoded the program took far more than a quarter of the period, and
-        # its geo.compute_over line says so and why (VM stalls may add lines that say "")
-        assert d.read_symbol("GEO.timing.compute_over_25pct", "<I") >= 1
+        # the program was read, decoded and planned off the cycle (runtime/preparer.py): no
+        # cycle of the reload decoded on the loop's thread (until issue 41 the cycle that
+        # took it did: 2.5-3.5 ms of CPU for the demo; a cold cycle is a few hundred µs, and
+        # this VM's stalls count on the CPU clock too, hence 1 ms)
         slow = [rec for rec in list(d.logs) if rec.get("event") == "geo.compute_over"]
         took = [rec for rec in slow
                 if "reload" in (rec.get("text") or "").split(";")[0].split(",")]  # fmt: skip
-        assert len(took) == 1 and took[0]["value"] > 250.0, slow
-        # decoding is the loop's own work: the thread's CPU clock saw it too
-        cpu_us = int(took[0]["text"].split("; cpu ")[1].split(" µs")[0])
-        assert cpu_us > 250, took[0]
-        # after the steps (a reload is taken after the snapshot is published), not before them
-        step_us = int(took[0]["text"].split("; step ")[1].split(" µs")[0])
-        before_us = int(took[0]["text"].split("; before ")[1].split(" µs")[0])
-        assert took[0]["value"] - step_us - before_us > 250 > before_us, took[0]
-        assert d.read_symbol("GEO.timing.compute_cpu_over_25pct", "<I") >= 1
-        assert d.read_symbol("GEO.timing.compute_cpu_max_us", "<d") >= cpu_us
-        assert abs(took[0]["t"] * 1000 - round(took[0]["t"] * 1000)) < 1e-6  # a GEO cycle
+        cpu_us = [int(rec["text"].split("; cpu ")[1].split(" µs")[0]) for rec in took]
+        assert all(us < 1000 for us in cpu_us), took
     finally:
         assert d.stop() == 0
 

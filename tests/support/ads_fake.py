@@ -17,7 +17,9 @@ from tests.support.ads_harness import snapshot
 from tests.support.channel import make_channel
 
 NET = net_id_bytes("127.0.0.1.1.1")
-LIMITS = ServiceLimits(max_handles=8, max_notifications=6, max_sum_subcommands=500)
+FRAME = 4096  # the server's max_frame_bytes; the service's reply cap follows from it
+LIMITS = ServiceLimits(max_handles=8, max_notifications=6, max_sum_subcommands=500,
+                       max_notification_payload=FRAME - 32, max_reply_payload=FRAME - 32)  # fmt: skip
 QUEUE = 32
 
 
@@ -29,6 +31,9 @@ class FakeTransport:
 
     def write(self, data: bytes) -> None:
         self.out += data
+
+    def get_write_buffer_size(self) -> int:
+        return 0  # what the server wrote went to the peer (`out`); pause_writing says otherwise
 
     def abort(self) -> None:
         self.aborted = True
@@ -56,5 +61,5 @@ def make_server() -> AdsServer:
     view = GeoView(snapshot(), LoopStats(cycles=1))  # the loop after its first cycle
     provider = CncProvider(catalog, lambda: view, lambda w: None)
     cfg = ServerConfig(host="127.0.0.1", port=0, net_ids=frozenset({NET}),
-                       max_frame_bytes=4096, write_queue_frames=QUEUE)  # fmt: skip
+                       max_frame_bytes=FRAME, write_queue_frames=QUEUE)  # fmt: skip
     return AdsServer(cfg, AdsService(provider, LIMITS), structlog.wrap_logger(Silent()))

@@ -168,6 +168,92 @@ def foreign_addresses(d: Daemon) -> str:
     return f"NetId {net}, port {port}, command {cmd}"
 
 
+def sum_read_gigabytes(ig: int, length: int) -> Callable[[Daemon], str]:
+    """Issue 41's 66-byte frame: one sub-command {lift_active, length L}, read length
+    0xFFFFFFFF; its reply used to be padded to L (a 4 GiB peak for L = 2 GiB)."""
+
+    def run(d: Daemon) -> str:
+        c = client(d)
+        body = struct.pack("<III", 0x121301, 0x30095, length)
+        outcome = error_of(c.request(9, struct.pack("<IIII", ig, 1, 0xFFFFFFFF, 12) + body))
+        c.close()
+        return outcome
+
+    return run
+
+
+def upload_notifications_unread(d: Daemon) -> str:
+    """A notification sum on the symbol upload (all the connection may have, at 1 ms), then
+    the client reads nothing: its frames are split to the frame cap and its queue bounded in
+    bytes; it is closed at its budget."""
+    c = client(d, rcvbuf=4096)
+    _, info = c.read(0xF00C, 0, 8)
+    size = struct.unpack("<II", info)[1]
+    n = ATTACK_ADS["max_notifications_per_connection"]
+    entry = struct.pack("<IIIIII16s", 0xF00B, 0, 0xFFFFFFFF, 3, 0, 10_000, bytes(16))
+    reply = c.request(9, struct.pack("<IIII", 0xF085, n, 8 * n, 40 * n) + entry * n)
+    code, data = wire.decode_read_response(reply.payload)
+    assert code == 0 and set(struct.unpack(f"<{2 * n}I", data)[::2]) == {0}, (code, data)
+    assert size * n > ATTACK_ADS["max_frame_bytes"]  # a poll's samples need several frames
+    return closed(c, 10.0)
+
+
+def routed_to_a_reader_that_stalls(d: Daemon) -> str:
+    """A client registers an AMS port and reads nothing; another sends it 60 kB frames."""
+    receiver = client(d, rcvbuf=4096)
+    receiver.send(struct.pack("<HIH", 0x1000, 2, 0))
+    head = b""
+    while len(head) < 14:
+        head += receiver.sock.recv(14 - len(head))
+    port = struct.unpack_from("<H", head, 12)[0]
+    sender = client(d)
+    payload = bytes(60_000)
+    sent = 0
+    try:
+        for _ in range(400):  # 24 MB, far beyond connection_budget_bytes
+            sender.send(sender.frame(3, payload, port=port, target=net_id_bytes(d.net_id)))
+            sent += 1
+    except OSError:
+        return f"sender closed after {sent} frames"
+    outcome = f"receiver {closed(receiver, 10.0)}"
+    sender.send(sender.frame(2, LIFT))
+    invoke = sender.invoke
+    while (reply := sender.recv_frame()).header.invoke_id != invoke:
+        pass  # the answers to frames sent after the port was gone (AMS 0x6)
+    sender.close()
+    return f"{outcome}, sender served: {error_of(reply)}"
+
+
+def plc_command_flood(d: Daemon) -> str:
+    """200 sum writes of 128 × (RESET, START) back to back: the GEO loop reads 16 writes a
+    cycle and never plans a program in its cycle; what does not fit the input ring is BUSY."""
+    c = client(d)
+    _, info = c.read_by_name("PLC.ch1.reset", 1)
+    assert info
+    codes: set[int] = set()
+    heads, data = b"", b""
+    for k in range(256):
+        name = "PLC.ch1.reset" if k % 2 == 0 else "PLC.ch1.start"
+        heads += struct.pack("<III", *_address(c, name), 1)
+        data += b"\x01"
+    for _ in range(200):
+        reply = c.request(9, struct.pack("<IIII", 0xF081, 256, 4 * 256, len(heads + data))
+                          + heads + data)  # fmt: skip
+        code, results = wire.decode_read_response(reply.payload)
+        codes.add(code)
+        codes.update(struct.unpack("<256I", results))
+    c.close()
+    return "answered " + ", ".join("ok" if x == 0 else f"0x{x:X}" for x in sorted(codes))
+
+
+def _address(c: RawClient, name: str) -> tuple[int, int]:
+    reply = c.request(9, struct.pack("<IIII", 0xF007, 0, 12, len(name)) + name.encode())
+    code, data = wire.decode_read_response(reply.payload)
+    assert code == 0, hex(code)
+    ig, io, _ = struct.unpack("<III", data)
+    return ig, io
+
+
 @dataclass(frozen=True)
 class Case:
     name: str
@@ -205,7 +291,16 @@ CASES = [
         foreign_addresses,
         "NetId AMS 0x7, port AMS 0x6, command AMS 0x8",
     ),
-]
+    Case("sum read of one sub-command asking 2 GiB", sum_read_gigabytes(0xF080, 2 << 30),
+         "ADS 0x70A"),
+    Case("sum read-ex of one sub-command asking 4 GiB",
+         sum_read_gigabytes(0xF083, 0xFFFFFFF0), "ADS 0x70A"),
+    Case("notification sum on the symbol upload, client stops reading",
+         upload_notifications_unread, "closed"),
+    Case("60 kB frames routed to a registered port that does not read",
+         routed_to_a_reader_that_stalls, "receiver closed, sender served: ok"),
+    Case("200 sum writes of 128 × (RESET, START)", plc_command_flood, "answered ok, 0x708"),
+]  # fmt: skip
 
 
 def probe_ms(d: Daemon, n: int = 200) -> float:

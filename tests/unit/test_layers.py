@@ -24,7 +24,8 @@ ALLOWED: dict[str, set[str]] = {
     "runtime": {"cnc"},
     "sim": {"cnc"},
     "clients": {"ads", "cnc"},
-    "service": {"ads", "objects", "runtime", "settings", "cnc", "sim"},
+    "service": {"ads", "objects", "runtime", "settings", "cnc", "sim", "ui"},
+    "ui": {"objects", "cnc", "settings"},  # the live view: no runtime, no ADS protocol
 }
 # the GEO process: these modules and all they import, transitively, at any depth
 GEO_PROCESS_ROOTS = ("liftd.runtime.geo_loop", "liftd.runtime.__main__")
@@ -34,6 +35,9 @@ GEO_PROCESS_FORBIDDEN = {"numpy", "matplotlib", "pyads", "structlog"} | {
     "uvloop",
     "asyncio",
     "prometheus_client",
+    "dask",  # the study's cluster client (liftd.sim.cluster)
+    "distributed",
+    "aiohttp",  # the live view's server (liftd/ui)
 }
 
 

@@ -172,12 +172,19 @@ class AdvancedLift:
         fits = _fits(desc, nxt[0], q_limit, q_target)
         self.first = FirstStep(rise.traj, q_target, q_limit, dt, nxt, desc.duration, fits)
 
-    def rise_and_hold(self, t: float) -> None:
-        """Program error inside the range: go to POS_LIMIT and stay (vendor §2.1.3 case 2).
+    def rise_and_hold(self, t: float, start: float) -> None:
+        """Program error inside the range: go to the maximum lift height and stay there
+        (vendor §2.1.3 case 2: "auf die max. Abhebehöhe positioniert"; §2.4: "bleibt an der
+        angegebenen maximalen Abhebehöhe stehen"). That height is POS_LIMIT, raised to the
+        start (`start`, axis coordinates) or POS where one lies beyond it (§2.1.1: the limit
+        "wird ... auf das Maximum von Start und Zielposition erhöht"), or where Z already is
+        if that is higher: an error never moves Z toward the part (issue 37 item 1: with POS
+        above POS_LIMIT, Z came down from POS to POS_LIMIT).
         A moving Z's plan starts at its last output time, where its state is: from t (the
         path's stop before the erroneous block, up to a cycle away) it lost or gained that
         much motion in one cycle (40× its acceleration limit). A Z at rest starts at t."""
-        self.target = max(self.limit, self.q) if self.limit >= self.target else self.limit
+        top = max(self.limit, self.target)
+        self.target = max(top, max(self.sign * start, self.q))  # noqa: PLW3301
         self._on_rise = False
         self._plan_direct(max(self.t, t) if self.v == 0.0 and self.a == 0.0 else self.t)
         self.phase = HOLD_LIMIT

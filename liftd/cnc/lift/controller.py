@@ -9,9 +9,10 @@ Rules (vendor text §2.1, §2.5, §2.6; DESIGN.md §4), with liftd's choices whe
 * lift_active is TRUE from the LIFT_START point until Z is at POS at LIFT_END; a suppressed lift
   (path shorter than lift_min_dist) sets lift_suppressed, and also lift_active when POS differs
   from the start (both TRUE, vendor §2.6).
-* A waiting condition inside a range (G04, M function with synchronisation, M00, #FLUSH) is a
-  stop of the path; Z plans to be at POS when the path stops there ("the lift axis moves on to
-  target height", vendor §2.1.1) and lifts again for the rest of the range after the wait.
+* A waiting condition inside a range (G04, M function with synchronisation, M00) is a stop of
+  the path; Z plans to be at POS when the path stops there ("the lift axis moves on to target
+  height", vendor §2.1.1) and lifts again for the rest of the range after the wait. A #FLUSH is
+  none (§2.1.3 case 3): Z goes on across it, the path waits there only for Z (lift_ahead.py).
 * Feed hold: T_rem is infinite, so Z keeps rising toward POS_LIMIT and holds; when the path
   resumes the override is limited so that Z still lands on time.
 * Program error inside the range: Z rises to POS_LIMIT and stays (vendor §2.1.3 case 2, §2.4).

@@ -25,6 +25,7 @@ from liftd.cnc.lift.advanced import (
 )
 from liftd.cnc.lift.guard import GuardFinding, LiftGuard
 from liftd.cnc.lift.path_based import RangePlan
+from liftd.cnc.lift.profile import ProfileError
 from liftd.cnc.lift.ranges import LiftRange
 from liftd.cnc.path.interpolator import Interpolator
 from liftd.cnc.plc import MAX_OVERRIDE
@@ -106,6 +107,11 @@ class LiftMotion:
         raise NotImplementedError
 
     def needed_time(self) -> float:
+        raise NotImplementedError
+
+    def landing_time(self) -> float:
+        """Time Z needs from its state now to be at POS: the descent in hand, or, while it
+        rises, the time-optimal one from here (`LiftAhead._flush_may_go`)."""
         raise NotImplementedError
 
     def resume_in_range(self, t: float) -> None:
@@ -222,6 +228,15 @@ class TimeBasedLift(LiftMotion):
         plan = gen.plan
         return 0.0 if plan is None else max(0.0, gen.plan_t0 + plan.duration - gen.t)
 
+    def landing_time(self) -> float:
+        gen = self.gen
+        if gen.phase is not UP:
+            return self.needed_time()
+        try:
+            return float(gen.prof.to_rest(gen.q, gen.v, gen.a, gen.target).duration)
+        except ProfileError:
+            return self.needed_time()  # the descent from the next state: a cycle on
+
     def resume_in_range(self, t: float) -> None:
         """The path leaves a waiting point inside the range: lift again for the rest of it."""
         if self.rng.direct:
@@ -232,7 +247,7 @@ class TimeBasedLift(LiftMotion):
 
     def error_in_range(self, t: float) -> None:
         gen, spec = self.gen, self.rng.start
-        gen.rise_and_hold(t)
+        gen.rise_and_hold(t, spec.z_start)
         # the bounds of a lift from where Z is to where it holds: a suppressed (direct)
         # range's were only its start and POS, and clamped Z there at full speed (bench_reset)
         margin = stop_margin(gen.vz, gen.az, self.guard.axis.a_max, self.guard.axis.j_max)
@@ -365,6 +380,9 @@ class CoupledLift(LiftMotion):
 
     def needed_time(self) -> float:
         return 0.0
+
+    def landing_time(self) -> float:
+        return 0.0  # Z is where the path puts it
 
     def resume_in_range(self, t: float) -> None:
         return  # waiting conditions stop path and Z together

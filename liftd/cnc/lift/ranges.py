@@ -8,6 +8,7 @@ from dataclasses import dataclass
 from liftd.cnc.nc.blocks import LiftStart
 from liftd.cnc.params import ChannelParams
 from liftd.cnc.path.program import ActionKind, PathProgram
+from liftd.cnc.pause import EVERY, pause
 
 
 @dataclass(frozen=True, slots=True)
@@ -42,6 +43,8 @@ def find_ranges(program: PathProgram, ch: ChannelParams) -> tuple[LiftRange, ...
     ranges: list[LiftRange] = []
     open_start: tuple[LiftStart, int] | None = None
     for boundary in program.boundaries:
+        if not boundary.index & EVERY:
+            pause()
         for action in boundary.actions:
             if action.kind is ActionKind.LIFT_START and action.lift_start is not None:
                 open_start = (action.lift_start, boundary.index)

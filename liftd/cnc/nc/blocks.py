@@ -196,7 +196,6 @@ class FlushKind(enum.Enum):
 class LiftEndCause(enum.Enum):
     PROGRAMMED = "LIFT_END"
     SINGLE_BLOCK = "LIFT"
-    FLUSH = "#FLUSH"  # implicit LIFT_END + LIFT_START (vendor §2.4)
     PROGRAM_END = "program end"  # implicit LIFT_END at the end (vendor §2.4)
 
 
@@ -210,7 +209,6 @@ class LiftStart(NamedTuple):
     down: bool
     line: int  # line of the programmed LIFT_START / LIFT
     single_block: bool = False
-    implicit: bool = False  # re-start inserted after #FLUSH
     # POS_LIMIT as programmed when it lies beyond the software limit and `pos_limit` is the
     # limit instead (issue 15 item 3); None when programmed within the limits
     limit_programmed: float | None = None

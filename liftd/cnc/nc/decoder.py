@@ -18,13 +18,13 @@ only (its errors are reported once, not per call).
 from __future__ import annotations
 
 from collections.abc import Iterator
+from typing import cast
 
 from liftd.cnc.nc.blocks import (
     Block,
     CallSite,
     DecodeResult,
     ErrorId,
-    FlushKind,
     LiftEndCause,
     LiftStart,
     NcError,
@@ -42,6 +42,7 @@ from liftd.cnc.nc.sources import Frame, Source, parse_source
 from liftd.cnc.nc.trc import TrcFault
 from liftd.cnc.nc.words import Template, Words, collect_plain, template
 from liftd.cnc.params import LiftMethod, SlopeType
+from liftd.cnc.pause import pause, release
 
 LINE_CACHE = 4096  # distinct lines prepared once and reused by their text (bounded memory)
 
@@ -50,7 +51,9 @@ def decode(text: str, ctx: DecoderContext) -> DecodeResult:
     """Decode a whole program. Never raises for any text: problems come back as NcErrors."""
     dec = _Decoder(ctx)
     blocks = tuple(dec.run(text))
-    return dec.result(blocks)
+    result = dec.result(blocks)
+    dec.release()
+    return result
 
 
 def iter_decode(text: str, ctx: DecoderContext) -> tuple[Iterator[Block], _Decoder]:
@@ -69,6 +72,7 @@ class _Decoder(SubroutineCalls):
         self.stopped = False  # an error was found: no further blocks are executed
         self.open_at_error: LiftStart | None = None  # lift range open at the first error
         self.stack: list[Frame] = []
+        self.main_source: Source | None = None
         self.files: dict[str, Source] = {}
         self.line_cache: dict[str, Words | Template] = {}  # prepared lines by their text
         self.missing: set[str] = set()
@@ -81,7 +85,7 @@ class _Decoder(SubroutineCalls):
 
     # -- program flow --------------------------------------------------------------------------
     def run(self, text: str) -> Iterator[Block]:
-        main = parse_source(self.ctx.sources.program, text)
+        main = self.main_source = parse_source(self.ctx.sources.program, text)
         self._source_problems(main)
         if main.main is None:
             self._error(
@@ -111,6 +115,7 @@ class _Decoder(SubroutineCalls):
                             file=frame.source.name)  # fmt: skip
                 break
             self._run_line(frame, idx)
+            pause()  # a line's work at most between two pause points
             if out:
                 yield from out
                 out.clear()
@@ -122,6 +127,18 @@ class _Decoder(SubroutineCalls):
             self._emit(Block(self.last_line, lift_end=end, file=self.last_file))
         yield from out
         out.clear()
+
+    def release(self) -> None:
+        """Free the files' lines and prepared lines a piece at a time (pause.py)."""
+        for source in [self.main_source, *self.files.values()]:
+            if source is not None:
+                cached = list(source.cache.values())
+                source.cache.clear()
+                release(cached)
+                release(cast(list[object], source.lines))
+        cached = list(self.line_cache.values())
+        self.line_cache.clear()
+        release(cached)
 
     def result(self, blocks: tuple[Block, ...]) -> DecodeResult:
         return DecodeResult(
@@ -351,25 +368,12 @@ class _Decoder(SubroutineCalls):
     def _command(self, lineno: int, n: int | None, cmd: CommandResult) -> None:
         tag = self._file_tag()
         if cmd.kind is CommandKind.FLUSH:
+            # inside a lift range too: a flush, not an implicit LIFT_END + LIFT_START (§2.4).
+            # The lift follows its method's own passage (issue 37 item 2): Advanced Lifting
+            # plans on across it and the path may have to wait there for Z (§2.1.3 case 3,
+            # lift_ahead.py); path-based Lifting cuts its plan there at POS_LIMIT (§2.2.3
+            # case 2, lift/path_based.py)
             assert cmd.flush is not None
-            if (
-                self.open_lift is not None
-                and cmd.flush is not FlushKind.CONTINUE
-                and self.ctx.lift_method is not LiftMethod.LIFTING
-            ):
-                # #FLUSH / #FLUSH WAIT inside a range: implicit LIFT_END + LIFT_START (§2.4),
-                # POS reached in the flush block. Path-based Lifting keeps one range and cuts
-                # its plan at the flush instead, where Z is at POS_LIMIT (vendor §2.2.3 case 2,
-                # lift/path_based.py).
-                interrupted = self.open_lift
-                end = self._close_lift(LiftEndCause.FLUSH)
-                self._emit(Block(lineno, n, flush=cmd.flush, lift_end=end, file=tag))
-                restart = interrupted._replace(
-                    z_start=interrupted.target, single_block=False, implicit=True
-                )
-                self.open_lift = restart
-                self._emit(Block(lineno, n, lift_start=restart, file=tag))
-                return
             self._emit(Block(lineno, n, flush=cmd.flush, file=tag))
         elif cmd.kind in (CommandKind.SLOPE, CommandKind.SLOPE_DEFAULT):
             slope = cmd.slope if cmd.slope is not None else self.ctx.slope

@@ -129,7 +129,7 @@ def describe(
     30.000 mm, path 23.400 mm: lifts (planned peak 41.2 mm, nominal 0.120 s)`. `program`:
     the program's own file, named where a range spans two files."""
     s = r.start
-    kind = ", single block" if s.single_block else ", resumed after #FLUSH" if s.implicit else ""
+    kind = ", single block" if s.single_block else ""
     down = ", DOWN" if s.down else ""
     head = (
         f"lift {r.index}: {_lines(r, program)}{kind}{down}, {METHOD_NAMES[method]}, "
@@ -142,7 +142,13 @@ def describe(
         limit += " without effect (POS or the start beyond it, vendor §2.1.3 special case 1)"
     path = f"path {r.length * MM:.3f} mm"
     if r.end_line is None:
-        state = f"open where the program stops: {s.axis} goes to the limit and stays (vendor §2.4)"
+        # the maximum lift height: POS_LIMIT, raised to the start or POS beyond it (§2.1.1)
+        far = min if s.down else max
+        top = far(far(s.pos_limit, s.target), s.z_start)
+        state = (
+            f"open where the program stops: {s.axis} goes to {top * MM:.3f} mm, the maximum "
+            "lift height, and stays (vendor §2.1.1, §2.4)"
+        )
     elif r.suppressed:
         state = f"suppressed (path shorter than lift_min_dist, P-CHAN-00244): {s.axis} goes to POS"
     elif r.beyond_limit:

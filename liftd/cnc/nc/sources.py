@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 
 from liftd.cnc.nc.blocks import CallSite, ErrorId, NcFault
 from liftd.cnc.nc.lexer import strip_comments
+from liftd.cnc.pause import pause
 
 MAX_LOCAL_SUBROUTINES = 50  # P-STUP-00053 default
 _LOCAL = re.compile(r"\s*%\s*L[ \t]+(\S+)", re.IGNORECASE)
@@ -83,13 +84,38 @@ def _has_words(line: str) -> bool:
     return bool(text) and not text.upper().startswith("#COMMENT")
 
 
+SPLIT_CHUNK = 4096  # characters split at once between two pause points (~30 µs here)
+
+
 def split_lines(text: str) -> list[str]:
     """The lines of a program text as an editor numbers them (`_LINE_END`); a last line
-    break ends the last line (no empty line after it), as with str.splitlines."""
-    lines = _LINE_END.split(text)
+    break ends the last line (no empty line after it), as with str.splitlines. Split in
+    pieces that end at a LF (a CR LF is never cut), with a pause point between them."""
+    lines: list[str] = []
+    pos, n = 0, len(text)
+    while True:
+        cut = text.find("\n", pos + SPLIT_CHUNK) if n - pos > SPLIT_CHUNK else -1
+        if cut < 0:
+            lines += _LINE_END.split(text[pos:] if pos else text)
+            break
+        piece = _LINE_END.split(text[pos : cut + 1])  # ends with its line break: "" last
+        piece.pop()
+        lines += piece
+        pos = cut + 1
+        pause()
     if lines and not lines[-1]:
         lines.pop()
     return lines
+
+
+def _percent_lines(lines: list[str]) -> list[int]:
+    """The indices of the % lines, with a pause point every 256 lines."""
+    out: list[int] = []
+    step = 256
+    for a in range(0, len(lines), step):
+        out += [i for i in range(a, min(a + step, len(lines))) if lines[i].lstrip()[:1] == "%"]
+        pause()
+    return out
 
 
 def parse_source(name: str, text: str, called: bool = False) -> Source:
@@ -98,7 +124,7 @@ def parse_source(name: str, text: str, called: bool = False) -> Source:
     misplaced % lines are ID 21313 instead of the main program's 20193. A leading byte
     order mark (programs saved as UTF-8 by Windows tools) is not part of the first line."""
     lines = split_lines(text.removeprefix("\ufeff"))
-    headers = [i for i, line in enumerate(lines) if line.lstrip().startswith("%")]
+    headers = _percent_lines(lines)
     problems: list[SourceProblem] = []
     locals_: dict[str, Section] = {}
     if not headers:

@@ -12,11 +12,13 @@ from __future__ import annotations
 
 import enum
 from dataclasses import dataclass
+from typing import cast
 
 from liftd.cnc.nc.blocks import Block, FlushKind, LiftEnd, LiftStart, MotionKind
 from liftd.cnc.params import ChannelParams, MSync
 from liftd.cnc.path.geometry import ArcSeg, LineSeg, Segment, Vec
 from liftd.cnc.path.limits import segment_limits, transition
+from liftd.cnc.pause import pause, release
 
 INF = float("inf")
 
@@ -230,6 +232,7 @@ def prepare(blocks: tuple[Block, ...], ch: ChannelParams, start: Vec) -> PathPro
     b = _Builder(ch, start)
     for block in blocks:
         b.block(block)
+        pause()  # ~5 µs of work a block
     segs = b.segments
     bounds: list[Boundary] = []
     for k, actions in enumerate(b.actions):
@@ -258,4 +261,7 @@ def prepare(blocks: tuple[Block, ...], ch: ChannelParams, start: Vec) -> PathPro
         bounds.append(
             Boundary(k, s, b.lines[k], cap, stop, b.cond[k], tuple(actions), smooth, kink)
         )
+        pause()  # a transition velocity a boundary
+    release(cast(list[object], b.actions))  # a list per boundary, copied to the tuples
+    release(cast(list[object], b.lines))
     return PathProgram(tuple(segs), tuple(bounds), start, b.pos)

@@ -93,6 +93,14 @@ CASES = [
     ("ADS 0x705", "sum delete notification announcing 2 handles, carrying 1", rw(0xF086, 2, 8, bytes(4))),
     ("ADS 0x703", "device data (0xF100) at offset 5", frame(2, struct.pack("<III", 0xF100, 5, 4))),
     ("pending", "half a frame (20 bytes): held for the idle timeout", frame(2, LIFT)[:20]),
+    # issue 41: replies sized before they are built (the frame cap here is 4 096 bytes)
+    ("ADS 0x70A", "sum read of one sub-command asking 2 GiB, read length 0xFFFFFFFF", rw(0xF080, 1, 0xFFFFFFFF, struct.pack("<III", 0x121301, 0x30095, 2 << 30))),
+    ("ADS 0x70A", "sum read-ex of one sub-command asking 4 GiB", rw(0xF083, 1, 0xFFFFFFFF, struct.pack("<III", 0x121301, 0x30095, 0xFFFFFFF0))),
+    ("ADS 0x70A", "sum read of two 2 kB sub-commands: a reply above the frame cap", rw(0xF080, 2, 0xFFFFFFFF, struct.pack("<III", 0x121301, 0x30095, 2048) * 2)),
+    ("ADS 0x70A", "sum read-ex2 of 300 symbol uploads: a compact reply above the frame cap", rw(0xF084, 300, 0xFFFFFFFF, struct.pack("<III", 0xF00B, 0, 1 << 20) * 300)),
+    ("ADS 0x70A", "read of the symbol upload (5 kB) with length 0xFFFFFFFF", frame(2, struct.pack("<III", 0xF00B, 0, 0xFFFFFFFF))),
+    ("ok", "read of lift_active with length 0xFFFFFFFF: the object's byte", frame(2, struct.pack("<III", 0x121301, 0x30095, 0xFFFFFFFF))),
+    ("ADS 0x717", "notification on the symbol upload, whose sample cannot fit a frame", notif(0xF00B, 0, 0xFFFFFFFF, 3)),
 ]  # fmt: skip
 
 

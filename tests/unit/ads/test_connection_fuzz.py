@@ -26,7 +26,7 @@ from liftd.ads.constants import IndexGroup
 from liftd.ads.framing import AmsFramer
 from liftd.ads.server import AdsConnection
 from liftd.ads.wire import net_id_bytes
-from tests.support.ads_fake import LIMITS, NET, QUEUE, FakeTransport, make_server
+from tests.support.ads_fake import FRAME, LIMITS, NET, QUEUE, FakeTransport, make_server
 
 SOURCE = bytes([10, 0, 0, 9, 1, 1])
 STATS = {"chunks": 0, "bytes": 0}  # for bench/fuzz_connection.py
@@ -104,6 +104,7 @@ class ConnectionMachine(RuleBasedStateMachine):
         frames = self.reader.feed(bytes(self.transport.out))
         self.transport.out.clear()
         for raw in frames:
+            assert len(raw) <= FRAME + 6  # no reply, notification or routed frame above the cap
             if raw[:2] != b"\0\0":  # a router answer (AMS/TCP command, no AMS header)
                 assert struct.unpack_from("<H", raw)[0] in (0x1000, 0x1002)
                 continue
@@ -171,6 +172,21 @@ class ConnectionMachine(RuleBasedStateMachine):
         spec = struct.pack("<IIIIII", 0x121301, io, n, mode, 0, cycle_100ns) + bytes(16)
         self.send(self.frame(6, spec), 6, 1000)
 
+    @rule(ig=st.sampled_from([0xF080, 0xF083, 0xF084]), n=st.integers(1, 4),
+          length=st.sampled_from([1, 2048, 5000, 1 << 20, 2 << 30, 0xFFFFFFF0]),
+          rlen=st.sampled_from([0xFFFFFFFF, 8, 4096]))  # fmt: skip
+    def sum_asking_gigabytes(self, ig: int, n: int, length: int, rlen: int) -> None:
+        """Issue 41: a sum read's reply is sized before it is built (0x70A above the cap)."""
+        body = struct.pack("<III", 0x121301, 0x30095, length) * n
+        self.send(self.frame(9, struct.pack("<IIII", ig, n, rlen, len(body)) + body), 9, 1000)
+
+    @rule(n=st.integers(1, 8), mode=st.sampled_from([3, 4]))
+    def notify_on_the_upload(self, n: int, mode: int) -> None:
+        """A notification sum on the symbol upload (larger than the 4 kB frame): refused."""
+        entry = struct.pack("<IIIIII16s", 0xF00B, 0, 0xFFFFFFFF, mode, 0, 10_000, bytes(16))
+        payload = struct.pack("<IIII", 0xF085, n, 8 * n, 40 * n) + entry * n
+        self.send(self.frame(9, payload), 9, 1000)
+
     @rule(data=st.binary(min_size=1, max_size=200))
     def garbage(self, data: bytes) -> None:
         if self.transport.reading:
@@ -197,6 +213,7 @@ class ConnectionMachine(RuleBasedStateMachine):
         assert len(s.handles) <= LIMITS.max_handles
         assert len(s.notifications) <= LIMITS.max_notifications
         assert len(self.conn.queue) <= QUEUE + 1
+        assert self.conn.held <= self.server.config.connection_budget_bytes  # bytes too
         assert self.conn.framer.pending <= 4096 + wire.HEADER_SIZE
         if self.conn.closed or self.transport.aborted:
             self.conn.connection_lost(None)

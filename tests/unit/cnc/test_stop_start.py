@@ -21,17 +21,25 @@ from tests.support.paths import REPO
 from tests.support.stops import StopThenStart, stop_and_start
 
 DEMO = (REPO / "config" / "programs" / "demo.nc").read_text()
+# inside the demo's third lift (line 37), for Advanced / path-based Lifting: path-based
+# Lifting's path runs slower in its ranges since issue 37 item 3; since issue 36 the path
+# passes kinks as the block-transition parameters allow (the demo 14.26 → 14.02 s): the range
+# is 12.10-12.52 s (Advanced), 12.63-13.28 s (path-based)
+LIFT_3 = (12.36, 12.95)
+
+
+def _at(t: float | tuple[float, float], method: LiftMethod) -> float:
+    return t if isinstance(t, float) else t[method is LiftMethod.LIFTING]
 
 
 @pytest.mark.parametrize("method", [LiftMethod.ADVANCED, LiftMethod.LIFTING])
 @pytest.mark.parametrize("held", [0.001, 0.27, 3.0])
-# the moments in the demo's lift ranges 1 and 3 (rise, top, descent) since the path passes
-# kinks as the block-transition parameters allow (issue 36: the demo 14.26 → 14.02 s)
-@pytest.mark.parametrize(("t_stop", "in_lift"), [(0.45, False), (5.45, True), (5.95, True),
-                                                 (12.36, True)])  # fmt: skip
+@pytest.mark.parametrize(("t_stop", "in_lift"), [(0.45, False), (5.6, True), (5.95, True),
+                                                 (LIFT_3, True)])  # fmt: skip
 def test_start_after_a_stop_goes_on_from_where_the_path_stopped(
-    method: LiftMethod, held: float, t_stop: float, in_lift: bool
+    method: LiftMethod, held: float, t_stop: float | tuple[float, float], in_lift: bool
 ) -> None:
+    t_stop = _at(t_stop, method)
     ch = make_channel(method)
     plc = StopThenStart(t_stop, held)
     task, snaps = run_task(ch, DEMO, inputs=plc, max_time=60.0)
@@ -84,13 +92,15 @@ class ResetThenStart:
 
 
 @pytest.mark.parametrize("method", [LiftMethod.ADVANCED, LiftMethod.LIFTING])
-@pytest.mark.parametrize("t_reset", [5.3, 5.65, 5.95, 12.36])
+# (the first range: 5.23-6.08 s Advanced, 5.23-6.44 s path-based)
+@pytest.mark.parametrize("t_reset", [5.45, 5.8, 5.95, LIFT_3])
 def test_a_reset_inside_a_lift_leaves_every_axis_at_rest_and_the_lift_ended(
-    method: LiftMethod, t_reset: float
+    method: LiftMethod, t_reset: float | tuple[float, float]
 ) -> None:
     """READY comes when the path and the lift axis are at rest; Z rises to POS_LIMIT and stays
     there (not the path's Z inside the range), the lift's objects read no lift (flags FALSE, phase
     NONE), `lift.aborted` says so; START runs the program again from there."""
+    t_reset = _at(t_reset, method)
     ch = make_channel(method)
     plc = ResetThenStart(t_reset, 0.3)
     task, snaps = GeoTask(ch, DEMO), []
@@ -112,7 +122,8 @@ def test_a_reset_inside_a_lift_leaves_every_axis_at_rest_and_the_lift_ended(
     z_high = ready[0].positions[2]
     # up at the range's POS_LIMIT, as after an error in a range: not down onto the path
     limit = 0.060  # POS_LIMIT of the ranges these RESETs fall into
-    assert z_high == pytest.approx(limit, abs=1e-9) and z_high >= at_reset.positions[2]
+    # (never below Z at the RESET: the coupled plan's 60 mm may read 5e-18 m above it)
+    assert z_high == pytest.approx(limit, abs=1e-9) and z_high >= at_reset.positions[2] - 1e-15
     assert len(events(snaps, "lift.aborted")) == 1
     (reset,) = events(snaps, "geo.reset")
     assert reset[0] == pytest.approx(plc.t_ready, abs=1e-9)

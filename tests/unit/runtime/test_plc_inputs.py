@@ -103,3 +103,29 @@ def test_the_loops_own_start_is_requested_once_and_undelivered_commands_survive_
     new.carry_over(plc)
     assert new.inputs(None, 0.004).command is Command.START
     assert new.inputs(None, 0.005).command is Command.NONE
+
+
+def test_a_held_start_stays_first_and_what_follows_waits_behind_it() -> None:
+    """While the loop prepares the run a START loads (preparer.py), the START is held: the
+    levels and the acknowledge go on, the commands keep their order behind it."""
+    plc = PlcInputs(auto=False, ack_delay_s=0.02)
+    for sig in (PlcSignal.START, PlcSignal.STOP, PlcSignal.M_ACK):
+        plc.apply(PlcWrite(sig, 1.0))
+    plc.apply(PlcWrite(PlcSignal.OVERRIDE, 0.5))
+    plc.take()
+    ready = snapshot(state=ChannelState.READY)
+    assert plc.start_next(ready) and plc.backlog == 2
+    assert plc.inputs(ready, 0.001, hold_start=True) == GeoInputs(0.5, False, Command.NONE, True)
+    assert plc.inputs(ready, 0.002, hold_start=True).command is Command.NONE
+    assert plc.backlog == 2
+    assert plc.inputs(ready, 0.003).command is Command.START  # prepared: in order
+    assert plc.inputs(ready, 0.004).command is Command.STOP
+    assert not plc.start_next(ready) and plc.backlog == 0
+
+
+def test_the_automatic_plcs_start_after_m00_is_held_too() -> None:
+    plc = PlcInputs(auto=True, ack_delay_s=0.0)
+    held = snapshot(state=ChannelState.HOLD)
+    assert plc.start_next(held)
+    assert plc.inputs(held, 0.010, hold_start=True).command is Command.NONE
+    assert plc.inputs(held, 0.020).command is Command.START

@@ -100,3 +100,12 @@ def test_a_reload_names_what_needs_a_restart_against_what_runs() -> None:
     assert needs_restart(running, moved) == ["ads.port", "rt.sched_fifo_priority", "log.format"]
     assert needs_restart(running, moved.model_copy(update={"ads": running.ads, "rt": running.rt,
                                                            "log": running.log})) == []  # fmt: skip
+
+
+def test_a_reload_that_changes_the_live_view_needs_a_restart() -> None:
+    """[ui] is read when the daemon starts (listener, token, control): a reload that changes it
+    says so instead of seeming applied."""
+    running = LiftdConfig.model_validate({"ui": {"enabled": True}})
+    changed = LiftdConfig.model_validate({"ui": {"enabled": True, "control": True,
+                                                 "token": "0123456789abcdef"}})  # fmt: skip
+    assert needs_restart(running, changed) == ["ui.control", "ui.token"]

@@ -10,6 +10,7 @@ from liftd.settings import ConfigError, load_settings
 from liftd.settings.config_file import default_config_path, find_config, parse_config_text
 from liftd.settings.model import LiftdConfig
 from tests.support.paths import REPO
+from tests.support.settings import copy_two_head_machine, edit
 
 CONTRACT = """
 [cnc]
@@ -115,3 +116,32 @@ def test_repo_config_is_the_default_in_a_source_checkout() -> None:
         REPO / "config" / "liftd.toml",
         Path(__file__).resolve().parents[3] / "liftd" / "_config" / "liftd.toml",
     )
+
+
+@pytest.mark.parametrize(
+    ("keys", "key", "value", "fragment"),
+    [
+        ("max_frame_bytes = 1048576\nconnection_budget_bytes = 2000000", "connection_budget_bytes",
+         "2000000", "below 2 × max_frame_bytes (2097152)"),
+        ("connection_budget_bytes = 8388608\nbudget_bytes = 4194304", "budget_bytes", "4194304",
+         "below connection_budget_bytes (8388608)"),
+    ],
+)  # fmt: skip
+def test_memory_budgets_below_what_they_must_hold(
+    tmp_path: Path, keys: str, key: str, value: str, fragment: str
+) -> None:
+    """A connection's budget holds a frame in and a frame out; the server's a connection's."""
+    machine = copy_two_head_machine(tmp_path)
+    edit(machine / "liftd.toml", "[ads]\n", f"[ads]\n{keys}\n")
+    with pytest.raises(ConfigError) as exc:
+        load_settings(str(machine / "liftd.toml"))
+    (p,) = exc.value.problems
+    lines = (machine / "liftd.toml").read_text().splitlines()
+    line = next(n for n, text in enumerate(lines, 1) if text.startswith(f"{key} ="))
+    assert (p.file, p.line, p.key, p.value) == (
+        str(machine / "liftd.toml"),
+        line,
+        f"ads.{key}",
+        value,
+    )
+    assert fragment in p.message

@@ -9,10 +9,10 @@ from pathlib import Path
 
 import pytest
 
-from liftd.cnc.params import ChannelParams
+from liftd.cnc.params import NcFile, NcSources
 from liftd.sim import report, study
 from liftd.sim.progress import ProgressBar
-from liftd.sim.study import ProgramResult, ProgramRow, Status, StudyConfig
+from liftd.sim.study import ProgramResult, ProgramRow, RunSettings, Status, StudyConfig
 from tests.support.channel import make_channel
 
 PROGRAM = (
@@ -21,24 +21,24 @@ PROGRAM = (
 )
 
 
-def prepare(path: Path, text: str) -> ChannelParams:
-    """The study's `program_channel`, without files: the demo machine's channel."""
-    return make_channel()
+def sources(path: Path, text: str) -> NcSources:
+    """The study's `read_sources`, without files."""
+    return NcSources(str(path))
 
 
-def dying_prepare(path: Path, text: str) -> ChannelParams:
+def dying_sources(path: Path, text: str) -> NcSources:
     """Kills its worker process for programs named die*.nc (a crash in native code)."""
     if path.name.startswith("die"):
         os._exit(3)
-    return make_channel()
+    return NcSources(str(path))
 
 
-def failing_prepare(path: Path, text: str) -> ChannelParams:
+def failing_sources(path: Path, text: str) -> NcSources:
     raise ZeroDivisionError("a bug")
 
 
-def config(prep: study.Prepare = prepare) -> StudyConfig:
-    return StudyConfig(prep, 0.02, 60.0)
+def config(read: study.Sources = sources, max_time: float = 60.0) -> StudyConfig:
+    return StudyConfig(RunSettings(make_channel(), 0.02, max_time), read)
 
 
 def library(tmp_path: Path, n: int, name: str = "p{k:02d}.nc") -> list[str]:
@@ -70,8 +70,42 @@ def test_unreadable_programs_and_failures_of_liftd_are_rows(tmp_path: Path) -> N
     row = study.run_one(config(), str(tmp_path / "none.nc")).row
     assert row.status is Status.UNREADABLE and "cannot read program" in row.why
     (program,) = library(tmp_path, 1)
-    row = study.run_one(config(failing_prepare), program).row
+    row = study.run_one(config(failing_sources), program).row
     assert row.status is Status.FAILED and "ZeroDivisionError: a bug" in row.why
+
+
+def test_a_program_too_large_to_send_is_a_failed_row_with_its_size(tmp_path: Path) -> None:
+    """The cluster's limit (read_one's max_bytes): the program alone, or with the subroutine
+    files it calls; a local study (no limit) runs it."""
+    (program,) = library(tmp_path, 1)
+    size = Path(program).stat().st_size
+    row = study.read_one(config(), program, max_bytes=size - 1)
+    assert isinstance(row, ProgramResult) and row.row.status is Status.FAILED
+    assert row.row.why.startswith("too large to send to the cluster: ")
+
+    def big_file(path: Path, text: str) -> NcSources:
+        return NcSources(str(path), (NcFile("big.nc", "big.nc", "N1 G01 X1\n" * 1000),))
+
+    row = study.read_one(config(big_file), program, max_bytes=size + 1000)
+    assert isinstance(row, ProgramResult) and "with its subroutine files" in row.row.why
+    text, files = study.read_one(config(big_file), program, max_bytes=size + 20_000)  # type: ignore[misc]
+    assert text == Path(program).read_text() and files.files[0].name == "big.nc"
+    assert study.run_one(config(), program).row.status is Status.OK
+
+
+def test_bytes_that_are_not_utf8_are_read_as_simulate_reads_them(tmp_path: Path) -> None:
+    """In a comment (CP1252 from a Windows CAM): the program runs; in a word: ISG 990001 at its
+    line, a row that says why."""
+    comment = tmp_path / "comment.nc"
+    comment.write_bytes(b"( St\xe4rke )\n" + PROGRAM.format(x=80).encode())
+    assert study.run_one(config(), str(comment)).row.status is Status.OK
+    word = tmp_path / "word.nc"
+    word.write_bytes(b"G90 G17 G94\nG01 X1\xe40 Y10 Z1 F6000\nM30\n")
+    row = study.run_one(config(), str(word)).row
+    assert row.status is Status.ERROR and (row.errors[0].error_id, row.errors[0].line) == (
+        990001,
+        2,
+    )
 
 
 def test_an_unfinished_program_says_why_and_counts_its_open_range_once(tmp_path: Path) -> None:
@@ -80,7 +114,7 @@ def test_an_unfinished_program_says_why_and_counts_its_open_range_once(tmp_path:
     program = tmp_path / "long.nc"
     program.write_text("G01 X10 Y10 Z1 F6000\nZ[LIFT_START POS=1 POS_LIMIT=30]\n"
                        "G01 X1000 F600\nZ[LIFT_END]\nM30\n")  # fmt: skip
-    row = study.run_one(StudyConfig(prepare, 0.02, 1.5), str(program)).row
+    row = study.run_one(config(max_time=1.5), str(program)).row
     assert row.status is Status.UNFINISHED
     assert row.why == "did not finish within 1.5 s simulated (--max-time)"
     assert row.to_json()["errors"] == [] and (row.lifts, row.open) == (1, 1)
@@ -110,7 +144,7 @@ def test_a_worker_that_dies_fails_only_its_own_program(tmp_path: Path) -> None:
     programs = (
         library(tmp_path, 3) + library(tmp_path, 1, "die.nc") + library(tmp_path, 3, "q{k}.nc")
     )
-    rows = [r.row for r in study.run_programs(programs, config(dying_prepare), 2)]
+    rows = [r.row for r in study.run_programs(programs, config(dying_sources), 2)]
     assert [r.program for r in rows] == programs
     assert [r.status for r in rows] == [Status.OK] * 3 + [Status.FAILED] + [Status.OK] * 3
     assert "worker process died" in rows[3].why

@@ -294,21 +294,6 @@ def test_program_end_without_lift_end_is_an_implicit_end() -> None:
     assert task.lift.records[0].range.end_line == 4
 
 
-def test_flush_in_the_range_reaches_the_target_in_the_flush_block() -> None:
-    ch = make_channel()
-    text = START + (
-        "Z[LIFT_START POS=2 POS_LIMIT=40]\nG01 X100 F24000\n#FLUSH\nX200\nZ[LIFT_END]\nM30\n"
-    )
-    task, snaps = run_task(ch, text)
-    check_common(ch, task, snaps)
-    r1, r2 = task.lift.records  # implicit LIFT_END + LIFT_START
-    at_flush = [s for s in snaps if s.t <= r1.t_end][-1]
-    assert at_flush.positions[:2] == pytest.approx((0.1, 0.01), abs=1e-6)  # arriving
-    assert r1.arrival_error <= 1e-9  # Z at POS when the path stops in the flush block
-    assert snaps[0].positions[2] < r1.peak
-    assert r2.peak > 0.02
-
-
 def test_lift_statuses_appear_in_snapshot_and_summary() -> None:
     from liftd.sim.simulate import simulate  # noqa: PLC0415
 

@@ -124,3 +124,19 @@ def test_lazy_nominal_run_reports_what_a_full_shadow_run_reports(
     for a, b in zip(lazy.lift.records, full.lift.records, strict=True):
         assert a.nominal_time == pytest.approx(b.nominal_time, abs=1e-9)
         assert a.path_delay == pytest.approx(b.path_delay, abs=1e-9)
+
+
+# the first seeds from 4000 whose programs have a #FLUSH inside a range
+FLUSH_SEEDS = [s for s in range(4000, 4100) if "#FLUSH" in scenario(s, flush=True).text][:10]
+
+
+@pytest.mark.parametrize("method", [LiftMethod.ADVANCED, LiftMethod.LIFTING])
+@pytest.mark.parametrize("seed", FLUSH_SEEDS)
+def test_random_run_with_flushes_keeps_every_promise(seed: int, method: LiftMethod) -> None:
+    """#FLUSH / #FLUSH WAIT inside ranges (issue 37 item 2: Advanced Lifting plans across them
+    and the path may wait there for Z; path-based Lifting cuts its plan there); the bench
+    `bench_lift_safety.py --flush` runs many more seeds, `--wide --flush` the long ranges."""
+    sc = scenario(seed, method, flush=True)
+    task, snaps = run_task(sc.channel, sc.text, sc.schedule, max_time=120)
+    assert violations(sc, snaps, task.lift.records) == [], describe(sc)
+    assert task.interp.plan_errors == 0, (task.interp.last_plan_error, describe(sc))

@@ -188,14 +188,16 @@ def test_parameters_in_any_order_and_blank_before_bracket() -> None:
     assert s is not None and s.down and s.target == pytest.approx(-MM)
 
 
-def test_flush_in_range_is_implicit_end_and_start() -> None:
-    r = ok("Z[LIFT_START POS=1 POS_LIMIT=40]\nG01 X10 F600\n#FLUSH WAIT\nX20\nZ[LIFT_END]\n")
-    flush, restart = r.blocks[2], r.blocks[3]
-    assert flush.flush is FlushKind.WAIT and flush.lift_end is not None
-    assert flush.lift_end.cause is LiftEndCause.FLUSH
-    assert restart.lift_start is not None and restart.lift_start.implicit
-    assert restart.lift_start.target == pytest.approx(MM)
-    assert r.blocks[-1].lift_end is not None
+@pytest.mark.parametrize("method", [LiftMethod.ADVANCED, LiftMethod.LIFTING])
+def test_flush_in_range_is_a_flush_inside_one_range(method: LiftMethod) -> None:
+    """Issue 37 item 2: no implicit LIFT_END + LIFT_START for either method; each lift
+    method acts at the flush as its own passage says (vendor §2.1.3 case 3, §2.2.3 case 2)."""
+    r = ok("Z[LIFT_START POS=1 POS_LIMIT=40]\nG01 X10 F600\n#FLUSH WAIT\nX20\nZ[LIFT_END]\n",
+           method=method)  # fmt: skip
+    flush = r.blocks[2]
+    assert flush.flush is FlushKind.WAIT and flush.lift_end is None and flush.lift_start is None
+    assert [b.lift_start is not None for b in r.blocks].count(True) == 1
+    assert [b.lift_end is not None for b in r.blocks].count(True) == 1
 
 
 def test_flush_continue_does_not_interrupt_the_lift() -> None:

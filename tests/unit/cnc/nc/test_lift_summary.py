@@ -72,7 +72,8 @@ def test_the_lines_a_user_reads() -> None:
     )
     assert lines[4].startswith("lift 5: from line 17, ")
     assert lines[4].endswith(
-        "open where the program stops: Z goes to the limit and stays (vendor §2.4)"
+        "open where the program stops: Z goes to 60.000 mm, the maximum lift height, and "
+        "stays (vendor §2.1.1, §2.4)"
     )
 
 
@@ -107,5 +108,6 @@ def test_the_state_names_the_ranges_own_lift_axis() -> None:
     lines = [describe(r, LiftMethod.ADVANCED) for r in on_w]
     assert lines[1].endswith("P-CHAN-00244): W goes to POS")
     assert lines[2].endswith(": W goes to POS at the start")
-    assert lines[4].endswith(": W goes to the limit and stays (vendor §2.4)")
+    assert lines[4].endswith(": W goes to 60.000 mm, the maximum lift height, and stays "
+                             "(vendor §2.1.1, §2.4)")  # fmt: skip
     assert not any(" Z " in line for line in lines)

@@ -1,0 +1,125 @@
+"""The live view inside `liftd run` (`[ui] enabled`): the page's server and hub (liftd/ui/) fed
+from what the daemon already has, adapted here. Values come from `Daemon._view` (the published
+GEO snapshot the ADS provider reads), events from the GEO process's event callback, peers and
+counters from the ADS server; a control write goes to `CncProvider.write_symbol`, the path of
+an ADS write of `PLC.chN.*`, so `run --trace` still equals `simulate` with the same schedule.
+The GEO process does nothing for it. The program drawings are prepared in a worker thread
+after the daemon is ready, again after a reload, shown once the loop took the reload
+(`geo.reloaded`)."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+from collections.abc import Callable
+from typing import Any
+
+from liftd.ads.errors import AdsError
+from liftd.ads.server import AdsServer
+from liftd.cnc.snapshot import Event
+from liftd.objects.catalog import Catalog, GeoView
+from liftd.objects.provider import CncProvider
+from liftd.runtime.loop_config import LoopConfig
+from liftd.settings import Settings
+from liftd.ui import geometry
+from liftd.ui.hub import LiveHub, LiveSession
+from liftd.ui.web import Refused, UiServer, WebConfig
+
+
+class UiHost:
+    def __init__(
+        self, settings: Settings, catalog: Catalog, provider: CncProvider, server: AdsServer,
+        view: Callable[[], GeoView | None], log: Any,
+    ) -> None:  # fmt: skip
+        ui = settings.config.ui
+        self.settings = settings
+        self.provider = provider
+        self.ads = server
+        self.log = log
+        self.hub = LiveHub(catalog, view, self._peers, ui.rate_hz)
+        cfg = WebConfig(ui.host, ui.port, ui.control, settings.ui_token, ui.hosts,
+                        ui.max_connections, ui.max_message_bytes)  # fmt: skip
+        self.server = UiServer(cfg, lambda: LiveSession(self.hub), log, self._write,
+                               self._policy)  # fmt: skip
+        self._task: asyncio.Task[None] | None = None
+        self._jobs: set[asyncio.Future[Any]] = set()
+        self._staged: dict[int, geometry.Geometry] = {}
+
+    @property
+    def url(self) -> str:
+        host = self.settings.config.ui.host
+        shown = "127.0.0.1" if host in ("0.0.0.0", "") else "[::1]" if host == "::" else host
+        shown = f"[{shown}]" if ":" in shown and not shown.startswith("[") else shown
+        return f"http://{shown}:{self.server.port}/"
+
+    def on_event(self, ev: Event) -> None:
+        self.hub.on_event(ev)
+        if ev.name == "geo.reloaded":
+            index = self.hub.catalog.index_of(ev.channel) if ev.channel else 0
+            staged = self._staged.pop(index or 0, None)
+            if staged is not None:
+                self.hub.set_geometry(index or 0, staged)
+
+    async def start(self, cfg: LoopConfig) -> None:
+        """Listen (OSError when the port is taken), then update the pages and draw."""
+        await self.server.start()
+        self._task = asyncio.create_task(self.hub.run())
+        self.draw(cfg, staged=False)
+        ui = self.settings.config.ui
+        self.log.info("ui.listening", url=self.url, control=ui.control and
+                      self.settings.ui_token is not None)  # fmt: skip
+
+    def draw(self, cfg: LoopConfig, staged: bool = True) -> None:
+        """Each channel's program drawn in a worker thread; a reload's (`staged`) waits for
+        the loop to take it."""
+        loop = asyncio.get_running_loop()
+        for i, ch in enumerate(cfg.channels):
+            if ch.program_name == "(none)":
+                continue
+            job = loop.run_in_executor(None, geometry.build, ch.channel, ch.program_text)
+
+            def done(fut: asyncio.Future[geometry.Geometry], i: int = i) -> None:
+                self._jobs.discard(fut)
+                if fut.cancelled() or fut.exception() is not None:
+                    return
+                if staged:
+                    self._staged[i] = fut.result()
+                else:
+                    self.hub.set_geometry(i, fut.result())
+
+            self._jobs.add(job)
+            job.add_done_callback(done)
+
+    def reloaded(self, settings: Settings, cfg: LoopConfig) -> None:
+        self.settings = settings
+        self.draw(cfg)
+
+    async def close(self) -> None:
+        if self._task is not None:
+            self._task.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await self._task
+        await self.server.close()
+
+    # -- adapters ---------------------------------------------------------------------------------
+    def _peers(self) -> list[dict[str, Any]]:
+        return [{"peer": p, "net_id": n, "requests": r, "notifications": k}
+                for p, n, r, k in self.ads.peers()]  # fmt: skip
+
+    def _policy(self, ip: str) -> str:
+        """The ADS access policy for a writing peer: its IP in `[ads] allow_ips`; with
+        `[ads] write_net_ids` writes are for those NetIds, which a browser does not have."""
+        if not self.ads.ip_allowed(ip):
+            return f"{ip} is not in [ads] allow_ips"
+        if self.ads.config.write_net_ids:
+            return "[ads] write_net_ids limits writes to PLCs with those NetIds"
+        return ""
+
+    def _write(self, symbol: str, value: bool | int) -> None:
+        if not symbol.upper().startswith("PLC."):
+            raise Refused(f"{symbol[:80]}: only PLC.chN.* is written")
+        try:
+            self.provider.write_symbol(symbol, value)
+        except AdsError as exc:
+            raise Refused(f"ADS error 0x{int(exc.code):X}: {exc}") from None
+        self.log.info("ui.write", symbol=symbol, value=value)
