@@ -40,7 +40,9 @@ from liftd.cnc.path.plan import BRAKE, CRUISE, EPS_S, Crossing, Plan
 from liftd.cnc.path.table import PathTable
 from liftd.cnc.path.targets import Targets
 from liftd.cnc.path.velocity import (
+    brake_distance,
     projected_velocity,
+    ramp_distance,
     reach_velocity,
 )
 from liftd.cnc.ruckig1 import ProfileError
@@ -179,6 +181,13 @@ class Tracker(Targets):
             self._cruise(top, a_max, j_max, w)
             return
         b, s_c, _, gate = best
+        if self.hold and self._rests_before(cands, s, v, a, s_c, a_max, j_max):
+            # a feed hold brakes as hard as it may (issue 36, wide seeds 181 and 285): a
+            # profile to rest *at* b, time-optimal to b, reached b 5 ms before the plan without
+            # the hold that braked to b's cap, and Z, which takes a hold for a later arrival,
+            # landed late; the brake is behind every other profile at every moment
+            self._cruise(0.0, a_max, j_max, w)
+            return
         cap = self._target_cap(cands, best_i)
         d = s_c - s
         target = self._pick_target(v, a, v_p, d, cap, ceiling, a_max, j_max, self._hard(b, w))
@@ -242,6 +251,21 @@ class Tracker(Targets):
             v_max = max(min(v_max, top), target, v, v_p)
         self._settle(s, v, a, v_p, s_c, target, cap, v_max, a_max, j_max, b, w, self._hard(b, w),
                      passed)  # fmt: skip
+
+    def _rests_before(
+        self, cands: list[tuple[int, float, float, bool]], s: float, v: float, a: float,
+        s_b: float, a_max: float, j_max: float,
+    ) -> bool:  # fmt: skip
+        """The brake to rest from (v, a) ends before s_b and before every run boundary in
+        `cands` (where the path acceleration must be zero), so it keeps them all: braking
+        harder than any profile to a boundary, it passes the others below their caps."""
+        if projected_velocity(v, a, j_max) > 0.0:
+            stop = brake_distance(v, a, 0.0, a_max, j_max)
+        else:
+            stop = ramp_distance(v, a, j_max)
+        if stop > s_b - s + SLACK_TOL:
+            return False
+        return all(not gate or stop <= s_c - s + SLACK_TOL for _, s_c, _, gate in cands)
 
     def _cruise(self, ceiling: float, a_max: float, j_max: float, w: int) -> None:
         try:

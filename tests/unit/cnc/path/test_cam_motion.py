@@ -32,3 +32,21 @@ def test_random_lift_runs_rest_only_where_a_rule_says(seed: int) -> None:
     sc = wide_scenario(seed)
     _, hard, _, errors = check(sc)
     assert hard == [] and errors == 0, (hard, describe(sc))
+
+
+@pytest.mark.parametrize("seed", [285, 181])
+def test_z_lands_before_the_path_passes_lift_end_after_holds_and_override_drops(
+    seed: int,
+) -> None:
+    """Regressions of the branch's first round, both landed late (main landed them).
+    285: a feed hold just before LIFT_END planned rest *at* LIFT_END, time-optimal to it, and
+    reached it 5 ms before the plan without the hold (braking to the corner's 4.9 mm/s cap),
+    which Z had planned against; a hold now brakes as hard as it may. 181: after an override
+    drop to 10 % on 2 mm blocks with a kink each (zero acceleration at each), the lower bound
+    of the arrival took the path as braking in one stroke of the run's limits, so it was 30 ms
+    above the true arrival (not a bound); and the override back up to its value at the
+    descent's start was granted without asking whether Z, whose descent had been stretched to
+    the later arrival, still lands: it landed 65 µs after the path passed LIFT_END."""
+    sc = wide_scenario(seed)
+    _, hard, _, errors = check(sc)
+    assert hard == [] and errors == 0, (hard, describe(sc))
