@@ -6,8 +6,10 @@ The rules (docs/architecture.md, "Which rule decides a slowdown"):
 * **Rest** only where a rule makes the path rest: a stop boundary of the program (program end,
   M00/M01, a synchronised M function, a dwell, #FLUSH, a lift range without path motion), a
   conditional stop (MVS_SNS) not acknowledged in time, a stop for a lift that cannot
-  otherwise land, a feed hold or override 0, a PLC STOP, or the end of the look-ahead window
-  (the window's last boundary, when nothing beyond it is known).
+  otherwise land, a feed hold or override 0 (and the end of its brake after the release, where
+  ramping the deceleration out at full jerk already takes the velocity to 0: narrow seed 448),
+  a PLC STOP, or the end of the look-ahead window (the window's last boundary, when nothing
+  beyond it is known).
 * **At a block boundary** the velocity reaches the lowest of: the two blocks' ceilings (F ×
   override within the axes' and the lift's caps), the transition cap, what the constraints
   ahead within the look-ahead window allow (a backward pass: each reachable from the one before
@@ -232,6 +234,7 @@ def check_motion(
     interval_min = INF
     fresh = True  # the interval began with a restart or a stop: no entry velocity to keep
     braking_from = 0  # the segment the path was in when it last began to brake
+    brake_ends = -INF  # a hold's brake that its release cannot undo ends by then (at rest)
     last: Sample | None = None
     for smp in samples:
         if last is None:
@@ -247,6 +250,12 @@ def check_motion(
             or not last.running
         )
         if event:
+            if (last.hold or last.override <= 0.0) and not (smp.hold or smp.override <= 0.0):
+                # released while braking for the hold: where ramping the deceleration out
+                # already takes the velocity to 0, the hold's brake still ends at rest
+                _, j = path.limits(smp.seg, smp.seg + 1)
+                if j != INF and smp.v + smp.a * abs(smp.a) / (2.0 * j) <= ABS_TOL:
+                    brake_ends = smp.t + abs(smp.a) / j + 2.0 * dt
             anchor_s, anchor_v, anchor_seg = smp.s, max(smp.v, last.v), smp.seg
             interval_min, fresh = INF, True
             last = smp
@@ -256,7 +265,7 @@ def check_motion(
             b = smp.stopped_at
             if not path.is_stop(b, smp):
                 out.append(f"stopped at boundary {b} (line {path.bounds[b].line}), not a stop")
-        elif smp.v == 0.0 and smp.stopped_at is None and not held:
+        elif smp.v == 0.0 and smp.stopped_at is None and not held and smp.t > brake_ends:
             b = smp.seg  # the window's end as seen before, or a stop
             at_boundary = b <= path.n and path.bounds[b].s == smp.s
             if not (at_boundary and (b == last.seg + path.look_ahead or path.is_stop(b, smp))):
