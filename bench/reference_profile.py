@@ -24,6 +24,11 @@ which is faster than the path may go where the lower ceiling holds (seed 195: a 
 at F6000 × 0.77 followed by F52627 and a corner 0.7 mm later: the reference runs the line at
 the higher feed; core / reference 1.38). The bench reports both directions
 (bench/bench_reference.py).
+
+It is therefore no lower bound: zero acceleration at a cap that is no run boundary is a
+restriction the core does not have (seed 15: the core passes a collinear boundary 0.5 mm before
+a sharp corner braking at 36 mm/s, the chain asks 23 mm/s there with zero acceleration; core /
+reference 0.996). bench/reference_bound.py is the lower bound; the optimum lies between.
 """
 
 from __future__ import annotations
@@ -40,6 +45,7 @@ INF = float("inf")
 # a ceiling that changes by less than this (the axes' projected velocity limit on a slightly bent
 # polyline) is no node: the piece runs at the highest of them (a relaxation: faster)
 CEILING_STEP = 0.02
+EDGE = 1e-6  # a piece this close to the length of its velocity change alone is that change
 
 
 @dataclass(frozen=True, slots=True)
@@ -49,7 +55,7 @@ class Reference:
     pieces_refused: int  # ruckig refused a piece at the passes' velocities (lowered, retried)
 
 
-class _Piece:
+class Piece:
     """One ruckig position profile between two nodes."""
 
     def __init__(self) -> None:
@@ -61,6 +67,14 @@ class _Piece:
         self.traj = Trajectory(1)
 
     def time(self, length: float, v0: float, v1: float, top: float, a: float, j: float) -> float:
+        """The time-optimal profile's duration. Where the two velocities are as far apart as
+        the length allows (the passes put them there: `reach_velocity`), the profile is the
+        velocity change alone, point-symmetric about its middle: 2·L / (v0 + v1). Ruckig,
+        given such an edge case, returned a longer profile (seed 2: 0.2 mm from 1.1 to
+        25.9 mm/s, 17.1 ms for the change's 14.8), and the core was "faster than the
+        reference" there."""
+        if v0 + v1 > 0.0 and change_distance(v0, v1, a, j) >= length * (1.0 - EDGE):
+            return 2.0 * length / (v0 + v1)
         inp = self.inp
         inp.current_position = [0.0]
         inp.current_velocity = [v0]
@@ -151,7 +165,7 @@ def reference_time(prog: PathProgram, tb: PathTable, look_ahead: int, ov: float)
         elif v >= e[b] * (1.0 - 1e-9):
             slow = b  # at its cap: a turning point or a cruise, zero acceleration
     nodes = [b for b in sorted(u) if gate(b) or u[b] >= e[b] * (1.0 - 1e-9)]
-    piece = _Piece()
+    piece = Piece()
     total = 0.0
     refused = 0
     for i in range(len(nodes) - 1):
