@@ -52,6 +52,16 @@ def test_z_lands_before_the_path_passes_lift_end_after_holds_and_override_drops(
     assert hard == [] and errors == 0, (hard, describe(sc))
 
 
+def test_a_hold_brakes_to_a_run_boundary_with_zero_acceleration_there() -> None:
+    """Wide seed 81: held while braking toward a near-zero cap, the hold's full brake (the fix
+    of seed 285) ended on the run boundary itself and reached it with the rounding of its last
+    acceleration (−0.0004 m/s²: a tracker error). The full brake is for a rest 1 µm before
+    every run boundary; at one, the profile to rest there (zero acceleration by construction)."""
+    sc = wide_scenario(81)
+    _, hard, _, errors = check(sc)
+    assert hard == [] and errors == 0, (hard, describe(sc))
+
+
 def test_the_brake_of_a_hold_released_too_late_to_undo_it_may_end_at_rest() -> None:
     """Narrow seed 448: the hold ends at 40 mm/s with −8 m/s² (jerk 400 m/s³); ramping the
     deceleration out alone takes 80 mm/s off, so the path comes to rest 14 ms after the
