@@ -38,6 +38,7 @@ COMPILED: tuple[str, ...] = (
     "liftd.cnc.path.plan",
     "liftd.cnc.path.program",
     "liftd.cnc.path.table",
+    "liftd.cnc.path.targets",
     "liftd.cnc.path.tracker",
     "liftd.cnc.path.velocity",
 )

@@ -55,6 +55,13 @@ class AxisParams:
     sw_limit_pos: float  # P-AXIS-00178 swe_pos
     dyn_a_warn: float = 0.5  # P-AXIS-00441 as a fraction (500 = 0.5): warning above a_max·(1+x)
     dyn_a_err: float = 1.0  # P-AXIS-00442 as a fraction (1000 = 1.0): error above a_max·(1+x)
+    # block transitions (path/limits.py, `TransitionParams`): P-AXIS-00013 and P-AXIS-00154 as
+    # fractions (0.1 %: 1000 = 1.0; a_trans_weight 0 = the cycle time / ramp time factor),
+    # P-AXIS-00339/00340 in m/s³ (0 = not set: the axis jerk)
+    a_trans_weight: float = 0.0
+    r_trans_weight: float = 1.0
+    j_trans_c0: float = 0.0
+    j_trans_c1: float = 0.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -108,6 +115,10 @@ class ChannelParams:
     g53_offsets: bool = False  # P-ZERO-00001 g53_verfuegbar: G53 applies group 0 values
     nc_sources: NcSources = field(default_factory=NcSources)
     max_executed_blocks: int = 2_000_000  # expansion bound (subroutines, repetitions)
+    # block transitions: P-CHAN-00009 corr_v_trans_jerk (slow down for the jerk at tangential
+    # transitions; default off) and P-CHAN-00117 mode_trans_jerk (0, 1: weights; 2: jerks)
+    corr_v_trans_jerk: bool = False
+    mode_trans_jerk: int = 0
 
     def axis(self, name: str) -> AxisParams:
         for ax in self.axes:

@@ -25,7 +25,7 @@ from liftd.settings.isg_schema import (
     Value,
     type_list,
 )
-from liftd.settings.list_reader import ListReader, as_int, flags_of, int_of
+from liftd.settings.list_reader import ListReader, as_int, flags_of, int_of, real_of
 
 DEFAULT_MAX_RADIUS_DIFF = 50  # P-CHAN-00171 default, 0.1 µm
 
@@ -51,6 +51,8 @@ class ChannelLists:
     g53_offsets: bool = False
     # where each path axis's log_achs_nr is written (file, line), for messages about the axis
     axis_refs: tuple[tuple[str, int | None], ...] = ()
+    corr_v_trans_jerk: bool = False  # P-CHAN-00009
+    mode_trans_jerk: int = 0  # P-CHAN-00117
 
 
 def _resolve(base: Path, value: Value) -> Path:
@@ -131,6 +133,8 @@ def read_channel_lists(
         zero_offset_default=zero[1],
         g53_offsets=zero[2],
         axis_refs=tuple(_axis_ref(channel_values, j) for j in range(len(axes))),
+        corr_v_trans_jerk=int_of(channel_values, "corr_v_trans_jerk", 0) != 0,
+        mode_trans_jerk=int_of(channel_values, "mode_trans_jerk", 0),
     )
     return lists, rd.problems
 
@@ -341,4 +345,13 @@ def _axis(rd: ListReader, name: str, nr: int, v: TypedList) -> AxisParams | None
         sw_limit_pos=units.isg_pos_to_m(swe_pos),
         dyn_a_warn=units.isg_permille_to_fraction(int_of(v, "kenngr.dyn_monitoring_a_warn", 500)),
         dyn_a_err=units.isg_permille_to_fraction(int_of(v, "kenngr.dyn_monitoring_a_err", 1000)),
+        # block transitions (path/limits.py): defaults as the pages give them
+        a_trans_weight=units.isg_permille_to_fraction(
+            int_of(v, "getriebe[0].dynamik.a_trans_weight", 0)
+        ),
+        r_trans_weight=units.isg_permille_to_fraction(
+            int_of(v, "getriebe[0].dynamik.r_trans_weight", 1000)
+        ),
+        j_trans_c0=real_of(v, "getriebe[0].dynamik.j_trans_c0", 0.0),
+        j_trans_c1=real_of(v, "getriebe[0].dynamik.j_trans_c1", 0.0),
     )

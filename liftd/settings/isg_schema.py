@@ -22,6 +22,7 @@ class Kind(Enum):
     PATH = "file name"
     FLAGS = "flag set"
     KNOWN = "recognised, not used by liftd"
+    REAL = "number"
 
 
 # P-STUP-00060 / P-CHAN-00600 path-preparation flags (TF5200 lift_axis/223161995.html)
@@ -92,14 +93,14 @@ S32 = (-(2**31), 2**31 - 1)
 class KeySpec:
     pattern: re.Pattern[str]
     kind: Kind
-    bounds: tuple[int, int] | None = None
+    bounds: tuple[float, float] | None = None
     flags: frozenset[str] | None = None
 
 
 def _spec(
     pattern: str,
     kind: Kind,
-    bounds: tuple[int, int] | None = None,
+    bounds: tuple[float, float] | None = None,
     flags: frozenset[str] | None = None,
 ) -> KeySpec:
     regex = re.escape(pattern).replace(r"\[i\]", r"\[\d+\]")
@@ -149,6 +150,11 @@ CHANNEL_KEYS = (
     _spec("max_radius_diff_circle", Kind.INT, (0, 10000)),  # P-CHAN-00171, 0.1 µm
     _spec("max_proz_radius_diff_circle", Kind.KNOWN),
     _spec("m_synch[i]", Kind.STR),  # P-CHAN-00041
+    # block transitions (issue 36, path/limits.py): P-CHAN-00009 corr_v_trans_jerk
+    # (tf5200_channel_parameter/149316875.html), P-CHAN-00117 mode_trans_jerk 0/1/2
+    # (tf5200_channel_parameter/149319947.html)
+    _spec("corr_v_trans_jerk", Kind.BOOL),
+    _spec("mode_trans_jerk", Kind.INT, (0, 2)),
     _spec("vector.velocity", Kind.KNOWN),
     _spec("vector.acceleration", Kind.KNOWN),
     _spec("vector.deceleration", Kind.KNOWN),
@@ -167,7 +173,15 @@ AXIS_KEYS = (
     _spec("getriebe[i].dynamik.tr_min", Kind.INT, U32),  # P-AXIS-00201, µs
     _spec("getriebe[i].dynamik.tr_geom", Kind.KNOWN),
     _spec("getriebe[i].dynamik.a_emergency", Kind.KNOWN),
-    _spec("getriebe[i].dynamik.a_trans_weight", Kind.KNOWN),
+    # block transitions (issue 36, path/limits.py), 0.1 %: P-AXIS-00013 a_trans_weight, its
+    # page gives the range 1 … 1000 and the default 0 (= cycle time / ramp time), so 0 … 1000
+    # (tf5200_axis_parameter/117648395.html); P-AXIS-00154 r_trans_weight 0 … 1000, default
+    # 1000 (117667595.html); P-AXIS-00339/00340 j_trans_c0/c1, REAL64 m/s³, 0 … MAX(UNS32),
+    # default 0 (131314059.html, 131315979.html)
+    _spec("getriebe[i].dynamik.a_trans_weight", Kind.INT, (0, 1000)),
+    _spec("getriebe[i].dynamik.r_trans_weight", Kind.INT, (0, 1000)),
+    _spec("getriebe[i].dynamik.j_trans_c0", Kind.REAL, (0, 0xFFFFFFFF)),
+    _spec("getriebe[i].dynamik.j_trans_c1", Kind.REAL, (0, 0xFFFFFFFF)),
     _spec("getriebe[i].slope_profil.tr_beschl_zu", Kind.KNOWN),
     _spec("getriebe[i].slope_profil.tr_brems_zu", Kind.KNOWN),
     _spec("kenngr.swe_neg", Kind.INT, S32),  # P-AXIS-00177, 0.1 µm
@@ -210,11 +224,15 @@ ZERO_OFFSET_KEYS = (
 class Value:
     """A typed list value and the raw entry it came from (for messages)."""
 
-    value: int | bool | str | frozenset[str]
+    value: int | float | bool | str | frozenset[str]
     entry: RawEntry
 
 
 TypedList = dict[str, Value]
+
+
+def _bound(x: float) -> str:
+    return str(int(x)) if float(x).is_integer() else f"{x:g}"
 
 
 def _type_entry(entry: RawEntry, spec: KeySpec, problems: list[Problem]) -> Value | None:
@@ -234,9 +252,18 @@ def _type_entry(entry: RawEntry, spec: KeySpec, problems: list[Problem]) -> Valu
                 return None
             return Value(bool(number), entry)
         if spec.bounds is not None and not spec.bounds[0] <= number <= spec.bounds[1]:
-            bad(f"out of range [{spec.bounds[0]}, {spec.bounds[1]}]")
+            bad(f"out of range [{_bound(spec.bounds[0])}, {_bound(spec.bounds[1])}]")
             return None
         return Value(number, entry)
+    if spec.kind is Kind.REAL:
+        real = parse_number(entry.value) if entry.numeric else None
+        if real is None:
+            bad("expected a number")
+            return None
+        if spec.bounds is not None and not spec.bounds[0] <= real <= spec.bounds[1]:
+            bad(f"out of range [{_bound(spec.bounds[0])}, {_bound(spec.bounds[1])}]")
+            return None
+        return Value(float(real), entry)
     if spec.kind is Kind.FLAGS:
         tokens = [tok.strip() for tok in entry.value.split("|")]
         if any(not tok for tok in tokens):

@@ -46,6 +46,13 @@ def int_of(values: TypedList, key: str, default: int) -> int:
     return v.value if v is not None and isinstance(v.value, int) else default
 
 
+def real_of(values: TypedList, key: str, default: float) -> float:
+    v = values.get(key)
+    if v is None or isinstance(v.value, (bool, str, frozenset)):
+        return default
+    return float(v.value)
+
+
 def flags_of(values: TypedList, key: str) -> Value | None:
     v = values.get(key)
     return v if v is not None and isinstance(v.value, frozenset) else None

@@ -226,6 +226,8 @@ def _params(
         look_ahead_blocks=lists.look_ahead_blocks,
         max_radius_diff=lists.max_radius_diff,
         m_synch=lists.m_synch,
+        corr_v_trans_jerk=lists.corr_v_trans_jerk,
+        mode_trans_jerk=lists.mode_trans_jerk,
         path_prep_flags=lists.path_prep_flags,
         ipo_flags=lists.ipo_flags,
         tool_radii=tools,

@@ -199,7 +199,7 @@ class ChannelRun:
         self.last = snap
         if self.writer is not None:
             self.writer.write(snap)
-        self.monitor.add(snap.positions)
+        self.monitor.add(snap.positions, snap.segment)
         if self.on_cycle is not None:
             self.on_cycle(snap)
         if self.keep_series and self.series.wants():
@@ -358,7 +358,9 @@ def build_summary(
         cycles=cycles,
         method=method.value,
         lifts=tuple(lifts),
-        limits=Limits.of(ch, *monitor.result()),
+        limits=Limits.of(
+            ch, *monitor.result(), segments=monitor.segments(), transitions=monitor.transitions()
+        ),
         z_overload=Overload(mon.warn_ratio, mon.err_ratio, mon.warning_cycles, mon.error_cycles),
         errors=errors,
         step_cpu_us=step_cpu,

@@ -17,7 +17,7 @@ import numpy as np
 
 from liftd.cnc.geo_task import LIFT_LATE_ID
 from liftd.cnc.lift.controller import LiftRecord
-from liftd.cnc.params import ChannelParams, LiftMethod
+from liftd.cnc.params import AxisParams, ChannelParams, LiftMethod
 from liftd.sim.trace import MM
 
 JsonObject = dict[str, Any]
@@ -132,12 +132,29 @@ class AxisLimits:
     """max |v|, |a|, |j| / limit of one axis over the run (finite differences of the sampled
     positions); `prefix` is "z" for the lift axis, else the axis name in lower case, and
     "path_z" for an axis named Z that is not the lift axis (W lifts, Z is a path axis): its
-    keys would overwrite the lift axis's."""
+    keys would overwrite the lift axis's. `segment` and `transition`: the same over the
+    differences that span no block transition and over those that span one (issue 36: a
+    transition may step an axis' acceleration as far as the CNC's block-transition parameters
+    allow, path/limits.py); (v, a, j) each."""
 
     prefix: str
     v_max_ratio: float
     a_max_ratio: float
     j_max_ratio: float
+    segment: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    transition: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+
+Maxima = tuple[np.ndarray, np.ndarray, np.ndarray]
+
+
+def _axis_ratios(ax: AxisParams, i: int, maxima: Maxima) -> tuple[float, float, float]:
+    v, a, j = maxima
+    return (
+        float(v[i] / ax.v_max),
+        float(a[i] / ax.a_max),
+        float(j[i] / ax.j_max) if ax.j_max != math.inf else 0.0,
+    )
 
 
 @dataclass(frozen=True, slots=True)
@@ -146,21 +163,28 @@ class Limits:
 
     @classmethod
     def of(
-        cls, ch: ChannelParams, max_v: np.ndarray, max_a: np.ndarray, max_j: np.ndarray
-    ) -> Limits:
-        """From the maxima per channel axis [SI] (trace.LimitMonitor.result)."""
+        cls, ch: ChannelParams, max_v: np.ndarray, max_a: np.ndarray, max_j: np.ndarray,
+        segments: Maxima | None = None, transitions: Maxima | None = None,
+    ) -> Limits:  # fmt: skip
+        """From the maxima per channel axis [SI] (trace.LimitMonitor.result, .segments,
+        .transitions)."""
         z = ch.lift_axis_index
         order = [z] + [i for i in range(len(ch.axes)) if i != z]
         axes = []
         for i in order:
             ax = ch.axes[i]
             name = ax.name.lower()
+            whole = _axis_ratios(ax, i, (max_v, max_a, max_j))
             axes.append(
                 AxisLimits(
                     "z" if i == z else ("path_z" if name == "z" else name),
-                    float(max_v[i] / ax.v_max),
-                    float(max_a[i] / ax.a_max),
-                    float(max_j[i] / ax.j_max) if ax.j_max != math.inf else 0.0,
+                    *whole,
+                    segment=_axis_ratios(ax, i, segments) if segments is not None else whole,
+                    transition=(
+                        _axis_ratios(ax, i, transitions)
+                        if transitions is not None
+                        else (0.0, 0.0, 0.0)
+                    ),
                 )
             )
         return cls(tuple(axes))
@@ -175,6 +199,11 @@ class Limits:
             out[f"{ax.prefix}_v_max_ratio"] = ax.v_max_ratio
             out[f"{ax.prefix}_a_max_ratio"] = ax.a_max_ratio
             out[f"{ax.prefix}_j_max_ratio"] = ax.j_max_ratio
+        for kind in ("segment", "transition"):
+            for ax in self.axes:
+                ratios = ax.segment if kind == "segment" else ax.transition
+                for name, r in zip(("v", "a", "j"), ratios, strict=True):
+                    out[f"{ax.prefix}_{kind}_{name}_max_ratio"] = r
         return out
 
 

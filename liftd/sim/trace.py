@@ -95,7 +95,11 @@ class TraceWriter:
 
 class LimitMonitor:
     """Maximum |v|, |a|, |j| of every axis by finite differences of the sampled positions over
-    the whole run, in constant memory (chunks of samples, numpy)."""
+    the whole run, in constant memory (chunks of samples, numpy); and the same apart over the
+    differences that span a block transition (the samples on both sides of a change of the
+    active segment) and over all the others (`transitions`, `segments`): a transition may step
+    an axis' acceleration as far as the CNC's block-transition parameters allow (issue 36;
+    path/limits.py), a segment keeps within the axis' limits."""
 
     def __init__(self, n_axes: int, dt: float) -> None:
         self.dt = dt
@@ -105,38 +109,68 @@ class LimitMonitor:
         # into an array ~185 (array.extend parses each item); the first `keep` are carried over
         # from the last chunk (max is idempotent)
         self.rows: list[tuple[float, ...]] = []
+        self.segs: list[int] = []
         self.keep = 0
         self.max_v = np.zeros(n_axes)
         self.max_a = np.zeros(n_axes)
         self.max_j = np.zeros(n_axes)
+        # [segments, transitions] × [v, a, j]
+        self.split = np.zeros((2, 3, n_axes))
         self.samples = 0
 
-    def add(self, positions: tuple[float, ...]) -> None:
+    def add(self, positions: tuple[float, ...], segment: int = 0) -> None:
         rows = self.rows
         rows.append(positions)
+        self.segs.append(segment)
         self.samples += 1
         if len(rows) == CHUNK + 3:
             self._reduce()
+
+    def _fold(self, row: int, diffs: np.ndarray, near: np.ndarray) -> None:
+        """Fold |diffs| (one derivative) into the split maxima; `near`: each difference spans a
+        transition."""
+        mag = np.abs(diffs)
+        for kind, mask in ((0, ~near), (1, near)):
+            if mask.any():
+                np.maximum(self.split[kind, row], mag[mask].max(axis=0),
+                           out=self.split[kind, row])  # fmt: skip
 
     def _reduce(self) -> None:
         n = len(self.rows)
         flat = np.fromiter(chain.from_iterable(self.rows), dtype=float, count=n * self.n_axes)
         rows = flat.reshape(n, self.n_axes)
+        seg = np.array(self.segs)
         dt = self.dt
         if n >= 2:
+            cross = seg[1:] != seg[:-1]  # a block boundary lies between samples k and k + 1
             v = np.diff(rows, axis=0) / dt
             np.maximum(self.max_v, np.abs(v).max(axis=0), out=self.max_v)
+            self._fold(0, v, cross)
             if n >= 3:
                 a = np.diff(v, axis=0) / dt
                 np.maximum(self.max_a, np.abs(a).max(axis=0), out=self.max_a)
+                near_a = cross[1:] | cross[:-1]
+                self._fold(1, a, near_a)
                 if n >= 4:
                     j = np.diff(a, axis=0) / dt
                     np.maximum(self.max_j, np.abs(j).max(axis=0), out=self.max_j)
+                    self._fold(2, j, near_a[1:] | near_a[:-1])
         tail = min(3, n)
         self.rows = self.rows[n - tail :]
+        self.segs = self.segs[n - tail :]
         self.keep = tail
 
     def result(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         if len(self.rows) > self.keep:
             self._reduce()
         return self.max_v, self.max_a, self.max_j
+
+    def segments(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The maxima over the differences that span no block transition."""
+        self.result()
+        return self.split[0, 0], self.split[0, 1], self.split[0, 2]
+
+    def transitions(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The maxima over the differences that span a block transition."""
+        self.result()
+        return self.split[1, 0], self.split[1, 1], self.split[1, 2]

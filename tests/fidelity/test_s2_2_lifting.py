@@ -22,8 +22,12 @@ SHAPES = {
 
 
 def _z_ratios(snaps: list[GeoSnapshot]) -> tuple[float, float]:
+    """Z's a and j ratios from the first range's start on: before it Z is a path axis of
+    the first block, which passes its 90° corner into X at the corner's transition cap
+    (issue 36), within the block-transition parameters, not the axis' own jerk."""
     ch = make_channel(LiftMethod.LIFTING)
-    _, a, j = fd_ratios(ch, snaps)[:, 2]
+    start = next(i for i, s in enumerate(snaps) if events([s], "lift.start"))
+    _, a, j = fd_ratios(ch, snaps[start:])[:, 2]
     return float(a), float(j)
 
 

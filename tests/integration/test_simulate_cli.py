@@ -109,7 +109,12 @@ def test_summary_schema(demo_run: tuple[dict, list[list[str]], Path]) -> None:
     assert overload["warning_cycles"] == overload["error_cycles"] == 0
     assert (overload["warning_ratio"], overload["error_ratio"]) == (1.5, 2.0)  # list defaults
     assert {"z_v_max_ratio", "z_a_max_ratio", "z_j_max_ratio"} <= set(summary["limits"])
-    assert max(summary["limits"].values()) <= 1 + 1e-9
+    # within the limits in the segments; over block transitions what the block-transition
+    # parameters allow (issue 36: the demo's kinks step the axes' acceleration by up to j·dt)
+    limits = summary["limits"]
+    assert max(r for k, r in limits.items() if "_segment_" in k) <= 1 + 1e-9
+    assert max(r for k, r in limits.items() if k.startswith("z_")) <= 1 + 1e-9  # the lift axis
+    assert all(limits[f"{a}_transition_v_max_ratio"] <= 1 + 1e-9 for a in "xy")
     suppressed = [x for x in summary["lifts"] if x["suppressed"]]
     assert [x["start_line"] for x in suppressed] == [48]
 

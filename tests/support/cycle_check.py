@@ -19,6 +19,7 @@ from liftd.cnc.lift.controller import LiftRecord
 from liftd.cnc.params import ChannelParams, LiftMethod
 from liftd.cnc.plc import Schedule
 from liftd.cnc.snapshot import ChannelState, GeoSnapshot
+from tests.support.closed_loop import limit_problems
 from tests.support.scenarios import Scenario
 
 POS_TOL = 1e-7  # 0.1 µm
@@ -61,7 +62,13 @@ def violations(
     dt = ch.cycle_time
     v, a, j = _derivatives(p, dt)
     ov = highest_override(sc.schedule)
+    # the path axes: within their limits in a segment, within the block-transition parameters
+    # over a transition (issue 36: tests/support/closed_loop.py `limit_problems`); the lift axis
+    # within its own limits throughout
+    out += limit_problems(ch, list(snaps))
     for i, ax in enumerate(ch.axes):
+        if i != ch.lift_axis_index:
+            continue
         v_max, a_max, j_max = axis_limits(ch, i, ov)
         for name, arr, lim in (("v", v, v_max), ("a", a, a_max), ("j", j, j_max)):
             got = float(np.abs(arr[:, i]).max(initial=0.0)) / lim

@@ -288,13 +288,20 @@ class TimeBasedLift(LiftMotion):
         granting an override that passes it can never make Z late. While a request that was
         cut stands, the verdict is re-examined every cycle but granted higher only in steps of
         OVERRIDE_STEP, one bound evaluation a cycle while the next step does not fit."""
+        phase = self.gen.phase
+        at_descent = self.ov_at_descent if phase is DOWN else None
+        if at_descent is not None:
+            ov_req = min(ov_req, at_descent)
         if ov_req != self.cut_request:
             self.cut_request = -1.0  # a new request (also the same one again after another)
-        phase = self.gen.phase
         if phase is DONE or phase is HOLD_LIMIT or phase is IDLE:
             return OverrideVerdict(ov_req, MAX_OVERRIDE)
-        if phase is DOWN and self.ov_at_descent is not None:
-            return OverrideVerdict(min(ov_req, self.ov_at_descent), self.ov_at_descent)
+        if at_descent is not None and ov_req <= ov_eff and not was_holding:
+            return OverrideVerdict(ov_req, at_descent)
+        # (an increase back toward the descent's override is granted only as far as Z still
+        # lands on time, as while it rises: a descent stretched to the later arrival of a lower
+        # override lands after the path's arrival at the descent's own; wide seed 181, 65 µs,
+        # issue 36)
         if k < 0:
             return OverrideVerdict(ov_req, MAX_OVERRIDE)
         t0 = path.t_state

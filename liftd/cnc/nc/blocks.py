@@ -104,6 +104,9 @@ class ErrorId(enum.IntEnum):
     DUPLICATE_SUBROUTINE = 990035  # %L name defined twice in a file
     LIFT_LIMIT_CLAMPED = 990036  # warning: POS_LIMIT beyond the software limit, held there
     LIFT_LATE = 990037  # the path passed LIFT_END with the lift axis not at POS (never expected)
+    # #TRANSVELMIN ON [v] with a negative or non-numeric v: the programming manual documents
+    # the command but no error id for it (tf5200_programming_manual/207486091.html)
+    TRANSVELMIN_VALUE = 990038
 
 
 class Severity(enum.Enum):
@@ -231,6 +234,7 @@ class Block(NamedTuple):
     lift_end: LiftEnd | None = None
     program_end: bool = False  # M02 / M30
     file: str = ""  # "" = the main program; else the subroutine file the line is in
+    trans_vel_min: float | None = None  # #TRANSVELMIN: m/s from here on (0: OFF, or ON alone)
 
 
 @dataclass(frozen=True, slots=True)

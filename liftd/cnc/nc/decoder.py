@@ -391,6 +391,9 @@ class _Decoder(SubroutineCalls):
             self._emit(Block(lineno, n, slope=slope, file=tag))
         elif cmd.kind is CommandKind.TIME:
             self._emit(Block(lineno, n, dwell=cmd.seconds, file=tag))
+        elif cmd.kind is CommandKind.TRANSVELMIN:
+            v_min = cmd.value * self.unit / 60.0 if cmd.on else 0.0
+            self._emit(Block(lineno, n, trans_vel_min=v_min, file=tag))
         elif cmd.kind is CommandKind.SMOOTHING:
             if cmd.on is not None:
                 fault = self._smoothing(SMOOTHING_CMD[cmd.smoothing], cmd.on, cmd.column)

@@ -17,11 +17,12 @@ from collections.abc import Iterator
 
 from liftd.cnc.path.table import PathTable
 from liftd.cnc.path.velocity import (
-    brake_below,
     brake_distance,
+    brake_reach,
     projected_velocity,
+    ramp_crossing,
     ramp_distance,
-    reach_below,
+    reach_velocity,
 )
 
 INF = float("inf")
@@ -85,7 +86,7 @@ class Constraints:
         """Distance beyond which no constraint can bind within the next step."""
         stop = 0.0
         if projected_velocity(v, a, j_max) > 0.0:
-            stop = brake_distance(v, a, 0.0, a_max, j_max)
+            stop = brake_reach(v, a, a_max, j_max)
         return stop + 2.0 * dt * (v + a_max * dt) + 1e-9
 
     def _ahead(self, b: int, w: int) -> Iterator[int]:
@@ -149,7 +150,7 @@ class Constraints:
             _, sk, ck, _ = cands[k]
             bn, sn, _, _ = cands[k + 1]
             a_max, j_max = self._limits(bn - 1)
-            e = min(ck, reach_below(e, max(sn - sk - CHAIN_MARGIN, 0.0), a_max, j_max))
+            e = min(ck, reach_velocity(e, max(sn - sk - CHAIN_MARGIN, 0.0), a_max, j_max))
         return e
 
     def _beyond(self, g: int, cap: float, w: int) -> float:
@@ -176,7 +177,7 @@ class Constraints:
             e = min(c_i, e)
             s_prev = chain[i - 1][0] if i > 0 else s_g
             a_max, j_max = self._limits(b_i - 1)
-            e = reach_below(e, max(s_i - s_prev - CHAIN_MARGIN, 0.0), a_max, j_max)
+            e = reach_velocity(e, max(s_i - s_prev - CHAIN_MARGIN, 0.0), a_max, j_max)
         self._beyond_key, self._beyond_val = key, e
         return e
 
@@ -187,9 +188,13 @@ class Constraints:
         violation of the cap, which hid the stop behind it the path could still make: stress
         seed 380, lifting, passed the program end at 99 mm/s)."""
         if projected_velocity(v, a, j_max) > cap + V_ROUND:
-            return brake_below(v, a, cap, a_max, j_max)
+            return brake_distance(v, a, cap, a_max, j_max)
         if not gate:
-            return 0.0
+            # below the cap once the acceleration is ramped to 0, but braking through it now:
+            # where that ramp crosses the cap (issue 36: 0.45 mm before a kink of 16.5 mm/s at
+            # 67 mm/s, braking, the ramp ended below it 0.6 mm on and the path passed the kink
+            # at 24 mm/s)
+            return ramp_crossing(v, a, cap, j_max) if v > cap + V_ROUND else 0.0
         # zero acceleration there: ramp it to 0 now, or (shorter when already braking hard)
         # brake to rest
         ramp = ramp_distance(v, a, j_max)
@@ -244,11 +249,11 @@ class Constraints:
             # a candidate the plan passes above its feed cap (Plan.soft_from): only its hard cap
             soft = soft_from <= b < goal and not gate
             cap = min(self.tb.point_cap[b], self.tb.cap[b]) if soft else c
-            if not gate and v_p <= cap + V_ROUND:
-                # a cap the path is already below once its acceleration is ramped to 0 cannot
-                # bind, however near (as in `_replan`): read as a violation 0.76 µm before a
-                # feed change, its forced cruise dropped the target of the stop behind it and
-                # made that stop unreachable (seed 1537)
+            if not gate and v_p <= cap + V_ROUND and v <= cap + V_ROUND:
+                # a cap the path is below, and stays below as its acceleration is ramped to 0,
+                # cannot bind, however near (as in `_replan`): read as a violation 0.76 µm
+                # before a feed change, its forced cruise dropped the target of the stop
+                # behind it and made that stop unreachable (seed 1537)
                 continue
             slack = s_c - s - self._need(v, a, cap, gate, a_max, j_max)
             if slack < SLACK_MARGIN:

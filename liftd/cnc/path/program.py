@@ -17,7 +17,7 @@ from typing import cast
 from liftd.cnc.nc.blocks import Block, FlushKind, LiftEnd, LiftStart, MotionKind
 from liftd.cnc.params import ChannelParams, MSync
 from liftd.cnc.path.geometry import ArcSeg, LineSeg, Segment, Vec
-from liftd.cnc.path.limits import segment_limits, transition_velocity
+from liftd.cnc.path.limits import segment_limits, transition
 from liftd.cnc.pause import pause, release
 
 INF = float("inf")
@@ -74,10 +74,14 @@ class Boundary:
     index: int
     s: float
     line: int  # source line of the last block that ends here (for display while waiting)
-    v_cap: float  # transition velocity cap (corner rule, adjacent segments); 0 at stops
+    v_cap: float  # transition velocity cap (limits.transition, adjacent segments); 0 at stops
     stop: bool  # the path must be at rest here
     conditional_stop: bool  # MVS_SNS: stop unless the M function was acknowledged in time
     actions: tuple[Action, ...]
+    # the path acceleration may pass through (a tangent or small kink: limits.transition); a
+    # run boundary of the table still needs the two segments' limits to agree
+    smooth: bool = False
+    kink: bool = False  # the tangent jumps here
 
 
 @dataclass(frozen=True, slots=True)
@@ -123,6 +127,8 @@ class _Builder:
         self.s = 0.0
         self.slope = ch.slope
         self.lift_target: tuple[int, float] | None = None  # (axis, POS) of the open range
+        self.trans_vel_min = 0.0  # #TRANSVELMIN in effect (m/s; 0: off)
+        self.v_min: list[float] = [0.0]  # per boundary: the one in effect at its next block
 
     def act(self, action: Action) -> None:
         self.actions[-1].append(action)
@@ -151,6 +157,7 @@ class _Builder:
     def motion(self, block: Block) -> None:
         m = block.motion
         assert m is not None
+        self.v_min[-1] = self.trans_vel_min
         geom: Segment
         if m.center is not None:
             geom = ArcSeg.make(m.start, m.end, m.center, m.sweep)
@@ -177,10 +184,13 @@ class _Builder:
         self.actions.append([])
         self.lines.append(block.line)
         self.cond.append(False)
+        self.v_min.append(0.0)
 
     def block(self, block: Block) -> None:
         if block.slope is not None:
             self.slope = block.slope
+        if block.trans_vel_min is not None:
+            self.trans_vel_min = block.trans_vel_min
         if block.lift_start is not None:
             self.act(Action(ActionKind.LIFT_START, block.line, lift_start=block.lift_start))
             start = block.lift_start
@@ -228,23 +238,29 @@ def prepare(blocks: tuple[Block, ...], ch: ChannelParams, start: Vec) -> PathPro
     for k, actions in enumerate(b.actions):
         stop = k == 0 or k == len(segs) or _is_stop(actions)
         cap = 0.0
-        if not stop:
+        smooth = kink = False
+        if k > 0 and k < len(segs):
             prev, nxt = segs[k - 1], segs[k]
-            cap = min(
-                prev.v_phys,
-                nxt.v_phys,
-                transition_velocity(
-                    prev.geom.tangent(prev.length),
-                    prev.geom.normal_curvature(prev.length),
-                    nxt.geom.tangent(0.0),
-                    nxt.geom.normal_curvature(0.0),
-                    ch.axes,
-                    ch.cycle_time,
-                    INF not in (prev.j_max, nxt.j_max),
-                ),
+            tr = transition(
+                prev.geom.tangent(prev.length),
+                prev.geom.normal_curvature(prev.length),
+                nxt.geom.tangent(0.0),
+                nxt.geom.normal_curvature(0.0),
+                ch.axes,
+                ch.cycle_time,
+                INF not in (prev.j_max, nxt.j_max),
+                max(prev.a_max, nxt.a_max),
+                ch.corr_v_trans_jerk,
+                ch.mode_trans_jerk,
+                b.v_min[k],
             )
+            smooth, kink = tr.smooth, tr.kink
+            if not stop:
+                cap = min(prev.v_phys, nxt.v_phys, tr.v_cap)
         s = segs[k].s0 if k < len(segs) else b.s
-        bounds.append(Boundary(k, s, b.lines[k], cap, stop, b.cond[k], tuple(actions)))
+        bounds.append(
+            Boundary(k, s, b.lines[k], cap, stop, b.cond[k], tuple(actions), smooth, kink)
+        )
         pause()  # a transition velocity a boundary
     release(cast(list[object], b.actions))  # a list per boundary, copied to the tuples
     release(cast(list[object], b.lines))

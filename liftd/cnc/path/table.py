@@ -4,12 +4,14 @@ preparation (never in the GEO cycle).
 * **Ceilings.** Segment k may run at V_k(ov) = min(F_k · ov, C_k): F_k the programmed feed
   (soft: scaled by the override; a path-based lift range's reduced feed is part of it), C_k the
   hard cap from the axes and an Advanced lift range (never scaled).
-* **Runs.** A boundary is *continuous* when the path is tangent there and both segments have the
-  same acceleration and jerk limits (collinear polyline blocks, pieces of one circle). A run is
-  a maximal sequence of segments joined by continuous boundaries: inside a run the path
-  acceleration is continuous; at a run boundary (a corner, a change of the limits, a stop) it is
-  zero, as the corner rule of `limits.py` assumes. Each run has one acceleration and one jerk
-  limit (the smallest of its segments).
+* **Runs.** A boundary is *continuous* when the path is tangent there (or, with
+  `limits.SMOOTH_KINKS`, its kink small enough to carry the path acceleration through:
+  `Boundary.smooth`), and both segments' acceleration and jerk limits agree within
+  RUN_LIMIT_TOL (collinear polyline blocks, pieces of one circle). A run is a maximal sequence of
+  segments joined by continuous boundaries: inside a run the path acceleration is continuous;
+  at a run boundary (a larger corner, a change of the limits, a stop) it is zero, as the
+  transition rule of `limits.py` assumes. Each run has one acceleration and one jerk limit (the
+  smallest of its segments).
 * **Constraints.** Boundary b is a constraint when the path may have to be slower there than in
   the segments around it: a stop, a conditional stop (MVS_SNS), a run boundary, a transition cap
   below the axis caps, or a ceiling drop. `next_constraint[b]` is the first constraint at or
@@ -29,6 +31,15 @@ from liftd.cnc.pause import EVERY, pause
 INF = float("inf")
 TANGENT_TOL = 1e-9  # |Δ direction cosine| below which a transition counts as tangent
 LIMIT_TOL = 1e-9  # relative difference below which two limits count as equal
+RUN_LIMIT_TOL = 0.05  # relative difference of the limits two segments of one run may have
+
+
+def _close(x: float, y: float) -> bool:
+    """Limits close enough for one run (which keeps the lower): the projections of the axis
+    limits on the two lines of a small kink differ by a few per cent."""
+    if x == y:
+        return True
+    return abs(x - y) <= RUN_LIMIT_TOL * max(abs(x), abs(y))
 
 
 def _same(x: float, y: float) -> bool:
@@ -100,8 +111,9 @@ def build_table(path: PathProgram) -> PathTable:
         t_in = prev.geom.tangent(prev.length)
         t_out = nxt.geom.tangent(0.0)
         tangent = all(abs(x - y) <= TANGENT_TOL for x, y in zip(t_in, t_out, strict=True))
-        limits = _same(prev.a_max, nxt.a_max) and _same(prev.j_max, nxt.j_max)
-        gate[k] = not (tangent and limits) or bounds[k].stop or bounds[k].conditional_stop
+        smooth = tangent or bounds[k].smooth
+        limits = _close(prev.a_max, nxt.a_max) and _close(prev.j_max, nxt.j_max)
+        gate[k] = not (smooth and limits) or bounds[k].stop or bounds[k].conditional_stop
         if not k & EVERY:
             pause()
     run_of = [0] * n

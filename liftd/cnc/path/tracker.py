@@ -35,19 +35,17 @@ from liftd.cnc.path.constraints import (
     SLACK_MARGIN,
     SLACK_TOL,
     V_ROUND,
-    Constraints,
 )
 from liftd.cnc.path.plan import BRAKE, CRUISE, EPS_S, Crossing, Plan
 from liftd.cnc.path.table import PathTable
+from liftd.cnc.path.targets import Targets
 from liftd.cnc.path.velocity import (
     brake_distance,
-    lowest_reachable_from,
     projected_velocity,
     ramp_distance,
-    reach_below,
     reach_velocity,
 )
-from liftd.cnc.ruckig1 import ProfileError, Ruckig1
+from liftd.cnc.ruckig1 import ProfileError
 
 
 class Primed:
@@ -62,7 +60,7 @@ class Primed:
         self.last_error = last_error
 
 
-class Tracker(Constraints):
+class Tracker(Targets):
     """Path state (t, s, v, a, seg) over one table; drive with `advance(t, dt)`."""
 
     def __init__(
@@ -73,18 +71,12 @@ class Tracker(Constraints):
         acked: set[int] | None = None,
     ) -> None:
         super().__init__(table, look_ahead, lift_stops, acked)
-        self.calc = Ruckig1()
-        self.t = 0.0
         self.s = table.s[0] if table.s else 0.0
         self.v = 0.0
         self.a = 0.0
         self.stopped_at: int | None = 0  # resting at this boundary until `resume`
         self.parked = False  # at rest under a hold, not at a stop
-        self.plan: Plan | None = None
         self._passed: Plan | None = None  # the target plan of the boundary just passed
-        self.errors = 0
-        self.last_error = ""
-        self._soft_from = -1  # the target's Plan.soft_from (`_replan`)
 
     # -- control --------------------------------------------------------------------------------
     def set_state(
@@ -96,6 +88,7 @@ class Tracker(Constraints):
         self._clear_s = -INF
         self.parked = stopped_at is None and self.hold and v == 0.0 and a == 0.0
         self.plan = None
+        self._passed = None  # planned for another state: not to be kept (`_replan`)
 
     def set_inputs(self, ov: float, hold: bool) -> None:
         """Override (fraction) and feed hold. Override 0 acts as a hold; the caps keep the last
@@ -105,6 +98,7 @@ class Tracker(Constraints):
         if cap_ov != self.ov or hold != self.hold:
             self.ov, self.hold = cap_ov, hold
             self.plan = None
+            self._passed = None  # planned under the old inputs: not to be kept
             self._clear_s = -INF
             if not hold:
                 self.parked = False
@@ -165,17 +159,21 @@ class Tracker(Constraints):
             force = None  # not a constraint from here: the most binding one
         best_i = -1
         top = ceiling
+        skip = -1
+        for c in cands:
+            b, s_c, cap, gate = c
+            if b == force and not gate and v_p <= cap + V_ROUND and v <= cap + V_ROUND:
+                # a forced one (the step would have passed it too fast) that cannot bind from
+                # here is kept by not accelerating beyond it (it may be too near for zero
+                # acceleration there, which it does not need); the others as always (a lower
+                # cap 0.2 mm after it was lost to a cruise at its cap: issue 36, wide seed 95)
+                top, force, skip = min(top, cap), None, b
         for i, c in enumerate(cands):
             b, s_c, cap, gate = c
-            if force is not None and b != force:
+            if (force is not None and b != force) or b == skip:
                 continue
-            if not gate and v_p <= cap + V_ROUND:
-                # cannot bind from here; a forced one (the step would have passed it too fast)
-                # is kept by not accelerating beyond it: it may be too near for zero
-                # acceleration there, which it does not need
-                if b == force:
-                    top = min(top, cap)
-                continue
+            if not gate and v_p <= cap + V_ROUND and v <= cap + V_ROUND:
+                continue  # cannot bind from here
             slack = s_c - s - self._need(v, a, cap, gate, a_max, j_max)
             if slack < best_slack:
                 best, best_slack, best_i = c, slack, i
@@ -183,9 +181,16 @@ class Tracker(Constraints):
             self._cruise(top, a_max, j_max, w)
             return
         b, s_c, _, gate = best
+        if self.hold and self._rests_before(cands, s, v, a, s_c, a_max, j_max):
+            # a feed hold brakes as hard as it may (issue 36, wide seeds 181 and 285): a
+            # profile to rest *at* b, time-optimal to b, reached b 5 ms before the plan without
+            # the hold that braked to b's cap, and Z, which takes a hold for a later arrival,
+            # landed late; the brake is behind every other profile at every moment
+            self._cruise(0.0, a_max, j_max, w)
+            return
         cap = self._target_cap(cands, best_i)
         d = s_c - s
-        target = self._pick_target(v, a, v_p, d, cap, ceiling, a_max, j_max)
+        target = self._pick_target(v, a, v_p, d, cap, ceiling, a_max, j_max, self._hard(b, w))
         soft_from = b
         shifted = False
         # Zero acceleration at a boundary that does not need it, below a feed cap the path can
@@ -204,15 +209,31 @@ class Tracker(Constraints):
                 break  # its feed cap is reachable, or its hard cap binds (kept as it is)
             nb, ns, _, ngate = cands[best_i + 1]
             ncap = self._target_cap(cands, best_i + 1)
-            e = reach_below(ncap, max(ns - s_c - CHAIN_MARGIN, 0.0), a_max, j_max)
+            e = reach_velocity(ncap, max(ns - s_c - CHAIN_MARGIN, 0.0), a_max, j_max)
             if self._need(v, a, e, False, a_max, j_max) <= d + SLACK_TOL:
                 break  # zero acceleration at b, at most e there, loses nothing after it
             best_i += 1
             b, s_c, gate, cap = nb, ns, ngate, ncap
             d = s_c - s
-            target = self._pick_target(v, a, v_p, d, cap, ceiling, a_max, j_max)
+            target = self._pick_target(v, a, v_p, d, cap, ceiling, a_max, j_max,
+                                       self._hard(b, w))  # fmt: skip
             shifted = True
         self._soft_from = soft_from
+        top_b = min(cap, ceiling)
+        kept = passed
+        if (
+            kept is not None
+            and kept.goal == b
+            and kept.t0 <= self.t
+            and abs(kept.v_end - top_b) <= CAP_TOL * top_b
+            and abs(target - top_b) > CAP_TOL * top_b
+        ):
+            # the profile that brought the path to the boundary it just passed reaches b at
+            # its cap, and nothing from here does (a new one from its last µm before the brake
+            # can find the exact brake a few 10 nm too long): it keeps b
+            kept.window = w
+            self.plan = kept
+            return
         # above the ceiling (the override just dropped, or a hold): no acceleration, but the
         # brake toward the target may start from the current velocity
         # (a positive acceleration still lifts it to v_p while it is ramped down)
@@ -225,78 +246,29 @@ class Tracker(Constraints):
             v_max = max(ceiling, target, v_p)
         if shifted:
             v_max = max(min(v_max, max(v, v_p)), target, 1e-12)  # no speeding up through them
-        # Ruckig decides at the edge of what is feasible (rounding): the target; else the
-        # value nearest to it, toward v_p (the velocity after ramping the acceleration to 0),
-        # that ruckig accepts; else rest or a cap. A feed cap the path cannot get down to after
-        # a sudden override drop is passed as slowly as it can: only the axes' and transitions'
-        # caps are hard.
-        if self._try_target(s, v, a, s_c, target, v_max, a_max, j_max, b, w):
-            return
-        if target > 0.0 and self._try_target(s, v, a, s_c, 0.0, v_max, a_max, j_max, b, w):
-            return  # rest: safe whenever it fits
-        hard = 0.0 if self.is_stop(b) or b == w else min(tb.point_cap[b], tb.cap[b])
-        if v_p <= max(hard, target) and self._try_target(
-            s, v, a, s_c, v_p, max(v_max, v_p), a_max, j_max, b, w
-        ):
-            good, bad = v_p, target
-            for _ in range(14):  # from v_p toward the target while ruckig still accepts it
-                mid = 0.5 * (good + bad)
-                if self._try_target(s, v, a, s_c, mid, max(v_max, mid), a_max, j_max, b, w):
-                    good = mid
-                else:
-                    bad = mid
-            self._try_target(s, v, a, s_c, good, max(v_max, good), a_max, j_max, b, w)
-            return
-        for tgt in (0.0, cap, hard):
-            if self._try_target(s, v, a, s_c, tgt, max(v_max, tgt), a_max, j_max, b, w):
-                return
-        kept = passed
-        if kept is not None and kept.goal == b and kept.t0 <= self.t:
-            # the step was cut at a boundary on the way to b (a feed change) and nothing new
-            # from there is accepted, e.g. 1 µm before b while still ramping the acceleration
-            # to 0 (stress seed 396, lifting): the profile that brought the path here keeps b
-            # (a window that moved on only relaxes the constraints it was planned under)
-            kept.window = w
-            self.plan = kept
-            return
-        self._count(f"target profile refused at boundary {b}")
-        self._brake(a_max, j_max, w)
+        if skip >= 0:  # nor beyond the forced one's cap
+            target = min(target, top)
+            v_max = max(min(v_max, top), target, v, v_p)
+        self._settle(s, v, a, v_p, s_c, target, cap, v_max, a_max, j_max, b, w, self._hard(b, w),
+                     passed)  # fmt: skip
 
-    def _try_target(
-        self, s: float, v: float, a: float, s_c: float, tgt: float, v_max: float,
-        a_max: float, j_max: float, b: int, w: int,
+    def _rests_before(
+        self, cands: list[tuple[int, float, float, bool]], s: float, v: float, a: float,
+        s_b: float, a_max: float, j_max: float,
     ) -> bool:  # fmt: skip
-        try:
-            traj = self.calc.position(s, v, a, s_c, tgt, max(v_max, tgt), a_max, j_max)
-        except ProfileError as exc:
-            self.last_error = str(exc)
+        """The brake to rest from (v, a) ends before s_b and before every run boundary in
+        `cands` (where the path acceleration must be zero), so it keeps them all: braking
+        harder than any profile to a boundary, it passes the others below their caps. Before
+        them by SLACK_MARGIN: a brake that ends on a run boundary reaches it with the rounding
+        of its last acceleration (−0.0004 m/s², wide seeds 81, 101, 369, 459, 693), where
+        the target profile to rest there has zero acceleration by construction."""
+        if projected_velocity(v, a, j_max) > 0.0:
+            stop = brake_distance(v, a, 0.0, a_max, j_max) + SLACK_MARGIN
+        else:
+            stop = ramp_distance(v, a, j_max) + SLACK_MARGIN
+        if stop > s_b - s:
             return False
-        plan = self.plan = Plan(traj, self.t, b, w, s_c, tgt)
-        plan.soft_from = min(self._soft_from, b)
-        return True
-
-    def _pick_target(
-        self, v: float, a: float, v_p: float, d: float, cap: float, ceiling: float,
-        a_max: float, j_max: float,
-    ) -> float:  # fmt: skip
-        """The highest velocity ≤ cap the path can have, with zero acceleration, at distance d:
-        after ramping the acceleration to 0 and speeding up as far as d allows, the cap after a
-        brake, or rest; the lowest reachable one if none fits (a hold, a sudden override drop)."""
-        if not self.hold:
-            top = min(cap, ceiling)  # the ceiling holds up to there
-            ramp = ramp_distance(v, a, j_max)
-            fits = d + SLACK_TOL
-            if v_p <= top and ramp <= fits:
-                # a path never moves backwards: a projected velocity a rounding puts below 0
-                # (-1e-17 m/s) is rest (ruckig1 refuses a negative target, which cost a
-                # refusal and a fallback to rest in the cycle: 26 of them in the 500-part job
-                # with override steps, most in the nominal run's re-plans)
-                return max(min(top, reach_velocity(v_p, max(d - ramp, 0.0), a_max, j_max)), 0.0)
-            if v_p > top and brake_distance(v, a, top, a_max, j_max) <= fits:
-                return top
-            if brake_distance(v, a, 0.0, a_max, j_max) <= fits:
-                return 0.0
-        return min(cap, lowest_reachable_from(v, a, d, a_max, j_max))
+        return all(not gate or stop <= s_c - s for _, s_c, _, gate in cands)
 
     def _cruise(self, ceiling: float, a_max: float, j_max: float, w: int) -> None:
         try:
@@ -311,10 +283,6 @@ class Tracker(Constraints):
         """Last resort: brake to rest (never expected; counted)."""
         traj = self.calc.velocity(self.s, self.v, self.a, 0.0, a_max, j_max)
         self.plan = Plan(traj, self.t, BRAKE, w, None, 0.0)
-
-    def _count(self, what: str) -> None:
-        self.errors += 1
-        self.last_error = what
 
     # -- motion ---------------------------------------------------------------------------------
     def advance(self, t_new: float, dt: float) -> list[Crossing]:
@@ -417,6 +385,21 @@ class Tracker(Constraints):
         # a target beyond b: kept in case no new profile from here is accepted (`_replan`)
         self._passed = plan if plan is not None and plan.goal > b else None
         self.plan = None
+        if (
+            plan is not None
+            and plan.goal > b
+            and a < 0.0
+            and not tb.gate[b]
+            and not self.is_stop(b)
+            and b != w
+            and self._passable(b, v, a, w)
+        ):
+            # braking toward a goal beyond a boundary it keeps (a feed change, a higher
+            # ceiling): the profile in hand is still the time-optimal one, and a new one from
+            # inside its brake, which has no slack left, may find the exact brake a few 10 nm
+            # too long and dip below the goal's velocity (ruckig brakes below it and comes
+            # back: issue 36, 5 mm/s after a brake from 141 mm/s went down to 3)
+            self.plan = plan
         if self.is_stop(b):
             if v > CAP_TOL:
                 self._count(f"passed the stop at boundary {b} at {v:.6g} m/s")

@@ -99,6 +99,19 @@ def ramp_distance(v: float, a: float, j_max: float) -> float:
     return v * t + 0.5 * a * t * t + j * t * t * t / 6.0
 
 
+def ramp_crossing(v: float, a: float, v1: float, j_max: float) -> float:
+    """Distance until the velocity, braking from (v, a) while the acceleration is ramped to 0
+    at full jerk, first falls to v1 (v > v1 ≥ projected_velocity(v, a)); the whole ramp if it
+    does not."""
+    if j_max == INF or a >= 0.0:
+        return 0.0
+    disc = a * a - 2.0 * j_max * (v - v1)
+    if disc < 0.0:
+        return ramp_distance(v, a, j_max)
+    t = (-a - math.sqrt(disc)) / j_max
+    return v * t + 0.5 * a * t * t + j_max * t * t * t / 6.0
+
+
 def brake_distance(v: float, a: float, v1: float, a_max: float, j_max: float) -> float:
     """Least distance in which the velocity comes down from (v, a) to v1 with zero acceleration
     there (time-optimal jerk-limited brake: jerk −J, hold −A, jerk +J). Only meaningful when
@@ -126,40 +139,122 @@ def brake_distance(v: float, a: float, v1: float, a_max: float, j_max: float) ->
     return d1 + d2 + d3
 
 
+def brake_reach(v: float, a: float, a_max: float, j_max: float) -> float:
+    """The farthest the path can need to get from (v, a) to any one velocity below it with zero
+    acceleration (an upper bound of brake_distance over the end velocity). Braking to rest is
+    not the farthest: with a jerk limit the distance rises from v1 = 0 to v1 = min(v/3,
+    A²/2J) (from zero acceleration; ramping a positive acceleration to 0 first adds its
+    ramp), so a cap there is farther away than rest (issue 36: a feed drop F12000 → F6000
+    entered the tracker's horizon only once the path could no longer get down to it, and it
+    stopped instead). Checked against a fine scan of end velocities for random states."""
+    if j_max == INF:
+        return brake_distance(v, a, 0.0, a_max, j_max)
+    base, ramp = v, 0.0
+    if a > 0.0:
+        base, ramp = projected_velocity(v, a, j_max), ramp_distance(v, a, j_max)
+    hump = min(base / 3.0, a_max * a_max / (2.0 * j_max))
+    d = ramp + max(brake_distance(base, 0.0, 0.0, a_max, j_max),
+                   brake_distance(base, 0.0, hump, a_max, j_max))  # fmt: skip
+    if a < 0.0:
+        d = max(d, ramp_distance(v, a, j_max))
+    return d
+
+
+def _speed_up(v: float, a: float, a1: float, hold: float, j_max: float) -> tuple[float, float]:
+    """(distance, end velocity) of raising the acceleration from a to a1 (jerk +J), holding it
+    for `hold` and ramping it to 0 (jerk −J)."""
+    t1 = (a1 - a) / j_max
+    d = v * t1 + 0.5 * a * t1 * t1 + j_max * t1 * t1 * t1 / 6.0
+    v1 = v + a * t1 + 0.5 * j_max * t1 * t1
+    d += v1 * hold + 0.5 * a1 * hold * hold
+    v2 = v1 + a1 * hold
+    t3 = a1 / j_max
+    d += v2 * t3 + 0.5 * a1 * t3 * t3 - j_max * t3 * t3 * t3 / 6.0
+    return d, v2 + 0.5 * a1 * a1 / j_max
+
+
+def reach_from(v: float, a: float, length: float, a_max: float, j_max: float) -> float:
+    """The highest velocity the path can have, with zero acceleration, `length` ahead of (v, a)
+    (accelerating all the way; the caller bounds it by the ceiling). From a > 0 the fastest
+    way keeps raising the acceleration (jerk +J, up to A and held there) before ramping it to 0
+    (jerk −J), which ends faster than ramping it to 0 first (issue 36: 1 mm after a corner,
+    62 mm/s where 68 were reachable); from a ≤ 0 it ramps to 0 first. Only meaningful when
+    ramping the acceleration to 0 fits within `length`."""
+    if a <= 0.0 or j_max == INF:
+        rest = max(length - ramp_distance(v, a, j_max), 0.0)
+        return reach_velocity(projected_velocity(v, a, j_max), rest, a_max, j_max)
+    top = max(a_max, a)
+    d0, v_top = _speed_up(v, a, top, 0.0, j_max)
+    if d0 <= length:  # up to the acceleration limit, held there: a quadratic in the hold
+        v1 = v_top - 0.5 * top * top / j_max
+        # d(hold) = d0 + (v1 + top·t3)·hold + top·hold²/2 (the ramp down starts faster)
+        lin = v1 + top * top / j_max
+        rest = length - d0
+        hold = 2.0 * rest / (lin + math.sqrt(lin * lin + 2.0 * top * rest))
+        return _speed_up(v, a, top, hold, j_max)[1]
+    lo, hi = a, top  # the peak acceleration: lo fits (the ramp alone), hi does not
+    for _ in range(50):
+        mid = 0.5 * (lo + hi)
+        if _speed_up(v, a, mid, 0.0, j_max)[0] <= length:
+            lo = mid
+        else:
+            hi = mid
+    return _speed_up(v, a, lo, 0.0, j_max)[1]
+
+
+def _hump(v: float, a: float, a_max: float, j_max: float) -> float:
+    """The end velocity in [0, v_p] the brake from (v, a) needs the longest distance for
+    (brake_distance rises from 0 to it and falls after it; golden-section search, bounded)."""
+    lo, hi = 0.0, projected_velocity(v, a, j_max)
+    g = 0.6180339887498949
+    x1, x2 = hi - g * (hi - lo), lo + g * (hi - lo)
+    f1, f2 = brake_distance(v, a, x1, a_max, j_max), brake_distance(v, a, x2, a_max, j_max)
+    for _ in range(30):
+        if f1 < f2:
+            lo, x1, f1 = x1, x2, f2
+            x2 = lo + g * (hi - lo)
+            f2 = brake_distance(v, a, x2, a_max, j_max)
+        else:
+            hi, x2, f2 = x2, x1, f1
+            x1 = hi - g * (hi - lo)
+            f1 = brake_distance(v, a, x1, a_max, j_max)
+    return 0.5 * (lo + hi)
+
+
+def nearest_reachable(
+    v: float, a: float, length: float, top: float, a_max: float, j_max: float, above: bool
+) -> float:
+    """Where `top` itself cannot be reached with zero acceleration within `length` from (v, a):
+    the lowest velocity ≥ top that can (`above`: a feed cap the path cannot get down to, passed
+    as slowly as it can), or the highest one ≤ top (a hard cap: below it, at worst at rest).
+    With a jerk limit brake_distance rises from v1 = 0 to a hump and falls after it, so the
+    reachable end velocities are [0, x1] ∪ [x2, v_p]: these are x2 and x1 (bisections)."""
+    v_p = projected_velocity(v, a, j_max)
+    h = _hump(v, a, a_max, j_max) if j_max != INF else 0.0
+    if above or brake_distance(v, a, 0.0, a_max, j_max) > length:
+        return _edge(v, a, length, max(top, h), v_p, a_max, j_max)  # the falling side
+    return _edge(v, a, length, min(top, h), 0.0, a_max, j_max)  # the rising side
+
+
+def _edge(
+    v: float, a: float, length: float, far: float, near: float, a_max: float, j_max: float
+) -> float:
+    """The end velocity between `far` (its brake needs more than `length`) and `near` (within
+    it) where the brake from (v, a) needs exactly `length`: brake_distance is monotonic
+    between them (50 bisection steps); the last one within."""
+    for _ in range(50):
+        mid = 0.5 * (far + near)
+        if brake_distance(v, a, mid, a_max, j_max) <= length:
+            near = mid
+        else:
+            far = mid
+    return near
+
+
 def lowest_reachable_from(v: float, a: float, length: float, a_max: float, j_max: float) -> float:
     """Smallest velocity (≥ 0) that can be reached from (v, a) with zero acceleration within
     `length` (bisection on brake_distance; the projected velocity if no braking fits)."""
     v_p = projected_velocity(v, a, j_max)
     if v_p <= 0.0 or brake_distance(v, a, 0.0, a_max, j_max) <= length:
         return 0.0
-    lo, hi = 0.0, v_p  # brake_distance(.., hi) = ramp only ≤ … ; (.., lo) > length
-    for _ in range(50):
-        mid = 0.5 * (lo + hi)
-        if brake_distance(v, a, mid, a_max, j_max) <= length:
-            hi = mid
-        else:
-            lo = mid
-    return hi
-
-
-# -- caps are upper bounds: any end velocity below them will do ----------------------------------
-# With zero acceleration at both ends, the distance of a velocity change is not monotonic in the
-# end velocity near 0 (it rises from v1 = 0 to v1 = v/3, then falls): braking to rest can take
-# less distance than braking to a small positive velocity. A cap only asks for "at most", so
-# these take the better of the two ends of [0, cap].
-def reach_below(cap: float, length: float, a_max: float, j_max: float) -> float:
-    """Highest velocity (zero acceleration) from which some velocity ≤ cap (zero acceleration)
-    is reachable within `length`."""
-    best = reach_velocity(cap, length, a_max, j_max)
-    if cap > 0.0:
-        best = max(best, reach_velocity(0.0, length, a_max, j_max))
-    return best
-
-
-def brake_below(v: float, a: float, cap: float, a_max: float, j_max: float) -> float:
-    """Least distance in which the velocity from (v, a) gets to some value ≤ cap with zero
-    acceleration (the brake to cap or to rest, whichever is shorter)."""
-    d = brake_distance(v, a, cap, a_max, j_max)
-    if cap > 0.0:
-        d = min(d, brake_distance(v, a, 0.0, a_max, j_max))
-    return d
+    return _edge(v, a, length, 0.0, v_p, a_max, j_max)  # brake to v_p: the ramp only

@@ -318,3 +318,45 @@ def test_an_older_look_ahead_key_out_of_range_is_one_error(machine: Machine) -> 
         load_settings(str(cfg))
     errors = errors_of(exc.value)
     assert len(errors) == 1 and "interpolator.parameter" in errors[0], errors
+
+
+def test_block_transition_parameters_are_read_with_their_documented_defaults(
+    machine: Machine,
+) -> None:
+    """Issue 36: P-AXIS-00013/00154/00339/00340 per axis, P-CHAN-00009/00117 per channel,
+    defaults as the TF5200 pages give them (0, 1000, 0, 0; off, 0)."""
+    ch = load_settings(str(REPO / "config" / "liftd.toml")).channel
+    x = ch.axis("X")
+    assert (x.a_trans_weight, x.r_trans_weight, x.j_trans_c0, x.j_trans_c1) == (0, 1.0, 0, 0)
+    assert (ch.corr_v_trans_jerk, ch.mode_trans_jerk) == (False, 0)
+    cfg = machine({
+        "cnc/achsmds1.lis": {"getriebe[0].dynamik.a_trans_weight": "250",
+                             "getriebe[0].dynamik.r_trans_weight": "0",
+                             "getriebe[0].dynamik.j_trans_c0": "1500.5"},
+        "cnc/sda_mds1.lis": {"corr_v_trans_jerk": "1", "mode_trans_jerk": "2"},
+    })  # fmt: skip
+    ch = load_settings(str(cfg)).channel
+    x = ch.axis("X")
+    assert (x.a_trans_weight, x.r_trans_weight, x.j_trans_c0) == (0.25, 0.0, 1500.5)
+    assert (ch.corr_v_trans_jerk, ch.mode_trans_jerk) == (True, 2)
+
+
+@pytest.mark.parametrize(
+    ("file", "key", "value"),
+    [
+        ("cnc/achsmds1.lis", "getriebe[0].dynamik.a_trans_weight", "1001"),
+        ("cnc/achsmds2.lis", "getriebe[0].dynamik.r_trans_weight", "-1"),
+        ("cnc/achsmds1.lis", "getriebe[0].dynamik.j_trans_c1", "-0.5"),
+        ("cnc/achsmds1.lis", "getriebe[0].dynamik.j_trans_c0", "fast"),
+        ("cnc/sda_mds1.lis", "mode_trans_jerk", "3"),
+        ("cnc/sda_mds1.lis", "corr_v_trans_jerk", "2"),
+    ],
+)
+def test_block_transition_parameters_out_of_their_range_are_configuration_errors(
+    machine: Machine, file: str, key: str, value: str
+) -> None:
+    cfg = machine({file: {key: value}})
+    with pytest.raises(ConfigError) as exc:
+        load_settings(str(cfg))
+    errs = errors_of(exc.value)
+    assert any(Path(file).name in e and f"{key} = '{value}'" in e for e in errs), errs

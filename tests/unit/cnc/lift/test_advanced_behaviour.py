@@ -109,7 +109,9 @@ def test_pos_or_start_beyond_pos_limit_goes_to_the_target_at_the_start(
     lifted = window(snaps)
     z = np.array([s.positions[2] for s in lifted])
     assert lifted[0].lift_phase is LiftPhase.DIRECT
-    assert z.max() <= max(z0, pos) * MM + 1e-7  # no lifting above start/target (0.1 µm)
+    # no lifting above start/target: Z enters the range moving with the path's kink velocity
+    # (issue 36: P-AXIS-00013's default allows 0.7 mm/s there) and comes to rest within 1 µm
+    assert z.max() <= max(z0, pos) * MM + 1e-6
     t_target = next(s.t for s in lifted if abs(s.positions[2] - pos * MM) < 1e-9)
     assert t_target < rec.t_start + 0.2 < rec.t_end  # at the target early, not at the end
 
@@ -124,7 +126,10 @@ def test_lift_min_dist_suppresses_short_lifts(pos: float, active: bool) -> None:
     assert sup, "lift_suppressed must be set"
     assert all(s.lift_active == active for s in sup)  # both flags when POS differs (§2.6)
     assert task.lift.records[0].range.suppressed
-    assert max(s.positions[2] for s in snaps) == pytest.approx(max(pos, 1) * MM, abs=1e-9)
+    # Z enters the range still moving up with the path's kink velocity (P-AXIS-00013's
+    # default lets the kink step each axis by j·dt² of velocity: 0.7 mm/s there, Z 0.05 mm/s)
+    # and comes to rest a few nm on (issue 36; 0.3 nm with the corner rule before it)
+    assert max(s.positions[2] for s in snaps) == pytest.approx(max(pos, 1) * MM, abs=1e-8)
     lonely = [s for s in snaps if s.lift_active and not s.lift_suppressed]
     assert not lonely
 

@@ -1,18 +1,21 @@
-"""Segment geometry, projected limits and the corner rule."""
+"""Segment geometry, projected limits and the block-transition dynamics (P-AXIS-00013,
+P-AXIS-00154, P-CHAN-00009, P-CHAN-00117, P-AXIS-00339/00340, #TRANSVELMIN)."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import pytest
 
-from liftd.cnc.params import SlopeType
+from liftd.cnc.params import AxisParams, SlopeType
 from liftd.cnc.path.geometry import ArcSeg, LineSeg, arc_sweep, center_from_radius
 from liftd.cnc.path.limits import (
+    SAFETY,
     TRANSITION_SHARE,
     arc_limits,
     line_limits,
-    transition_velocity,
+    transition,
 )
 from tests.support.channel import make_channel
 
@@ -74,17 +77,68 @@ def test_arc_limits_respect_centripetal_and_jerk_budgets() -> None:
     assert lim.a_max + v * v / r <= a_axis * (1 + 1e-9)
 
 
-def test_corner_rule() -> None:
-    ch = make_channel()
-    dt = 1e-3
-    zero = (0.0, 0.0, 0.0)
-    x, y = (1.0, 0.0, 0.0), (0.0, 1.0, 0.0)
-    assert math.isinf(transition_velocity(x, zero, x, zero, ch.axes, dt, True))  # tangential
-    v90 = transition_velocity(x, zero, y, zero, ch.axes, dt, True)
-    j_min = min(ax.j_max for ax in ch.axes[:2])
-    # V/dt² ≤ ε·j per axis with |Δt| = 1: v ≤ ε·j·dt² (a fraction of a mm/s: an exact stop)
-    assert v90 == pytest.approx(TRANSITION_SHARE * 0.999 * j_min * dt * dt, rel=1e-9)
-    # tangential line → arc (R = 10 mm): only the curvature jump limits, 0.75·v²/R/dt ≤ ε·j
-    k = (0.0, 100.0, 0.0)
-    v_arc = transition_velocity(x, zero, x, k, ch.axes, dt, True)
-    assert v_arc == pytest.approx(math.sqrt(TRANSITION_SHARE * 0.999 * j_min * dt / 75.0))
+def _axes(**kw: float) -> tuple[AxisParams, ...]:
+    return tuple(dataclasses.replace(ax, **kw) for ax in make_channel().axes)
+
+
+X, Y, ZERO = (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 0.0)
+DT = 1e-3
+
+
+def test_a_kink_steps_each_axis_acceleration_by_its_transition_allowance() -> None:
+    """P-AXIS-00013: 0 weights a_max with cycle time / ramp time (the step stays within the
+    axis jerk: v·|Δt|/dt ≤ j·dt), 1000 keeps the full acceleration (v·|Δt|/dt ≤ a_max)."""
+    axes = make_channel().axes
+    tangent = transition(X, ZERO, X, ZERO, axes, DT, True, 8.0)
+    assert math.isinf(tangent.v_cap) and tangent.smooth and not tangent.kink
+    corner = transition(X, ZERO, Y, ZERO, axes, DT, True, 8.0)
+    assert corner.kink and not corner.smooth  # a run boundary: zero path acceleration
+    assert corner.v_cap == pytest.approx(SAFETY * 500.0 * DT * DT)  # 0.5 mm/s: almost a stop
+    full = transition(X, ZERO, Y, ZERO, _axes(a_trans_weight=1.0), DT, True, 8.0)
+    assert full.v_cap == pytest.approx(SAFETY * 10.0 * DT)
+    half = transition(X, ZERO, Y, ZERO, _axes(a_trans_weight=0.5), DT, True, 8.0)
+    assert half.v_cap == pytest.approx(0.5 * full.v_cap)
+    # the STEP slope: the weights act with the non-linear slope only; a_max steps
+    assert transition(X, ZERO, Y, ZERO, axes, DT, False, 8.0).v_cap == pytest.approx(full.v_cap)
+
+
+def test_every_kink_is_a_run_boundary() -> None:
+    """SMOOTH_KINKS is off (limits.py: a lift landed late with it): even a 0.2° kink asks for
+    zero path acceleration, with the whole allowance for its velocity step."""
+    axes = make_channel().axes
+    turn = math.radians(0.2)
+    small = transition(X, ZERO, (math.cos(turn), math.sin(turn), 0.0), ZERO, axes, DT, True, 8.0)
+    assert small.kink and not small.smooth
+    assert small.v_cap == pytest.approx(SAFETY * 0.5 * DT / math.sin(turn), rel=1e-3)
+
+
+def test_a_tangential_curvature_jump_slows_the_path_only_with_p_chan_00009() -> None:
+    axes = make_channel().axes
+    k = (0.0, 100.0, 0.0)  # line → arc of R 10 mm
+    assert math.isinf(transition(X, ZERO, X, k, axes, DT, True, 8.0).v_cap)
+    on = transition(X, ZERO, X, k, axes, DT, True, 8.0, corr_v_trans_jerk=True)
+    assert on.v_cap == pytest.approx(math.sqrt(SAFETY * 10.0 / 100.0))  # r_trans_weight 1000
+    jerk = _axes(r_trans_weight=0.0)
+    mode1 = transition(X, ZERO, X, k, jerk, DT, True, 8.0, corr_v_trans_jerk=True, mode=1)
+    assert mode1.v_cap == pytest.approx(math.sqrt(SAFETY * 500.0 * DT / 100.0))
+    # mode 0: P-AXIS-00154 is at least P-AXIS-00013's weight
+    both = _axes(r_trans_weight=0.0, a_trans_weight=0.4)
+    mode0 = transition(X, ZERO, X, k, both, DT, True, 8.0, corr_v_trans_jerk=True, mode=0)
+    assert mode0.v_cap == pytest.approx(math.sqrt(SAFETY * 4.0 / 100.0))
+
+
+def test_mode_2_takes_the_transition_jerks_limited_to_a_max_over_the_cycle() -> None:
+    c0 = transition(X, ZERO, Y, ZERO, _axes(j_trans_c0=2000.0), DT, True, 8.0, mode=2)
+    assert c0.v_cap == pytest.approx(SAFETY * 2000.0 * DT * DT)
+    unset = transition(X, ZERO, Y, ZERO, _axes(), DT, True, 8.0, mode=2)
+    assert unset.v_cap == pytest.approx(SAFETY * 500.0 * DT * DT)  # 0: the axis jerk
+    huge = transition(X, ZERO, Y, ZERO, _axes(j_trans_c0=1e9), DT, True, 8.0, mode=2)
+    assert huge.v_cap == pytest.approx(SAFETY * 10.0 * DT)  # at most a_max / dt
+
+
+def test_transvelmin_raises_a_kink_but_not_over_jerk_limitation() -> None:
+    axes = make_channel().axes
+    assert transition(X, ZERO, Y, ZERO, axes, DT, True, 8.0, v_min=0.05).v_cap == 0.05
+    assert transition(X, ZERO, X, ZERO, axes, DT, True, 8.0, v_min=0.05).v_cap == math.inf
+    jerk = transition(X, ZERO, Y, ZERO, axes, DT, True, 8.0, corr_v_trans_jerk=True, v_min=0.05)
+    assert jerk.v_cap == pytest.approx(SAFETY * 500.0 * DT * DT)

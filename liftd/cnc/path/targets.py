@@ -1,0 +1,144 @@
+"""Which target the path tracker plans for (`tracker.py`), and the fallbacks where ruckig
+refuses it: the `Targets` layer between the constraint queries (`constraints.py`) and the
+motion (`Tracker`).
+
+A constraint's cap is a target, not only a bound (issue 36): the path reaches the lower of the
+two blocks' ceilings and the transition cap at a block boundary, and does not dip below the
+lower of the targets it moves between. (Ruckig's time-optimal profile to a low target velocity
+brakes below it and comes back when the exact brake no longer fits: the constraints are kept
+by that exact brake, `Constraints._need`, and a brake in hand is not re-planned where only a
+ceiling rises, `Tracker._arrive`.)
+Where a cap cannot be reached exactly (a cap that came into view with the look-ahead window,
+an override drop), the path gets as near to it as it can below it, and above it only where it
+cannot get below it any more (`nearest_reachable`); it rests at a boundary that is not a stop
+only when nothing else is accepted.
+"""
+
+from __future__ import annotations
+
+from liftd.cnc.path.constraints import SLACK_TOL, Constraints
+from liftd.cnc.path.plan import Plan
+from liftd.cnc.path.table import PathTable
+from liftd.cnc.path.velocity import (
+    brake_distance,
+    lowest_reachable_from,
+    nearest_reachable,
+    ramp_distance,
+    reach_from,
+)
+from liftd.cnc.ruckig1 import ProfileError, Ruckig1
+
+
+class Targets(Constraints):
+    """The target choice and the profiles toward it; `Tracker` moves along them."""
+
+    def __init__(
+        self,
+        table: PathTable,
+        look_ahead: int,
+        lift_stops: set[int] | None = None,
+        acked: set[int] | None = None,
+    ) -> None:
+        super().__init__(table, look_ahead, lift_stops, acked)
+        self.calc = Ruckig1()
+        self.t = 0.0
+        self.plan: Plan | None = None
+        self.errors = 0
+        self.last_error = ""
+        self._soft_from = -1  # the target's Plan.soft_from (`Tracker._replan`)
+
+    def _hard(self, b: int, w: int) -> float:
+        """Boundary b's own hard cap: 0 at a stop and the window's end, else its axis and
+        transition cap (never scaled by the override)."""
+        tb = self.tb
+        return 0.0 if self.is_stop(b) or b == w else min(tb.point_cap[b], tb.cap[b])
+
+    def _count(self, what: str) -> None:
+        self.errors += 1
+        self.last_error = what
+
+    def _try_target(
+        self, s: float, v: float, a: float, s_c: float, tgt: float, v_max: float,
+        a_max: float, j_max: float, b: int, w: int,
+    ) -> bool:  # fmt: skip
+        try:
+            traj = self.calc.position(s, v, a, s_c, tgt, max(v_max, tgt), a_max, j_max)
+        except ProfileError as exc:
+            self.last_error = str(exc)
+            return False
+        plan = self.plan = Plan(traj, self.t, b, w, s_c, tgt)
+        plan.soft_from = min(self._soft_from, b)
+        return True
+
+    def _pick_target(
+        self, v: float, a: float, v_p: float, d: float, cap: float, ceiling: float,
+        a_max: float, j_max: float, hard: float,
+    ) -> float:  # fmt: skip
+        """The highest velocity ≤ cap the path can have, with zero acceleration, at distance d:
+        after accelerating as far as d allows (`reach_from`), or the cap after a brake. Where
+        the cap cannot be reached exactly: the nearest velocity that can, below it where the
+        path can still get below it, else above it up to `hard` (the boundary's own axis and
+        transition cap). Under a hold the lowest reachable one."""
+        if self.hold:
+            return min(cap, lowest_reachable_from(v, a, d, a_max, j_max))
+        top = min(cap, ceiling)  # the ceiling holds up to there
+        fits = d + SLACK_TOL
+        if v_p <= top:
+            if ramp_distance(v, a, j_max) <= fits:
+                # a path never moves backwards: a projected velocity a rounding puts below 0
+                # (-1e-17 m/s) is rest (ruckig1 refuses a negative target)
+                return max(min(top, reach_from(v, a, fits, a_max, j_max)), 0.0)
+            return min(top, max(v_p, 0.0))
+        if brake_distance(v, a, top, a_max, j_max) <= fits:
+            return top
+        # below it if the path can get there (a cap that came into view with the look-ahead
+        # window: braking to a low velocity can take longer than braking to rest), else, as
+        # after a sudden override drop, as slowly as it can above it, but within the
+        # boundary's own hard cap (`top` may be lower, for the candidates after it)
+        if brake_distance(v, a, 0.0, a_max, j_max) <= fits:
+            return nearest_reachable(v, a, fits, top, a_max, j_max, False)
+        up = nearest_reachable(v, a, fits, top, a_max, j_max, True)
+        if up <= hard or brake_distance(v, a, hard, a_max, j_max) > fits:
+            return up
+        return hard
+
+    def _settle(
+        self, s: float, v: float, a: float, v_p: float, s_c: float, target: float, cap: float,
+        v_max: float, a_max: float, j_max: float, b: int, w: int, hard: float, passed: Plan | None,
+    ) -> None:  # fmt: skip
+        """The target profile toward boundary b, or, where ruckig refuses it (it decides at
+        the edge of what is feasible), in this order: the value nearest to it toward v_p (the
+        velocity after ramping the acceleration to 0) that ruckig accepts, within the
+        boundary's hard cap; rest, the cap, the hard cap; the profile that brought the path to
+        the boundary it just passed; a brake (an error)."""
+        if self._try_target(s, v, a, s_c, target, v_max, a_max, j_max, b, w):
+            return
+        if v_p <= max(hard, target) and self._try_target(
+            s, v, a, s_c, v_p, max(v_max, v_p), a_max, j_max, b, w
+        ):
+            good, bad = v_p, target
+            for _ in range(14):  # from v_p toward the target while ruckig still accepts it
+                mid = 0.5 * (good + bad)
+                if self._try_target(s, v, a, s_c, mid, max(v_max, mid), a_max, j_max, b, w):
+                    good = mid
+                else:
+                    bad = mid
+            self._try_target(s, v, a, s_c, good, max(v_max, good), a_max, j_max, b, w)
+            return
+        for tgt in (0.0, cap, hard):
+            if self._try_target(s, v, a, s_c, tgt, max(v_max, tgt), a_max, j_max, b, w):
+                return
+        kept = passed
+        if kept is not None and kept.goal == b and kept.t0 <= self.t:
+            # the step was cut at a boundary on the way to b (a feed change) and nothing new
+            # from there is accepted, e.g. 1 µm before b while still ramping the acceleration
+            # to 0 (stress seed 396, lifting): the profile that brought the path here keeps b
+            # (a window that moved on only relaxes the constraints it was planned under)
+            kept.window = w
+            self.plan = kept
+            return
+        self._count(f"target profile refused at boundary {b}")
+        self._brake(a_max, j_max, w)
+
+    def _brake(self, a_max: float, j_max: float, w: int) -> None:
+        raise NotImplementedError  # Tracker: brake to rest
