@@ -36,6 +36,7 @@ import threading
 import time
 from collections import Counter
 from collections.abc import Callable
+from dataclasses import dataclass
 from multiprocessing.synchronize import Event
 from pathlib import Path
 from typing import cast
@@ -370,31 +371,49 @@ def probe(port: int, net: str, out: mp.Queue[dict[str, object]], stop: Event) ->
              "probe_seconds_over_10ms": sum(p > 0.010 for p in p99s)})  # fmt: skip
 
 
-def run(d: Daemon, udp_port: int, total: int, seed: int, surfaces: set[str]) -> None:
+@dataclass
+class Attacked:
+    """What the daemon went through while an attacker process ran beside the probe."""
+
+    rows: list[dict[str, object]]  # the attacker's, one per surface
+    probe: dict[str, object]  # the probe's figures under attack
+    seconds: float
+    alive: bool
+    rss_before_mb: float
+    rss_peak_mb: float
+    geo_exceeded: int  # -1: the daemon died
+
+
+def baseline(d: Daemon, bench: str, seconds: float = BASELINE_S) -> dict[str, object]:
+    """The probe alone for `seconds` (the baseline of the same run), printed as a JSON line."""
     ctx = mp.get_context("spawn")
-    budget = 48 << 20  # [ads] budget_bytes default
-    time.sleep(1.0)
-    # the baseline of the same run: the probe alone for BASELINE_S
     stop = ctx.Event()
-    probed_alone: mp.Queue[dict[str, object]] = ctx.Queue()
-    alone = ctx.Process(target=probe, args=(d.port, d.net_id, probed_alone, stop))
+    q: mp.Queue[dict[str, object]] = ctx.Queue()
+    alone = ctx.Process(target=probe, args=(d.port, d.net_id, q, stop))
     exceeded0 = d.read_exceeded()
     alone.start()
-    time.sleep(BASELINE_S)
+    time.sleep(seconds)
     stop.set()
-    baseline = probed_alone.get(timeout=60)
+    base = q.get(timeout=60)
     alone.join(10)
-    baseline["geo_exceeded_per_min"] = round((d.read_exceeded() - exceeded0) * 60 / BASELINE_S, 1)
-    print(json.dumps({"bench": "fuzz_daemon", "surface": "none (baseline)",
-                      "seconds": BASELINE_S, **baseline}), flush=True)  # fmt: skip
+    base["geo_exceeded_per_min"] = round((d.read_exceeded() - exceeded0) * 60 / seconds, 1)
+    print(json.dumps({"bench": bench, "surface": "none (baseline)", "seconds": seconds, **base}),
+          flush=True)  # fmt: skip
+    return base
+
+
+def under_attack(d: Daemon, target: Callable[..., None], args: tuple[object, ...]) -> Attacked:
+    """`target(*args, results, stop)` in a process of its own (it puts its rows in `results`
+    and ends by itself or when `stop` is set) while the probe reads and the daemon's RSS is
+    sampled every 50 ms."""
+    ctx = mp.get_context("spawn")
     rss0 = rss_mb(d.proc.pid) or 0.0
     exceeded0 = d.read_exceeded()
     stop = ctx.Event()
     results: mp.Queue[list[dict[str, object]]] = ctx.Queue()
     probed: mp.Queue[dict[str, object]] = ctx.Queue()
     prober = ctx.Process(target=probe, args=(d.port, d.net_id, probed, stop))
-    attacker = ctx.Process(target=attack, args=(d.port, d.net_id, udp_port, total, seed,
-                                                surfaces, results, stop))  # fmt: skip
+    attacker = ctx.Process(target=target, args=(*args, results, stop))
     t_start = time.monotonic()
     prober.start()
     attacker.start()
@@ -406,20 +425,29 @@ def run(d: Daemon, udp_port: int, total: int, seed: int, surfaces: set[str]) -> 
     rows = results.get(timeout=60)
     summary = probed.get(timeout=60)
     prober.join(10)
-    wall = time.monotonic() - t_start
     alive = d.proc.poll() is None
-    exceeded = d.read_exceeded() - exceeded0 if alive else -1
-    for row in rows:
+    return Attacked(rows, summary, time.monotonic() - t_start, alive, rss0, peak,
+                    d.read_exceeded() - exceeded0 if alive else -1)  # fmt: skip
+
+
+def run(d: Daemon, udp_port: int, total: int, seed: int, surfaces: set[str]) -> None:
+    budget = 48 << 20  # [ads] budget_bytes default
+    time.sleep(1.0)
+    baseline(d, "fuzz_daemon")
+    a = under_attack(d, attack, (d.port, d.net_id, udp_port, total, seed, surfaces))
+    for row in a.rows:
         print(json.dumps({"bench": "fuzz_daemon", **row}), flush=True)
-    frames = sum(int(cast(int, r["frames"])) for r in rows)
+    frames = sum(int(cast(int, r["frames"])) for r in a.rows)
+    wall = a.seconds
     events = Counter(str(r.get("event")) for r in list(d.logs)
                      if str(r.get("event", "")).startswith("ads."))  # fmt: skip
     print(json.dumps({
         "bench": "fuzz_daemon", "surface": "all", "frames": frames, "seconds": round(wall),
-        "frames_per_s": round(frames / wall), "daemon_alive": alive,
-        "rss_before_mb": round(rss0, 1), "rss_peak_mb": round(peak, 1),
-        "rss_growth_mb": round(peak - rss0, 1), "budget_mb": budget >> 20, **summary,
-        "geo_exceeded": exceeded, "geo_exceeded_per_min": round(exceeded * 60 / wall, 1),
+        "frames_per_s": round(frames / wall), "daemon_alive": a.alive,
+        "rss_before_mb": round(a.rss_before_mb, 1), "rss_peak_mb": round(a.rss_peak_mb, 1),
+        "rss_growth_mb": round(a.rss_peak_mb - a.rss_before_mb, 1), "budget_mb": budget >> 20,
+        **a.probe, "geo_exceeded": a.geo_exceeded,
+        "geo_exceeded_per_min": round(a.geo_exceeded * 60 / wall, 1),
         "tracebacks": sum("Traceback" in line for line in d.raw),
         "protocol_errors": d.count("ads.protocol_error") + d.count("ads.handler_failed"),
         "log_events": dict(events.most_common(12)),

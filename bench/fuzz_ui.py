@@ -39,8 +39,7 @@ sys.path.insert(0, str(ROOT))
 
 import aiohttp  # noqa: E402
 
-from bench.fuzz_daemon import probe  # noqa: E402
-from liftd.runtime.geo_process import rss_mb  # noqa: E402
+from bench.fuzz_daemon import baseline, under_attack  # noqa: E402
 from tests.support.daemon import Daemon  # noqa: E402
 from tests.support.ui import open_page, ui_daemon, ui_url  # noqa: E402
 
@@ -173,7 +172,8 @@ async def churn(url: str, end: float, stats: dict[str, int]) -> None:
                 await p.close()
 
 
-def attack(url: str, seconds: float, seed: int, out: mp.Queue[list[dict[str, Any]]]) -> None:
+def attack(url: str, seconds: float, seed: int, out: mp.Queue[list[dict[str, object]]],
+           stop: Event) -> None:  # fmt: skip
     r = random.Random(seed)
     port = int(url.rstrip("/").rsplit(":", 1)[1])
     end = time.monotonic() + seconds
@@ -208,49 +208,20 @@ async def still_serving(url: str) -> dict[str, Any]:
 
 
 def run(d: Daemon, seconds: float, seed: int) -> None:
-    ctx = mp.get_context("spawn")
     url = ui_url(d)
     time.sleep(1.0)
-    stop = ctx.Event()
-    q: mp.Queue[dict[str, object]] = ctx.Queue()
-    alone = ctx.Process(target=probe, args=(d.port, d.net_id, q, stop))
-    ex0 = d.read_exceeded()
-    alone.start()
-    time.sleep(BASELINE_S)
-    stop.set()
-    baseline = q.get(timeout=60)
-    alone.join(10)
-    baseline["geo_exceeded_per_min"] = round((d.read_exceeded() - ex0) * 60 / BASELINE_S, 1)
-    print(json.dumps({"bench": "fuzz_ui", "surface": "none (baseline)", **baseline}), flush=True)
-    rss0 = rss_mb(d.proc.pid) or 0.0
-    ex0 = d.read_exceeded()
-    stop2: Event = ctx.Event()
-    probed: mp.Queue[dict[str, object]] = ctx.Queue()
-    results: mp.Queue[list[dict[str, Any]]] = ctx.Queue()
-    prober = ctx.Process(target=probe, args=(d.port, d.net_id, probed, stop2))
-    attacker = ctx.Process(target=attack, args=(url, seconds, seed, results))
-    t0 = time.monotonic()
-    prober.start()
-    attacker.start()
-    peak = rss0
-    while attacker.is_alive():
-        peak = max(peak, rss_mb(d.proc.pid) or 0.0)
-        attacker.join(0.05)
-    stop2.set()
-    rows = results.get(timeout=60)
-    summary = probed.get(timeout=60)
-    prober.join(10)
-    wall = time.monotonic() - t0
-    alive = d.proc.poll() is None
-    exceeded = d.read_exceeded() - ex0 if alive else -1
-    after = asyncio.run(still_serving(url)) if alive else {}
-    for row in rows:
+    baseline(d, "fuzz_ui", BASELINE_S)
+    a = under_attack(d, attack, (url, seconds, seed))
+    after = asyncio.run(still_serving(url)) if a.alive else {}
+    for row in a.rows:
         print(json.dumps({"bench": "fuzz_ui", **row}), flush=True)
     print(json.dumps({
-        "bench": "fuzz_ui", "surface": "all", "seconds": round(wall), "daemon_alive": alive,
-        "rss_before_mb": round(rss0, 1), "rss_peak_mb": round(peak, 1),
-        "rss_growth_mb": round(peak - rss0, 1), **summary, **after,
-        "geo_exceeded": exceeded, "geo_exceeded_per_min": round(exceeded * 60 / wall, 1),
+        "bench": "fuzz_ui", "surface": "all", "seconds": round(a.seconds),
+        "daemon_alive": a.alive, "rss_before_mb": round(a.rss_before_mb, 1),
+        "rss_peak_mb": round(a.rss_peak_mb, 1),
+        "rss_growth_mb": round(a.rss_peak_mb - a.rss_before_mb, 1), **a.probe, **after,
+        "geo_exceeded": a.geo_exceeded,
+        "geo_exceeded_per_min": round(a.geo_exceeded * 60 / a.seconds, 1),
         "tracebacks": sum("Traceback" in line for line in d.raw),
         "aiohttp_errors": sum("Error handling request" in line for line in d.raw),
         "ui_bad_messages_logged": d.count("ui.page_closed") + d.count("ui.auth_failed"),
