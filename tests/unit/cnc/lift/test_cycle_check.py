@@ -8,6 +8,7 @@ import dataclasses
 
 import pytest
 
+from liftd.cnc.params import LiftMethod
 from liftd.cnc.snapshot import GeoSnapshot
 from tests.support.closed_loop import run_task
 from tests.support.cycle_check import violations
@@ -56,3 +57,19 @@ def test_a_lift_above_pos_limit_is_found_on_its_axis() -> None:
     ]
     found = violations(sc, bad, task.lift.records)
     assert f"POS_LIMIT exceeded in lift line {spec.line}" in found, found
+
+
+@pytest.mark.parametrize("seed", [174, 197])
+def test_the_lift_axis_as_a_path_axis_may_take_a_transition_s_jump(seed: int) -> None:
+    """Before its first range Z moves with the path; it arrives at the range's kink at the
+    transition's cap and stops as the range starts: a block transition not wholly inside a
+    range, judged as a path axis (issue 36). The same jerk inside a range is still found."""
+    sc = scenario(seed, LiftMethod.LIFTING)
+    task, snaps = run_task(sc.channel, sc.text, sc.schedule)
+    assert violations(sc, snaps, task.lift.records) == [], describe(sc)
+    rec = task.lift.records[0]
+    mid = (rec.t_start + rec.t_end) / 2  # a 0.1 mm step of Z inside the range
+    k = sc.channel.lift_axis_index
+    assert any(
+        "|j| ratio" in v for v in violations(sc, raised(snaps, k, 1e-4, mid), task.lift.records)
+    )
