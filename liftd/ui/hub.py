@@ -115,11 +115,10 @@ class LiveHub:
         view = self.view()
         extras: dict[str, Any] = {}
         events = [self._event(ev) for ev in self._pending if ev.name not in QUIET]
-        suppressed = {
-            self._index(ev.channel)
-            for ev in self._pending
-            if ev.name == "lift.start" and ev.text == "suppressed"
-        }
+        started: dict[int, list[bool]] = {}  # per channel, each range started: suppressed?
+        for ev in self._pending:
+            if ev.name == "lift.start":
+                started.setdefault(self._index(ev.channel), []).append(ev.text == "suppressed")
         self._pending.clear()
         if events:
             self.events.extend(events)
@@ -135,7 +134,7 @@ class LiveHub:
                 extras["peers"] = peers
         deltas: list[dict[str, Any]] = []
         if view is not None:
-            deltas = self.feed.update(view, suppressed)
+            deltas = self.feed.update(view, started)
             for key, value in range_extras(self.geometry, view).items():
                 if value != self.extras[key]:
                     extras[key] = value

@@ -88,7 +88,7 @@ class TraceSession:
         elif not self._moved:
             return []
         view = self.views.view(self.t)
-        deltas = self.feed.update(view, self.views.suppressed_between(before, self.t))
+        deltas = self.feed.update(view, self.views.starts_between(before, self.t))
         frames: list[dict[str, Any]] = [{"c": d} for d in deltas] or [{"c": {}}]
         frames[-1]["x"] = {
             **range_extras(self.geometry, view),

@@ -200,16 +200,20 @@ class TraceViews:
         stats = LoopStats(cycles=snaps[0].cycle)
         return GeoView(snaps[0], stats, channels=snaps if len(snaps) > 1 else ())
 
-    def suppressed_between(self, t_a: float, t_b: float) -> list[int]:
-        """Channels whose lift_suppressed rose in (t_a, t_b]."""
-        out = []
+    def starts_between(self, t_a: float, t_b: float) -> dict[int, list[bool]]:
+        """Per channel, the ranges whose flags rose in (t_a, t_b], in order: suppressed or
+        not (the feed's pulse rule); the rows are looked at only where the count rose."""
+        out: dict[int, list[bool]] = {}
         for i, tr in enumerate(self.traces):
             if tr is None:
                 continue
-            ka, kb = self.row(i, t_a), self.row(i, t_b)
+            ka, kb = max(self.row(i, t_a), 0), self.row(i, t_b)
+            if kb <= ka or tr.counts[kb] == tr.counts[ka]:
+                continue
             sup = tr.columns["lift_suppressed"]
-            if any(sup[k] > 0.5 and sup[k - 1] <= 0.5 for k in range(max(ka, 0) + 1, kb + 1)):
-                out.append(i)
+            out[i] = [
+                sup[k] > 0.5 for k in range(ka + 1, kb + 1) if tr.counts[k] > tr.counts[k - 1]
+            ]
         return out
 
 

@@ -36,7 +36,9 @@ def test_a_row_gives_the_same_symbols_as_the_live_view(tmp_path: Path) -> None:
     assert "GEO.ch1.state" not in views.missing and "PLC.ch1.override" in views.missing
     feed.update(views.view(0.005))
     assert feed.values["GEO.ch1.Z.lift_count"] == 2  # the suppressed hop counts too
-    assert views.suppressed_between(0.002, 0.005) == [0]
+    assert views.starts_between(0.002, 0.005) == {0: [True]}
+    assert views.starts_between(0.0, 0.005) == {0: [False, True]}  # in order, each its kind
+    assert views.starts_between(0.002, 0.003) == {}
 
 
 @pytest.mark.parametrize(
