@@ -105,6 +105,7 @@ class Feed:
         out: list[dict[str, Value]] = []
         shown = dict(self.values)
         kinds = started or {}
+        lifted: set[int] = set()  # channels with a range that came and went: shaded in history
         for lf in self.lifts:
             before, after = shown.get(lf.count), now.get(lf.count)
             if not isinstance(before, int) or not isinstance(after, int) or after == before:
@@ -122,6 +123,8 @@ class Feed:
                 if shown[flag]:
                     out.append({flag: False})
                     shown[flag] = False
+            if pulsed:
+                lifted.add(lf.channel)
             for flag in pulsed[-MAX_PULSES:]:  # each range that came and went, its own flag
                 out.append({flag: True})
                 out.append({flag: False})
@@ -130,14 +133,14 @@ class Feed:
             out.append(delta)
         self.values = now
         self.version += len(out)
-        self.sample(view)
+        self.sample(view, lifted)
         return out
 
-    def sample(self, view: GeoView) -> None:
+    def sample(self, view: GeoView, lifted: set[int] | frozenset[int] = frozenset()) -> None:
         snaps = view.channels or (view.snapshot,)
         for i, snap in enumerate(snaps):
             hist = self.history[i]
-            on = bool(snap.lift_active or snap.lift_suppressed)
+            on = bool(snap.lift_active or snap.lift_suppressed) or i in lifted
             hist.append(Sample(snap.t, tuple(p * 1e3 for p in snap.positions), on))
             while hist and (snap.t - hist[0].t > HISTORY_S or hist[0].t > snap.t):
                 hist.popleft()

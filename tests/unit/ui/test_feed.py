@@ -81,6 +81,7 @@ def test_a_lift_between_two_updates_is_a_pulse() -> None:
     deltas = feed.update(view(20, count=1))  # TRUE for a cycle in between, FALSE again
     assert flags(deltas, ACTIVE) == [True, False]
     assert feed.values[ACTIVE] is False
+    assert [s.on for s in feed.history[0]] == [False, True]  # the Z plot shades it
 
 
 def test_a_suppressed_range_pulses_its_own_flag() -> None:
