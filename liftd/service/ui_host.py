@@ -3,15 +3,18 @@ from what the daemon already has, adapted here. Values come from `Daemon._view` 
 GEO snapshot the ADS provider reads), events from the GEO process's event callback, peers and
 counters from the ADS server; a control write goes to `CncProvider.write_symbol`, the path of
 an ADS write of `PLC.chN.*`, so `run --trace` still equals `simulate` with the same schedule.
-The GEO process does nothing for it. The program drawings are prepared in a worker thread
-after the daemon is ready, again after a reload, shown once the loop took the reload
-(`geo.reloaded`)."""
+The GEO process does nothing for it. The program drawings are prepared and encoded in a
+process of their own (`geometry.build` holds the GIL for seconds on a long program: a thread
+would stall the event loop the ADS server shares) after the daemon is ready, again after a
+reload, shown once the loop took the reload (`geo.reloaded`)."""
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
+import multiprocessing
 from collections.abc import Callable
+from concurrent.futures import ProcessPoolExecutor
 from typing import Any
 
 from liftd.ads.errors import AdsError
@@ -51,10 +54,13 @@ class UiHost:
             ui.max_connections,
             ui.max_message_bytes,
         )
-        self.server = UiServer(cfg, lambda: LiveSession(self.hub), log, self._write, self._policy)
+        self.server = UiServer(
+            cfg, lambda: LiveSession(self.hub), log, self._write, self._policy, self.hub.drawing
+        )
         self._task: asyncio.Task[None] | None = None
         self._jobs: set[asyncio.Future[Any]] = set()
         self._staged: dict[int, geometry.Geometry] = {}
+        self._pools: set[ProcessPoolExecutor] = set()
 
     @property
     def url(self) -> str:
@@ -82,16 +88,24 @@ class UiHost:
         )
 
     def draw(self, cfg: LoopConfig, staged: bool = True) -> None:
-        """Each channel's program drawn in a worker thread; a reload's (`staged`) waits for
-        the loop to take it."""
+        """Each channel's program drawn in a process (spawned: no fork of a process with
+        threads; it ends with the drawing); a reload's (`staged`) waits for the loop to take it."""
         loop = asyncio.get_running_loop()
-        for i, ch in enumerate(cfg.channels):
-            if ch.program_name == "(none)":
-                continue
-            job = loop.run_in_executor(None, geometry.build, ch.channel, ch.program_text)
+        todo = [(i, ch) for i, ch in enumerate(cfg.channels) if ch.program_name != "(none)"]
+        if not todo:
+            return
+        pool = ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn"))
+        self._pools.add(pool)
+        left = [len(todo)]
+        for i, ch in todo:
+            job = loop.run_in_executor(pool, geometry.build, ch.channel, ch.program_text)
 
             def done(fut: asyncio.Future[geometry.Geometry], i: int = i) -> None:
                 self._jobs.discard(fut)
+                left[0] -= 1
+                if not left[0]:
+                    self._pools.discard(pool)
+                    pool.shutdown(wait=False)
                 if fut.cancelled() or fut.exception() is not None:
                     return
                 if staged:
@@ -107,6 +121,13 @@ class UiHost:
         self.draw(cfg)
 
     async def close(self) -> None:
+        for job in list(self._jobs):
+            job.cancel()
+        for pool in self._pools:  # a drawing still being built is not waited for at exit
+            procs: dict[int, Any] = getattr(pool, "_processes", None) or {}  # (no public kill)
+            for proc in list(procs.values()):
+                proc.terminate()
+            pool.shutdown(wait=False, cancel_futures=True)
         if self._task is not None:
             self._task.cancel()
             with contextlib.suppress(asyncio.CancelledError):

@@ -198,7 +198,7 @@
 
   function applyExtras(x) {
     if (!x) return;
-    if (x.geometry) geometry = x.geometry;
+    if (x.geometry) drawings(x.geometry);
     for (const k of ["range", "text", "peers", "geo", "trace", "error"]) if (k in x) extras[k] = x[k];
     if (x.events && x.events.length) addEvents(x.events);
     if (x.t) sample(x.t);
@@ -210,6 +210,19 @@
     if ("trace" in x) timeline(x.trace);
     if ("text" in x || "range" in x || "error" in x) notes();
     dirty = true;
+  }
+
+  // the program's drawing per channel: GET /drawing/<index>/<version>, once per version
+  const drawingAt = [];  // the version each channel's drawing has (or is being fetched at)
+  function drawings(versions) {
+    versions.forEach((v, i) => {
+      if (v === null) { geometry[i] = null; drawingAt[i] = null; dirty = true; return; }
+      if (drawingAt[i] === v) return;
+      drawingAt[i] = v;
+      fetch(`/drawing/${i}/${v}`).then((r) => r.ok ? r.json() : null).then((g) => {
+        if (g && drawingAt[i] === v) { geometry[i] = g; dirty = true; }
+      }).catch(() => { if (drawingAt[i] === v) drawingAt[i] = undefined; });
+    });
   }
 
   function addEvents(list) {
@@ -329,9 +342,9 @@
     ctx.lineWidth = 1; ctx.strokeStyle = "#9aa4ae"; line(ctx, path, map);
     $(".geo-note", node).textContent = geo ? (geo.error || "") : "path: being prepared (or no program)";
     ctx.strokeStyle = "rgba(21,101,192,0.35)"; ctx.lineWidth = 6; line(ctx, trail, map);
-    if (geo) for (const r of geo.ranges) {
-      ctx.strokeStyle = COLORS[r.method] || "#d32f2f"; ctx.lineWidth = 2;
-      ctx.setLineDash(r.method === "direct" ? [5, 4] : []); line(ctx, r.path, map);
+    if (geo) for (const [i0, i1, method] of geo.ranges) {  // spans of the drawn path
+      ctx.strokeStyle = COLORS[method] || "#d32f2f"; ctx.lineWidth = 2;
+      ctx.setLineDash(method === "direct" ? [5, 4] : []); line(ctx, path.slice(i0, i1 + 1), map);
     }
     ctx.setLineDash([]);
     if (trail.length) {
