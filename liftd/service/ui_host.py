@@ -117,6 +117,11 @@ class UiHost:
             job.add_done_callback(done)
 
     def reloaded(self, settings: Settings, cfg: LoopConfig) -> None:
+        """A reload: the new programs drawn; a new control token (`[ui] token`, or what
+        `[ui] token_file` holds now) applies at once, the old one unlocks nothing more."""
+        if settings.ui_token != self.settings.ui_token:
+            self.server.set_token(settings.ui_token)
+            self.log.info("ui.token_changed", detail="pages unlocked with the old one are locked")
         self.settings = settings
         self.draw(cfg)
 

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import dataclasses
 import hmac
 import json
 import socket
@@ -148,6 +149,7 @@ class UiServer:
         self._files = {n: (resources.files("liftd.ui") / "static" / n).read_bytes() for n in STATIC}
         self._runner: web.AppRunner | None = None
         self._handshakes: dict[str, deque[float]] = {}  # peer IP → its handshakes' times
+        self._pages: set[_Page] = set()  # the open pages (a new token locks them)
 
     # -- lifecycle --------------------------------------------------------------------------------
     async def start(self) -> int:
@@ -167,6 +169,18 @@ class UiServer:
         addresses = self._runner.addresses  # the real port (port 0 = any)
         self.port = int(addresses[0][1]) if addresses else self.cfg.port
         return self.port
+
+    def set_token(self, token: str | None) -> None:
+        """A new control token (a reload): pages unlocked with the old one lose control and
+        are told so; they unlock again with the new one."""
+        self.cfg = dataclasses.replace(self.cfg, token=token)
+        for page in self._pages:
+            if page.authed:
+                page.authed = False
+                page.replies.append(encode(
+                    {"op": "auth", "ok": False, "detail": "the token changed: enter the new one"}
+                ))  # fmt: skip
+                page.wake.set()
 
     async def close(self) -> None:
         if self._runner is not None:
@@ -257,6 +271,7 @@ class UiServer:
         self.open += 1
         self.counters.pages += 1
         page = _Page(request.remote or "?")
+        self._pages.add(page)
         session = self.new_session()
         sender: asyncio.Task[None] | None = None
         try:
@@ -285,6 +300,7 @@ class UiServer:
                     break
         finally:
             self.open -= 1
+            self._pages.discard(page)
             if sender is not None:
                 sender.cancel()
                 with contextlib.suppress(asyncio.CancelledError, Exception):

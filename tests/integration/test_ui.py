@@ -9,6 +9,7 @@ import asyncio
 import contextlib
 import json
 import re
+import signal
 import socket
 import subprocess
 import sys
@@ -16,6 +17,7 @@ import time
 import urllib.request
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import aiohttp
 import pytest
@@ -419,3 +421,44 @@ def test_liftd_view_of_two_channels_and_a_sibling_left_out(tmp_path: Path) -> No
         finally:
             proc.terminate()
             proc.wait(10)
+
+
+def test_a_reload_with_a_new_token_locks_pages_unlocked_with_the_old(tmp_path: Path) -> None:
+    """Review #8: the token file rewritten and SIGHUP: the new token applies at once (no
+    restart hint), the old one unlocks nothing more, an open page loses control."""
+    old, new = "old-token-0123456789", "new-token-9876543210"
+    (tmp_path / "ui.token").write_text(old + "\n")
+    d = ui_daemon(tmp_path, control=True, token_file="ui.token")
+    try:
+        url = ui_url(d)
+
+        async def unlocked(token: str) -> Any:
+            page = await open_page(url)
+            await page.send({"op": "auth", "token": token})
+            assert (await page.reply("auth"))["ok"] is True
+            return page
+
+        async def auth(token: str) -> bool:
+            page = await open_page(url)
+            await page.send({"op": "auth", "token": token})
+            ok = bool((await page.reply("auth"))["ok"])
+            await page.close()
+            return ok
+
+        async def go() -> None:
+            page = await unlocked(old)
+            (tmp_path / "ui.token").write_text(new + "\n")
+            d.signal(signal.SIGHUP)
+            locked = await page.reply("auth", timeout=30)
+            assert locked["ok"] is False and "token changed" in locked["detail"]
+            await page.send({"op": "write", "id": 1, "symbol": "PLC.ch1.override", "value": 500})
+            assert (await page.reply("result"))["ok"] is False
+            await page.close()
+            assert await auth(old) is False
+            assert await auth(new) is True
+
+        run(go())
+        assert d.event("config.reload_accepted") is not None
+        assert d.event("config.reload_partial", 0.5) is None
+    finally:
+        d.stop()
