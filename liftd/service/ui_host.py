@@ -82,6 +82,7 @@ class UiHost:
         await self.server.start()
         self._task = asyncio.create_task(self.hub.run())
         self.draw(cfg, staged=False)
+        self.check_token_file()
         ui = self.settings.config.ui
         self.log.info(
             "ui.listening", url=self.url, control=ui.control and self.settings.ui_token is not None
@@ -123,7 +124,23 @@ class UiHost:
             self.server.set_token(settings.ui_token)
             self.log.info("ui.token_changed", detail="pages unlocked with the old one are locked")
         self.settings = settings
+        self.check_token_file()
         self.draw(cfg)
+
+    def check_token_file(self) -> None:
+        """Warn when `[ui] token_file` is readable by others than its owner (the token
+        unlocks control of the machine's channels)."""
+        name = self.settings.config.ui.token_file
+        if name is None:
+            return
+        path = self.settings.path.parent / name
+        try:
+            mode = path.stat().st_mode & 0o777
+        except OSError:
+            return  # (read at load: gone since)
+        if mode & 0o077:
+            self.log.warning("ui.token_file_permissions", file=str(path), mode=f"{mode:03o}",
+                             detail=f"readable beyond its owner: chmod 600 {path}")  # fmt: skip
 
     async def close(self) -> None:
         for job in list(self._jobs):

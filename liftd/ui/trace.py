@@ -23,7 +23,10 @@ from liftd.objects.catalog import Catalog, GeoView
 REQUIRED = ("v_path", "override", "lift_active", "lift_suppressed")
 EXTRA = ("lift_phase", "vz", "az", "state", "override_max")
 MM = 1e3
-MAX_ROWS = 20_000_000  # ~1.6 GB of columns: a larger trace is refused, not swapped in
+# rows of all the run's channel files together: ~2.4 GB at the 119 B a row measured (review of
+# issue 38: the columns, the counts and the reader's transients); a larger run is refused, not
+# swapped in
+MAX_ROWS = 20_000_000
 
 
 class TraceError(Exception):
@@ -42,8 +45,9 @@ class ChannelTrace:
         return len(self.columns["t"])
 
 
-def read_trace(path: str, ch: ChannelParams) -> ChannelTrace:
-    """Read one channel's trace; raises TraceError naming the file, line and what is wrong."""
+def read_trace(path: str, ch: ChannelParams, max_rows: int = MAX_ROWS) -> ChannelTrace:
+    """Read one channel's trace (at most `max_rows` rows); raises TraceError naming the file,
+    line and what is wrong."""
     axes = [a.lower() for a in ch.axis_names]
     try:
         f = open(path, encoding="utf-8", newline="")  # noqa: SIM115
@@ -73,8 +77,10 @@ def read_trace(path: str, ch: ChannelParams) -> ChannelTrace:
                     )
                 for h in names:
                     cols[h].append(float(row[index[h]]))
-                if lineno > MAX_ROWS:
-                    raise TraceError(f"{path}: more than {MAX_ROWS} rows")
+                if lineno - 1 > max_rows:
+                    raise TraceError(
+                        f"{path}: line {lineno}: more than {MAX_ROWS} rows in the run's traces"
+                    )
         except (ValueError, csv.Error, UnicodeDecodeError) as exc:
             raise TraceError(f"{path}: line {lineno}: {exc}") from None
     if not len(cols["t"]):
@@ -221,9 +227,12 @@ def load_traces(catalog: Catalog, paths: list[str], primary: int = 0) -> TraceVi
     """The traces of a run, in channel order; a sibling (OUT.chN.csv) that does not exist is a
     channel without a trace. The primary channel's (OUT.csv, at `primary`) must exist."""
     traces: list[ChannelTrace | None] = []
+    left = MAX_ROWS  # one budget for all the files
     for i, (ch, path) in enumerate(zip(catalog.channels, paths, strict=True)):
         if i != primary and not Path(path).exists():
             traces.append(None)
             continue
-        traces.append(read_trace(path, ch))
+        tr = read_trace(path, ch, left)
+        left -= tr.n
+        traces.append(tr)
     return TraceViews(catalog, traces)
