@@ -25,7 +25,15 @@ import pytest
 from tests.support.daemon import Daemon, write_config
 from tests.support.paths import REPO
 from tests.support.replay import WRITES, first_difference, simulate_logged_writes
-from tests.support.ui import QUIET_RT, never_reading, open_page, run, ui_daemon, ui_url
+from tests.support.ui import (
+    QUIET_RT,
+    liftd_view,
+    never_reading,
+    open_page,
+    run,
+    ui_daemon,
+    ui_url,
+)
 
 pytestmark = pytest.mark.integration
 TOKEN = "ui-test-token-0123456789"
@@ -395,15 +403,7 @@ def test_liftd_view_of_two_channels_and_a_sibling_left_out(tmp_path: Path) -> No
     for sibling in (True, False):
         if not sibling:
             (tmp_path / "t.ch2.csv").unlink()
-        proc = subprocess.Popen(
-            [sys.executable, "-m", "liftd", "view", str(trace), "-c", config, "--port", "0"],
-            stdout=subprocess.PIPE,
-            text=True,
-        )
-        try:
-            assert proc.stdout is not None
-            found = re.search(r"http://\S+/", proc.stdout.readline())
-            assert found is not None
+        with liftd_view(trace, config) as url:
 
             async def go(url: str, sibling: bool = sibling) -> None:
                 page = await open_page(url)
@@ -417,10 +417,7 @@ def test_liftd_view_of_two_channels_and_a_sibling_left_out(tmp_path: Path) -> No
                 assert isinstance(w, int) if sibling else w is None
                 await page.close()
 
-            run(go(found.group(0)))
-        finally:
-            proc.terminate()
-            proc.wait(10)
+            run(go(url))
 
 
 def test_a_reload_with_a_new_token_locks_pages_unlocked_with_the_old(tmp_path: Path) -> None:

@@ -7,8 +7,13 @@ import asyncio
 import base64
 import json
 import os
+import re
 import socket
+import subprocess
+import sys
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -153,6 +158,25 @@ def never_reading(url: str) -> socket.socket:
     head = s.recv(256)
     assert head.startswith(b"HTTP/1.1 101"), head
     return s
+
+
+@contextmanager
+def liftd_view(trace: Path, config: str) -> Iterator[str]:
+    """`liftd view TRACE -c CONFIG` on a free port, running: its page's URL."""
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "liftd", "view", str(trace), "-c", config, "--port", "0"],
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        assert proc.stdout is not None
+        line = proc.stdout.readline()
+        found = re.search(r"http://\S+/", line)
+        assert found is not None, line
+        yield found.group(0)
+    finally:
+        proc.terminate()
+        proc.wait(10)
 
 
 def run(coro: Any) -> Any:
