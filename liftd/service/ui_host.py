@@ -28,6 +28,11 @@ from liftd.ui import geometry
 from liftd.ui.hub import LiveHub, LiveSession
 from liftd.ui.web import Refused, UiServer, WebConfig
 
+# programs up to this size (all channels) are drawn in a thread: ~8 KB, ~300 blocks, hold the
+# GIL for 5-25 ms (hops_program(60): 4.7 KB in 5.6 ms alone, 25 ms under load); larger ones
+# in a process of their own (40 000 ranges: a thread stalls the loop 150-170 ms)
+THREAD_MAX_CHARS = 8_192
+
 
 class UiHost:
     def __init__(
@@ -90,13 +95,17 @@ class UiHost:
 
     def draw(self, cfg: LoopConfig, staged: bool = True) -> None:
         """Each channel's program drawn in a process (spawned: no fork of a process with
-        threads; it ends with the drawing); a reload's (`staged`) waits for the loop to take it."""
+        threads; it ends with the drawing), small programs in a worker thread (a spawn costs
+        more than their build); a reload's (`staged`) waits for the loop to take it."""
         loop = asyncio.get_running_loop()
         todo = [(i, ch) for i, ch in enumerate(cfg.channels) if ch.program_name != "(none)"]
         if not todo:
             return
-        pool = ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn"))
-        self._pools.add(pool)
+        small = sum(len(ch.program_text) for _, ch in todo) <= THREAD_MAX_CHARS
+        pool: ProcessPoolExecutor | None = None
+        if not small:
+            pool = ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn"))
+            self._pools.add(pool)
         left = [len(todo)]
         for i, ch in todo:
             job = loop.run_in_executor(pool, geometry.build, ch.channel, ch.program_text)
@@ -104,7 +113,7 @@ class UiHost:
             def done(fut: asyncio.Future[geometry.Geometry], i: int = i) -> None:
                 self._jobs.discard(fut)
                 left[0] -= 1
-                if not left[0]:
+                if not left[0] and pool is not None:
                     self._pools.discard(pool)
                     pool.shutdown(wait=False)
                 if fut.cancelled() or fut.exception() is not None:

@@ -89,25 +89,27 @@ def test_hello_has_every_object_and_updates_follow(daemon: Daemon) -> None:
     run(go())
 
 
+async def _drawing_version(url: str) -> int:
+    """The drawing's version a page is told (in its hello, or a frame once it is built)."""
+    page = await open_page(url)
+    assert '"path"' not in json.dumps(page.hello)
+    version = page.hello["state"]["x"]["geometry"][0]
+    end = time.monotonic() + 60
+    while version is None:
+        assert time.monotonic() < end, "no drawing"
+        m = await page.receive()
+        for f in m.get("frames", []):
+            version = (f.get("x") or {}).get("geometry", [version])[0]
+    await page.close()
+    return int(version)
+
+
 def test_the_drawing_is_fetched_by_version_and_not_in_the_hello(daemon: Daemon) -> None:
-    """Built in a process of its own after ready, encoded once: a page GETs it by the version
-    its hello or a frame names; an old or unknown version is 404."""
+    """Built once after ready, encoded once: a page GETs it by the version its hello or a
+    frame names; an old or unknown version is 404."""
     url = ui_url(daemon)
 
-    async def go() -> int:
-        page = await open_page(url)
-        assert '"path"' not in json.dumps(page.hello)
-        version = page.hello["state"]["x"]["geometry"][0]
-        end = time.monotonic() + 30
-        while version is None:
-            assert time.monotonic() < end, "no drawing"
-            m = await page.receive()
-            for f in m.get("frames", []):
-                version = (f.get("x") or {}).get("geometry", [None])[0]
-        await page.close()
-        return int(version)
-
-    version = run(go())
+    version = run(_drawing_version(url))
     with urllib.request.urlopen(f"{url}drawing/0/{version}", timeout=10) as r:
         drawing = json.loads(r.read())
         assert r.headers["Content-Security-Policy"]
@@ -116,6 +118,19 @@ def test_the_drawing_is_fetched_by_version_and_not_in_the_hello(daemon: Daemon) 
         with pytest.raises(urllib.error.HTTPError) as exc:
             urllib.request.urlopen(url + bad, timeout=10)
         assert exc.value.code == 404, bad
+
+
+def test_a_long_program_is_drawn_in_a_process_of_its_own(tmp_path: Path) -> None:
+    """Over THREAD_MAX_CHARS (1 500 hops: ~115 KB) the drawing comes from a spawned process."""
+    d = ui_daemon(tmp_path, hops=1500)
+    try:
+        url = ui_url(d)
+        version = run(_drawing_version(url))
+        with urllib.request.urlopen(f"{url}drawing/0/{version}", timeout=10) as r:
+            drawing = json.loads(r.read())
+        assert drawing["error"] is None and len(drawing["path"]) > 3000 and drawing["ranges"]
+    finally:
+        d.stop()
 
 
 def test_a_foreign_origin_is_refused(daemon: Daemon) -> None:

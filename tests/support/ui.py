@@ -49,13 +49,13 @@ def hops_program(parts: int = 60) -> str:
     return "\n".join([*lines, "M30", ""])
 
 
-def ui_daemon(tmp: Path, *args: str, hops: bool = False, **ui: object) -> Daemon:
-    """`liftd run` on the demo (or `hops_program`), repeating, with the live view on a free
-    port, ready."""
+def ui_daemon(tmp: Path, *args: str, hops: bool | int = False, **ui: object) -> Daemon:
+    """`liftd run` on the demo (or `hops_program`, of `hops` parts when a number), repeating,
+    with the live view on a free port, ready."""
     program = None
     if hops:
         program = tmp / "hops.nc"
-        program.write_text(hops_program())
+        program.write_text(hops_program() if hops is True else hops_program(int(hops)))
     cfg = write_config(
         tmp,
         program_file=str(program) if program else None,
