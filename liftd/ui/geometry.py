@@ -1,9 +1,9 @@
 """A program as the page draws it: the prepared path in the plane of the channel's first two
 axes (mm), each lift range on it with its method, POS and POS_LIMIT, and the program's lines
-for the block text. Built and encoded once per program in a process of its own (decode + path
-preparation, the same code the GEO task runs, without the lift planning: ~15 µs a block; the
-compiled core and the JSON encoder do not let go of the GIL, a thread would stall the event
-loop the ADS server shares)."""
+for the block text. Built and encoded once per program, a long one in a process of its own
+(decode + path preparation, the same code the GEO task runs, without the lift planning: ~15 µs
+a block; the compiled core and the JSON encoder do not let go of the GIL, a thread would stall
+the event loop the ADS server shares: `liftd/service/ui_host.py`)."""
 
 from __future__ import annotations
 
