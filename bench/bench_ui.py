@@ -11,8 +11,12 @@
   client polls lift_active at 1 kHz (the ADS server's rate and latency in each phase).
 
 - rss: the daemon's RSS with [ui] off and on (no page), alternated.
+- reconnect (`--reconnect N`, alone): ADS round trips (read of lift_active every 10 ms) on a
+  program of N lift ranges, quiet and while two threads open /ws and close it in a loop,
+  alternated; how many handshakes were answered 101 and 429 (review #1 of issue 38).
 
 Run: .venv/bin/python bench/bench_ui.py [--rt] [--changes 200] [--phase-seconds 20] [--rounds 2]
+     .venv/bin/python bench/bench_ui.py --reconnect 40000 [--phase-seconds 15] [--rounds 2]
 """
 
 from __future__ import annotations
@@ -307,6 +311,79 @@ def rss_without_and_with_ui(rounds: int = 2) -> None:
     emit({"bench": "ui_daemon_rss", "ui_off_mb": got[False], "ui_on_mb": got[True]})
 
 
+def _round_trips(d: Any, seconds: float) -> list[float]:
+    from liftd.ads.client import RawClient  # noqa: PLC0415
+    from liftd.ads.wire import net_id_bytes  # noqa: PLC0415
+
+    c = RawClient(d.port, net_id_bytes(d.net_id))
+    out: list[float] = []
+    end = time.monotonic() + seconds
+    try:
+        while time.monotonic() < end:
+            a = time.perf_counter()
+            c.read_by_name(LIFT, 1)
+            out.append((time.perf_counter() - a) * 1e3)
+            time.sleep(0.01)
+    finally:
+        c.close()
+    return out
+
+
+def _reconnecting(url: str, stop: Any, got: dict[int, int]) -> None:
+    import base64  # noqa: PLC0415
+    import socket  # noqa: PLC0415
+
+    host, port = url.split("//")[1].rstrip("/").rsplit(":", 1)
+    while not stop.is_set():
+        with socket.create_connection((host, int(port))) as s:
+            key = base64.b64encode(os.urandom(16)).decode()
+            s.sendall(
+                f"GET /ws HTTP/1.1\r\nHost: {host}:{port}\r\nUpgrade: websocket\r\n"
+                f"Connection: Upgrade\r\nSec-WebSocket-Key: {key}\r\n"
+                "Sec-WebSocket-Version: 13\r\n\r\n".encode()
+            )
+            head = s.recv(256)
+            status = int(head.split()[1]) if len(head.split()) > 1 else 0
+            got[status] = got.get(status, 0) + 1
+
+
+def reconnect(ranges: int, phase_s: float, rounds: int) -> None:
+    import threading  # noqa: PLC0415
+
+    from tests.support.daemon import Daemon, write_config  # noqa: PLC0415
+    from tests.support.ui import QUIET_RT, hops_program, ui_url  # noqa: PLC0415
+
+    with tempfile.TemporaryDirectory() as tmp:
+        program = Path(tmp) / "hops.nc"
+        program.write_text(hops_program(ranges))
+        cfg = write_config(Path(tmp), program_file=str(program), program={"repeat": True},
+                           ui={"enabled": True, "port": 0}, rt=QUIET_RT)  # fmt: skip
+        d = Daemon(cfg)
+        try:
+            d.ready()
+            url = ui_url(d)
+            time.sleep(10)  # the drawing built (a process of its own) and published
+            for r in range(rounds):
+                for phase in ("quiet", "reconnecting"):
+                    stop, got = threading.Event(), {}
+                    threads = [
+                        threading.Thread(target=_reconnecting, args=(url, stop, got))
+                        for _ in range(2 if phase == "reconnecting" else 0)
+                    ]
+                    for t in threads:
+                        t.start()
+                    ms = _round_trips(d, phase_s)
+                    stop.set()
+                    for t in threads:
+                        t.join()
+                    emit({"bench": "ui_reconnect_ads_rtt", "ranges": ranges, "round": r,
+                          "phase": phase, "n": len(ms), "median_ms": round(statistics.median(ms), 3),
+                          "p90_ms": round(percentile(ms, 0.9), 2), "max_ms": round(max(ms), 1),
+                          "handshakes": {str(k): v for k, v in sorted(got.items())}})  # fmt: skip
+        finally:
+            d.stop()
+
+
 def main() -> None:
     if len(sys.argv) > 1 and sys.argv[1] == "--pages-child":
         pages_child(sys.argv[2], int(sys.argv[3]), float(sys.argv[4]))
@@ -325,7 +402,11 @@ def main() -> None:
     ap.add_argument("--skip-load", action="store_true")
     ap.add_argument("--rt", action="store_true", help="SCHED_FIFO 80, mlockall (as root)")
     ap.add_argument("--skip-rss", action="store_true")
+    ap.add_argument("--reconnect", type=int, metavar="RANGES", help="only the reconnect figure")
     args = ap.parse_args()
+    if args.reconnect:
+        reconnect(args.reconnect, args.phase_seconds, args.rounds)
+        return
     from tests.support.daemon import Daemon, free_port, write_config  # noqa: PLC0415
     from tests.support.ui import hops_program, ui_url  # noqa: PLC0415
 

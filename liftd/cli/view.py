@@ -61,7 +61,10 @@ def serve_trace(
         mode="trace",
     )
     log = structlog.get_logger("liftd").bind(part="ui")
-    server = UiServer(cfg, lambda: TraceSession(views, drawings, ui.rate_hz), log)
+    player = TraceSession(views, drawings, ui.rate_hz)  # (its drawings for /drawing/…)
+    server = UiServer(
+        cfg, lambda: TraceSession(views, drawings, ui.rate_hz), log, drawings=player.drawing
+    )
 
     async def main() -> int:
         try:

@@ -17,6 +17,7 @@ from liftd.settings.programs import program_channel, read_program
 
 RESTART_KEYS = ("host", "port", "net_id", "extra_net_ids", "ams_ports")
 RESTART_SECTIONS = ("rt", "log", "metrics", "ui")  # applied when the processes start
+RELOADED = ("ui.token", "ui.token_file")  # but the live view's token a reload applies
 
 
 def needs_restart(running: LiftdConfig, new: LiftdConfig) -> list[str]:
@@ -28,7 +29,7 @@ def needs_restart(running: LiftdConfig, new: LiftdConfig) -> list[str]:
         keys += [
             f"{name}.{k}"
             for k in type(new_s).model_fields
-            if getattr(new_s, k) != getattr(old_s, k)
+            if getattr(new_s, k) != getattr(old_s, k) and f"{name}.{k}" not in RELOADED
         ]
     return keys
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 import json
 import math
 from collections import deque
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -94,43 +94,53 @@ class Feed:
         out.update((sym, rnd(get(view))) for sym, get, rnd in self.objects)
         return out
 
-    def update(self, view: GeoView, suppressed_seen: Iterable[int] = ()) -> list[dict[str, Value]]:
+    def update(
+        self, view: GeoView, started: Mapping[int, Sequence[bool]] | None = None
+    ) -> list[dict[str, Value]]:
         """The deltas (symbol → value) that bring the published values to `view`, pulses
-        first; empty when nothing changed. `suppressed_seen`: machine indices of channels
-        where a suppressed range started since the last update."""
+        first; empty when nothing changed. `started`: per machine index, the ranges that
+        started since the last update, in order, each as suppressed (True) or not; a range
+        the caller did not see is taken as the flag it shows now, else `lift_active`."""
         now = self.read(view)
         out: list[dict[str, Value]] = []
         shown = dict(self.values)
-        seen = set(suppressed_seen)
+        kinds = started or {}
+        lifted: set[int] = set()  # channels with a range that came and went: shaded in history
         for lf in self.lifts:
             before, after = shown.get(lf.count), now.get(lf.count)
             if not isinstance(before, int) or not isinstance(after, int) or after == before:
                 continue
-            started = after - before if after > before else after  # a new program: from 0
-            on_now = bool(now[lf.active]) or bool(now[lf.suppressed])
-            flag = lf.suppressed if lf.channel in seen else lf.active
-            pulses = min(started - (1 if on_now else 0), MAX_PULSES)
-            for _ in range(pulses):
-                if shown[flag]:  # the range before it is shown TRUE: it ended first
+            count = after - before if after > before else after  # a new program: from 0
+            if count <= 0:
+                continue
+            running = lf.suppressed if now[lf.suppressed] else lf.active if now[lf.active] else ""
+            seen = [lf.suppressed if s else lf.active for s in kinds.get(lf.channel, ())]
+            flags = seen[-count:] + [running or lf.active] * (count - len(seen))
+            if running:  # the last one started is the one running now
+                flags[-1] = running
+            pulsed = flags[:-1] if running else flags
+            for flag in (lf.active, lf.suppressed):  # the range shown before it has ended
+                if shown[flag]:
                     out.append({flag: False})
+                    shown[flag] = False
+            if pulsed:
+                lifted.add(lf.channel)
+            for flag in pulsed[-MAX_PULSES:]:  # each range that came and went, its own flag
                 out.append({flag: True})
-                shown[flag] = True
-            if pulses > 0 and now[flag]:  # and the one running now started after them
                 out.append({flag: False})
-                shown[flag] = False
         delta = {k: v for k, v in now.items() if shown.get(k) != v}
         if delta:
             out.append(delta)
         self.values = now
         self.version += len(out)
-        self.sample(view)
+        self.sample(view, lifted)
         return out
 
-    def sample(self, view: GeoView) -> None:
+    def sample(self, view: GeoView, lifted: set[int] | frozenset[int] = frozenset()) -> None:
         snaps = view.channels or (view.snapshot,)
         for i, snap in enumerate(snaps):
             hist = self.history[i]
-            on = bool(snap.lift_active or snap.lift_suppressed)
+            on = bool(snap.lift_active or snap.lift_suppressed) or i in lifted
             hist.append(Sample(snap.t, tuple(p * 1e3 for p in snap.positions), on))
             while hist and (snap.t - hist[0].t > HISTORY_S or hist[0].t > snap.t):
                 hist.popleft()

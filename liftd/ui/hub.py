@@ -64,6 +64,8 @@ class LiveHub:
         self.feed = Feed(catalog)
         self.ring: deque[tuple[int, str]] = deque(maxlen=RING)
         self.geometry: list[Geometry | None] = [None] * len(catalog.channels)
+        self.drawn: list[int] = [0] * len(catalog.channels)  # each drawing's version
+        self._drawn = 0
         self.extras: dict[str, Any] = {
             "range": {},
             "text": {},
@@ -92,11 +94,23 @@ class LiveHub:
             self.events_dropped += 1
 
     def set_geometry(self, index: int, geo: Geometry | None) -> None:
+        self._drawn += 1
         self.geometry[index] = geo
+        self.drawn[index] = self._drawn
         self._publish([], {"geometry": self.drawings()})
 
-    def drawings(self) -> list[dict[str, Any] | None]:
-        return [g.drawing if g is not None else None for g in self.geometry]
+    def drawings(self) -> list[int | None]:
+        """Per channel, the version of its drawing (the page GETs /drawing/<index>/<version>:
+        the drawing is never in a hello or a frame)."""
+        pairs = zip(self.geometry, self.drawn, strict=True)
+        return [v if g is not None else None for g, v in pairs]
+
+    def drawing(self, index: int, version: int) -> bytes | None:
+        """The encoded drawing of channel `index`, if `version` is still its own."""
+        if not 0 <= index < len(self.geometry) or self.drawn[index] != version:
+            return None
+        geo = self.geometry[index]
+        return geo.encoded if geo is not None else None
 
     # -- updates ----------------------------------------------------------------------------------
     async def run(self) -> None:
@@ -115,11 +129,10 @@ class LiveHub:
         view = self.view()
         extras: dict[str, Any] = {}
         events = [self._event(ev) for ev in self._pending if ev.name not in QUIET]
-        suppressed = {
-            self._index(ev.channel)
-            for ev in self._pending
-            if ev.name == "lift.start" and ev.text == "suppressed"
-        }
+        started: dict[int, list[bool]] = {}  # per channel, each range started: suppressed?
+        for ev in self._pending:
+            if ev.name == "lift.start":
+                started.setdefault(self._index(ev.channel), []).append(ev.text == "suppressed")
         self._pending.clear()
         if events:
             self.events.extend(events)
@@ -135,7 +148,7 @@ class LiveHub:
                 extras["peers"] = peers
         deltas: list[dict[str, Any]] = []
         if view is not None:
-            deltas = self.feed.update(view, suppressed)
+            deltas = self.feed.update(view, started)
             for key, value in range_extras(self.geometry, view).items():
                 if value != self.extras[key]:
                     extras[key] = value

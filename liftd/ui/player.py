@@ -61,7 +61,7 @@ class TraceSession:
             "trace": self._position(),
             "peers": [],
             "events": [],
-            "geometry": [g.drawing if g else None for g in self.geometry],
+            "geometry": [1 if g else None for g in self.geometry],  # GET /drawing/<i>/1
         }
         state = {"v": self.version, **self.feed.full(), "x": extras}
         missing = sorted(self.views.missing)
@@ -72,6 +72,11 @@ class TraceSession:
             "state": state,
             "missing": missing,
         }
+
+    def drawing(self, index: int, version: int) -> bytes | None:
+        """The encoded drawing of channel `index` (a trace's drawings are version 1)."""
+        geo = self.geometry[index] if version == 1 and 0 <= index < len(self.geometry) else None
+        return geo.encoded if geo is not None else None
 
     def take(self) -> list[str] | None:
         if self._jumped:
@@ -88,7 +93,7 @@ class TraceSession:
         elif not self._moved:
             return []
         view = self.views.view(self.t)
-        deltas = self.feed.update(view, self.views.suppressed_between(before, self.t))
+        deltas = self.feed.update(view, self.views.starts_between(before, self.t))
         frames: list[dict[str, Any]] = [{"c": d} for d in deltas] or [{"c": {}}]
         frames[-1]["x"] = {
             **range_extras(self.geometry, view),

@@ -23,7 +23,10 @@ from liftd.objects.catalog import Catalog, GeoView
 REQUIRED = ("v_path", "override", "lift_active", "lift_suppressed")
 EXTRA = ("lift_phase", "vz", "az", "state", "override_max")
 MM = 1e3
-MAX_ROWS = 20_000_000  # ~1.6 GB of columns: a larger trace is refused, not swapped in
+# rows of all the run's channel files together: ~2.4 GB at the 119 B a row measured (review of
+# issue 38: the columns, the counts and the reader's transients); a larger run is refused, not
+# swapped in
+MAX_ROWS = 20_000_000
 
 
 class TraceError(Exception):
@@ -42,8 +45,9 @@ class ChannelTrace:
         return len(self.columns["t"])
 
 
-def read_trace(path: str, ch: ChannelParams) -> ChannelTrace:
-    """Read one channel's trace; raises TraceError naming the file, line and what is wrong."""
+def read_trace(path: str, ch: ChannelParams, max_rows: int = MAX_ROWS) -> ChannelTrace:
+    """Read one channel's trace (at most `max_rows` rows); raises TraceError naming the file,
+    line and what is wrong."""
     axes = [a.lower() for a in ch.axis_names]
     try:
         f = open(path, encoding="utf-8", newline="")  # noqa: SIM115
@@ -73,8 +77,10 @@ def read_trace(path: str, ch: ChannelParams) -> ChannelTrace:
                     )
                 for h in names:
                     cols[h].append(float(row[index[h]]))
-                if lineno > MAX_ROWS:
-                    raise TraceError(f"{path}: more than {MAX_ROWS} rows")
+                if lineno - 1 > max_rows:
+                    raise TraceError(
+                        f"{path}: line {lineno}: more than {MAX_ROWS} rows in the run's traces"
+                    )
         except (ValueError, csv.Error, UnicodeDecodeError) as exc:
             raise TraceError(f"{path}: line {lineno}: {exc}") from None
     if not len(cols["t"]):
@@ -200,16 +206,20 @@ class TraceViews:
         stats = LoopStats(cycles=snaps[0].cycle)
         return GeoView(snaps[0], stats, channels=snaps if len(snaps) > 1 else ())
 
-    def suppressed_between(self, t_a: float, t_b: float) -> list[int]:
-        """Channels whose lift_suppressed rose in (t_a, t_b]."""
-        out = []
+    def starts_between(self, t_a: float, t_b: float) -> dict[int, list[bool]]:
+        """Per channel, the ranges whose flags rose in (t_a, t_b], in order: suppressed or
+        not (the feed's pulse rule); the rows are looked at only where the count rose."""
+        out: dict[int, list[bool]] = {}
         for i, tr in enumerate(self.traces):
             if tr is None:
                 continue
-            ka, kb = self.row(i, t_a), self.row(i, t_b)
+            ka, kb = max(self.row(i, t_a), 0), self.row(i, t_b)
+            if kb <= ka or tr.counts[kb] == tr.counts[ka]:
+                continue
             sup = tr.columns["lift_suppressed"]
-            if any(sup[k] > 0.5 and sup[k - 1] <= 0.5 for k in range(max(ka, 0) + 1, kb + 1)):
-                out.append(i)
+            out[i] = [
+                sup[k] > 0.5 for k in range(ka + 1, kb + 1) if tr.counts[k] > tr.counts[k - 1]
+            ]
         return out
 
 
@@ -217,9 +227,12 @@ def load_traces(catalog: Catalog, paths: list[str], primary: int = 0) -> TraceVi
     """The traces of a run, in channel order; a sibling (OUT.chN.csv) that does not exist is a
     channel without a trace. The primary channel's (OUT.csv, at `primary`) must exist."""
     traces: list[ChannelTrace | None] = []
+    left = MAX_ROWS  # one budget for all the files
     for i, (ch, path) in enumerate(zip(catalog.channels, paths, strict=True)):
         if i != primary and not Path(path).exists():
             traces.append(None)
             continue
-        traces.append(read_trace(path, ch))
+        tr = read_trace(path, ch, left)
+        left -= tr.n
+        traces.append(tr)
     return TraceViews(catalog, traces)

@@ -1,14 +1,18 @@
 """The page's server (aiohttp on the daemon's event loop): `/` and its static files, `/ws` the
-WebSocket of one page. What it refuses, and why:
+WebSocket of one page, `/drawing/<channel index>/<version>` a program's drawing (encoded once
+per program version, never in a hello). What it refuses, and why:
 
 * a Host header that is neither an IP literal, `localhost` nor one of `[ui] hosts` (421): a
   name an attacker's DNS points at 127.0.0.1 would otherwise make his page same-origin;
 * a WebSocket whose `Origin` is not this page's own (403): no other site's page may read or
   control it (a client without Origin is not a browser and has no site to speak for);
-* more than `[ui] max_connections` WebSockets (503), a message over `[ui] max_message_bytes`
-  (closed, 1009), binary or malformed messages (answered; the connection is closed after
-  `MAX_BAD` of them), more than `MAX_MESSAGES_PER_S` messages a second (closed, 1008), a page
-  that does not take what it is sent within `SEND_TIMEOUT_S` (aborted);
+* more than `MAX_HANDSHAKES_PER_S` WebSocket handshakes a second from one IP address (429: a
+  page's hello is its whole state, a peer reconnecting in a loop must not keep the event loop
+  the ADS server shares busy), more than `[ui] max_connections` WebSockets (503), a message
+  over `[ui] max_message_bytes` (closed, 1009), binary or malformed messages (answered; the
+  connection is closed after `MAX_BAD` of them), more than `MAX_MESSAGES_PER_S` messages a
+  second (closed, 1008), a page that does not take what it is sent within `SEND_TIMEOUT_S`
+  (aborted);
 * a control message unless `[ui] control`, the access policy admits the peer and the page sent
   the token (`auth`; the connection is closed after `MAX_AUTH_FAILURES` wrong ones).
 Every response carries a Content-Security-Policy that allows only this origin's scripts,
@@ -19,10 +23,9 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import dataclasses
 import hmac
-import ipaddress
 import json
-import logging
 import socket
 import time
 from collections import deque
@@ -30,11 +33,11 @@ from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 from importlib import resources
 from typing import Any, Protocol
-from urllib.parse import urlsplit
 
 from aiohttp import WSMsgType, web
 
 from liftd.ui.feed import encode
+from liftd.ui.guard import host_allowed, http_logger, origin_allowed
 
 CSP = (
     "default-src 'none'; script-src 'self'; style-src 'self'; img-src 'self' data:; "
@@ -58,6 +61,8 @@ MAX_AUTH_FAILURES = 3
 MAX_MESSAGES_PER_S = 100
 MAX_WRITES_PER_S = 50
 MAX_SYMBOL_CHARS = 80
+MAX_HANDSHAKES_PER_S = 10  # per peer IP (a page reconnects once a second)
+PEERS_KEPT = 1024  # peer IPs whose handshakes are counted (bounded: a flood of sources)
 
 
 class Refused(Exception):
@@ -66,6 +71,7 @@ class Refused(Exception):
 
 Writer = Callable[[str, bool | int], None]  # symbol, value: raises Refused
 PeerPolicy = Callable[[str], str]  # peer IP → "" when it may control, else why not
+Drawings = Callable[[int, int], bytes | None]  # channel index, version → the encoded drawing
 
 
 class Session(Protocol):
@@ -90,6 +96,7 @@ class WebConfig:
     max_connections: int = 16
     max_message_bytes: int = 4096
     mode: str = "live"  # or "trace"
+    handshakes_per_s: int = MAX_HANDSHAKES_PER_S
 
 
 @dataclass
@@ -120,71 +127,6 @@ def _rate_ok(window: deque[float], limit: int, now: float) -> bool:
     return len(window) <= limit
 
 
-def host_allowed(host_header: str, names: tuple[str, ...]) -> bool:
-    """An IP literal, localhost or a configured name, with or without a port."""
-    host = host_header.strip().lower()
-    if host.startswith("["):
-        host = host[1 : host.find("]")] if "]" in host else ""
-    elif host.count(":") == 1:
-        host = host.split(":", 1)[0]
-    if host in ("localhost", *(n.lower() for n in names)):
-        return True
-    try:
-        ipaddress.ip_address(host)
-    except ValueError:
-        return False
-    return True
-
-
-def origin_allowed(origin: str | None, host_header: str) -> bool:
-    if origin is None:
-        return True  # not a browser: no other site's page behind it
-    parts = urlsplit(origin)
-    return parts.scheme == "http" and parts.netloc.lower() == host_header.strip().lower()
-
-
-class HttpLog(logging.Handler):
-    """aiohttp's server log as liftd's: a request it cannot parse (a header line over 8 KiB,
-    a broken request line …) is answered 400 and logged by aiohttp at ERROR with a traceback;
-    here it is one `ui.bad_request` event per peer address and second, with the error on one
-    line and how many were held back (a peer sends what it likes, the log must not grow with it,
-    as the ADS server's `warn`)."""
-
-    def __init__(self, log: Any, clock: Callable[[], float] = time.monotonic) -> None:
-        super().__init__(logging.INFO)  # aiohttp's DEBUG (a non-HTTP first line) is dropped
-        self.log = log
-        self.clock = clock
-        self.last: dict[str, float] = {}
-        self.held: dict[str, int] = {}
-
-    def emit(self, record: logging.LogRecord) -> None:
-        args = record.args if isinstance(record.args, tuple) else ()
-        peer = str(args[0]) if args else "?"
-        exc = record.exc_info[1] if record.exc_info else None
-        now = self.clock()
-        if now - self.last.get(peer, -2.0) < 1.0:
-            self.held[peer] = self.held.get(peer, 0) + 1
-            return
-        if len(self.last) > 1024:  # peers seen: bounded
-            self.last.clear()
-            self.held.clear()
-        self.last[peer] = now
-        error = (
-            f"{type(exc).__name__}: {' '.join(str(exc).split())}" if exc else record.getMessage()
-        )
-        self.log.warning("ui.bad_request", peer=peer, error=error[:200],
-                         suppressed=self.held.pop(peer, 0))  # fmt: skip
-
-
-def http_logger(log: Any) -> logging.Logger:
-    """A logger of its own for one server's aiohttp (not propagated to the root's stderr)."""
-    logger = logging.getLogger(f"liftd.ui.http.{id(log):x}")
-    logger.propagate = False
-    logger.setLevel(logging.INFO)
-    logger.handlers[:] = [HttpLog(log)]
-    return logger
-
-
 class UiServer:
     def __init__(
         self,
@@ -193,8 +135,10 @@ class UiServer:
         log: Any,
         writer: Writer | None = None,
         policy: PeerPolicy | None = None,
+        drawings: Drawings | None = None,
     ) -> None:
         self.cfg = cfg
+        self.drawings = drawings
         self.new_session = new_session
         self.log = log
         self.writer = writer
@@ -204,6 +148,8 @@ class UiServer:
         self.port = 0
         self._files = {n: (resources.files("liftd.ui") / "static" / n).read_bytes() for n in STATIC}
         self._runner: web.AppRunner | None = None
+        self._handshakes: dict[str, deque[float]] = {}  # peer IP → its handshakes' times
+        self._pages: set[_Page] = set()  # the open pages (a new token locks them)
 
     # -- lifecycle --------------------------------------------------------------------------------
     async def start(self) -> int:
@@ -211,6 +157,7 @@ class UiServer:
         app.router.add_get("/", self._index)
         app.router.add_get("/static/{name}", self._static)
         app.router.add_get("/ws", self._ws)
+        app.router.add_get("/drawing/{index:\\d+}/{version:\\d+}", self._drawing)
         app.router.add_get("/favicon.ico", self._no_icon)
         self._runner = web.AppRunner(app, access_log=None, handle_signals=False,
                                      logger=http_logger(self.log))  # fmt: skip
@@ -222,6 +169,18 @@ class UiServer:
         addresses = self._runner.addresses  # the real port (port 0 = any)
         self.port = int(addresses[0][1]) if addresses else self.cfg.port
         return self.port
+
+    def set_token(self, token: str | None) -> None:
+        """A new control token (a reload): pages unlocked with the old one lose control and
+        are told so; they unlock again with the new one."""
+        self.cfg = dataclasses.replace(self.cfg, token=token)
+        for page in self._pages:
+            if page.authed:
+                page.authed = False
+                page.replies.append(encode(
+                    {"op": "auth", "ok": False, "detail": "the token changed: enter the new one"}
+                ))  # fmt: skip
+                page.wake.set()
 
     async def close(self) -> None:
         if self._runner is not None:
@@ -258,8 +217,30 @@ class UiServer:
             raise web.HTTPNotFound()
         return web.Response(body=self._files[name], content_type=STATIC[name], charset="utf-8")
 
+    async def _drawing(self, request: web.Request) -> web.Response:
+        """A channel's drawing, encoded once per program version (not per page): 404 when the
+        version is not the current one (the page gets the new one in its next frame)."""
+        index, version = request.match_info["index"], request.match_info["version"]
+        body = None
+        if self.drawings is not None and len(index) <= 4 and len(version) <= 12:
+            body = self.drawings(int(index), int(version))
+        if body is None:
+            raise web.HTTPNotFound()
+        return web.Response(body=body, content_type="application/json")
+
     # -- WebSocket --------------------------------------------------------------------------------
-    async def _ws(self, request: web.Request) -> web.StreamResponse:
+    def _refusal(self, request: web.Request) -> web.Response | None:
+        """Why a WebSocket handshake is refused (handshake rate, Origin, too many pages)."""
+        ip = request.remote or "?"
+        if len(self._handshakes) > PEERS_KEPT:
+            self._handshakes.clear()
+        window, now = self._handshakes.setdefault(ip, deque()), time.monotonic()
+        while window and now - window[0] > 1.0:
+            window.popleft()
+        if len(window) >= self.cfg.handshakes_per_s:  # (a refused one is not counted)
+            self.counters.refused += 1
+            return web.Response(status=429, text="too many WebSocket handshakes\n")
+        window.append(now)
         if not origin_allowed(request.headers.get("Origin"), request.host):
             self.counters.refused += 1
             self.log.warning(
@@ -269,6 +250,12 @@ class UiServer:
         if self.open >= self.cfg.max_connections:
             self.counters.refused += 1
             return web.Response(status=503, text="too many pages open\n")
+        return None
+
+    async def _ws(self, request: web.Request) -> web.StreamResponse:
+        refusal = self._refusal(request)
+        if refusal is not None:
+            return refusal
         ws = web.WebSocketResponse(
             max_msg_size=self.cfg.max_message_bytes,
             compress=False,
@@ -284,6 +271,7 @@ class UiServer:
         self.open += 1
         self.counters.pages += 1
         page = _Page(request.remote or "?")
+        self._pages.add(page)
         session = self.new_session()
         sender: asyncio.Task[None] | None = None
         try:
@@ -312,6 +300,7 @@ class UiServer:
                     break
         finally:
             self.open -= 1
+            self._pages.discard(page)
             if sender is not None:
                 sender.cancel()
                 with contextlib.suppress(asyncio.CancelledError, Exception):

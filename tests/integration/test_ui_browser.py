@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import csv
 import http.server
-import re
 import subprocess
 import sys
 import threading
@@ -18,10 +17,10 @@ from typing import Any
 import pyads
 import pytest
 
-from tests.support.browser import OBSERVE, browser
+from tests.support.browser import OBSERVE, PAINTED, browser
 from tests.support.daemon import Daemon
 from tests.support.paths import REPO
-from tests.support.ui import ui_daemon, ui_url
+from tests.support.ui import liftd_view, ui_daemon, ui_url
 
 # wall-clock latencies asserted: run alone, after the parallel part of `make test`
 pytestmark = [pytest.mark.integration, pytest.mark.timing]
@@ -179,41 +178,93 @@ def test_liftd_view_replays_a_trace(tmp_path: Path) -> None:
         capture_output=True,
         timeout=120,
     )
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "liftd", "view", str(trace), "-c", config, "--port", "0"],
-        stdout=subprocess.PIPE,
-        text=True,
-    )
-    try:
-        assert proc.stdout is not None
-        line = proc.stdout.readline()
-        url = re.search(r"http://\S+/", line)
-        assert url is not None, line
-        with browser() as ctx:
-            page: Any = ctx.new_page()
-            page.goto(url.group(0))
-            page.wait_for_selector("body[data-ready=true][data-mode=trace]")
-            assert page.locator("#timeline").is_visible()
-            assert page.get_attribute(f'[data-symbol="{LIFT}"]', "data-value") == "false"
-            assert (
-                page.get_attribute('[data-symbol="GEO.timing.lateness_max_us"]', "data-missing")
-                == "true"
-            )
-            t_lift = _first_lift(trace)
-            t1 = float(page.inner_text("#clock").split("/")[1].split()[0])
-            page.eval_on_selector(
-                "#scrub",
-                f"el => {{ el.value = {round(1000 * t_lift / t1) + 2};"
-                " el.dispatchEvent(new Event('input')); }",
-            )
-            page.wait_for_selector(f'[data-symbol="{LIFT}"][data-value="true"]', timeout=10000)
-            page.click("#play")
-            cycle = '[data-symbol="GEO.cycle"]'
-            before = page.get_attribute(cycle, "data-value")
-            end = time.monotonic() + 10  # (no wait_for_function: the page's CSP forbids eval)
-            while page.get_attribute(cycle, "data-value") == before:
-                assert time.monotonic() < end
-                page.wait_for_timeout(50)
-    finally:
-        proc.terminate()
-        proc.wait(10)
+    with liftd_view(trace, config) as url, browser() as ctx:
+        page: Any = ctx.new_page()
+        page.goto(url)
+        page.wait_for_selector("body[data-ready=true][data-mode=trace]")
+        assert page.locator("#timeline").is_visible()
+        assert page.get_attribute(f'[data-symbol="{LIFT}"]', "data-value") == "false"
+        assert (
+            page.get_attribute('[data-symbol="GEO.timing.lateness_max_us"]', "data-missing")
+            == "true"
+        )
+        t_lift = _first_lift(trace)
+        t1 = float(page.inner_text("#clock").split("/")[1].split()[0])
+        page.eval_on_selector(
+            "#scrub",
+            f"el => {{ el.value = {round(1000 * t_lift / t1) + 2};"
+            " el.dispatchEvent(new Event('input')); }",
+        )
+        page.wait_for_selector(f'[data-symbol="{LIFT}"][data-value="true"]', timeout=10000)
+        page.click("#play")
+        cycle = '[data-symbol="GEO.cycle"]'
+        before = page.get_attribute(cycle, "data-value")
+        end = time.monotonic() + 10  # (no wait_for_function: the page's CSP forbids eval)
+        while page.get_attribute(cycle, "data-value") == before:
+            assert time.monotonic() < end
+            page.wait_for_timeout(50)
+
+
+# the columns of the Z plot shaded as a lift (its translucent red over most of the height)
+SHADED = """() => {
+  const cv = document.querySelector('.zt'), W = cv.width, H = cv.height;
+  const d = cv.getContext('2d').getImageData(0, 0, W, H).data;
+  let cols = 0;
+  for (let x = 0; x < W; x++) {
+    let n = 0;
+    for (let y = 0; y < H; y++) {
+      const i = 4 * (y * W + x);
+      if (d[i + 3] > 10 && d[i + 3] < 40 && d[i] > d[i + 1] + 50) n++;
+    }
+    if (n > H / 2) cols++;
+  }
+  return cols;
+}"""
+
+
+def _one_cycle_trace(path: Path, row: int = 1500, rows: int = 3000) -> None:
+    """A trace of 3 s (1 ms rows) whose lift_active is TRUE in one row only."""
+    axes = ["x", "y", "z"]
+    with path.open("w") as f:
+        f.write(",".join(["t", "line", *axes, "v_path", "override", "lift_active"]))
+        f.write(",lift_suppressed\n")
+        for i in range(rows):
+            on = "1" if i == row else "0"
+            f.write(f"{i * 1e-3:.4f},12,{i * 0.01:.3f},0,1,100,1,{on},0\n")
+
+
+def test_a_lift_of_one_geo_cycle_is_painted_true_then_false(tmp_path: Path) -> None:
+    """Review #7: the feed pulses a one-cycle range as TRUE and FALSE in one message; the page
+    paints the TRUE (for ~150 ms), then the FALSE, and shades the Z plot for it."""
+    trace = tmp_path / "one.csv"
+    _one_cycle_trace(trace)
+    config = str(REPO / "config" / "liftd.toml")
+    with liftd_view(trace, config) as url, browser() as ctx:
+        page: Any = ctx.new_page()
+        page.goto(url)
+        page.wait_for_selector("body[data-ready=true][data-mode=trace]")
+        page.eval_on_selector(  # to 1.2 s, 0.3 s before the lift
+            "#scrub", "el => { el.value = 400; el.dispatchEvent(new Event('input')); }"
+        )
+        end = time.monotonic() + 10
+        while not page.inner_text("#clock").startswith("1.2"):
+            assert time.monotonic() < end, page.inner_text("#clock")
+            page.wait_for_timeout(20)
+        page.evaluate(OBSERVE, LIFT)
+        page.evaluate(PAINTED, LIFT)
+        page.click("#play")
+        count = '[data-symbol="GEO.ch1.Z.lift_count"]'
+        while page.get_attribute(count, "data-value") != "1":
+            assert time.monotonic() < end + 10
+            page.wait_for_timeout(50)
+        page.wait_for_timeout(400)
+        changes = page.evaluate("window.__changes")
+        painted = page.evaluate("window.__painted")
+        shaded = page.evaluate(SHADED)
+    values = [v for _, v in changes]
+    assert values[0] == "false" and values[1:3] == ["true", "false"], changes
+    texts = [t for _, t in painted]
+    assert "TRUE" in texts and texts[-1] == "FALSE", painted
+    on = next(i for i, (_, t) in enumerate(painted) if t == "TRUE")
+    assert painted[on + 1][0] - painted[on][0] >= 100, painted  # shown, not a flicker
+    assert shaded > 0  # the Z plot's lift shading

@@ -56,7 +56,9 @@ def browser() -> Iterator[Any]:
             ctx.close()
 
 
-# records every data-value change of the elements of one symbol: [Date.now(), value]
+# records every data-value change of the elements of one symbol: [Date.now(), value], each
+# value it took (a callback gets several changes at once: each one's value is the next one's
+# oldValue, the last one's the element's current)
 OBSERVE = """(symbol) => {
   window.__changes = [];
   const seen = new WeakSet();
@@ -65,10 +67,26 @@ OBSERVE = """(symbol) => {
       if (seen.has(el)) continue;
       seen.add(el);
       window.__changes.push([Date.now(), el.dataset.value]);
-      new MutationObserver(() => window.__changes.push([Date.now(), el.dataset.value]))
-        .observe(el, {attributes: true, attributeFilter: ["data-value"]});
+      new MutationObserver((recs) => {
+        const now = Date.now();
+        recs.forEach((r, i) => window.__changes.push(
+          [now, i + 1 < recs.length ? recs[i + 1].oldValue : el.dataset.value]));
+      }).observe(el, {attributes: true, attributeOldValue: true, attributeFilter: ["data-value"]});
     }
   };
   watch();
   new MutationObserver(watch).observe(document.body, {childList: true, subtree: true});
+}"""
+
+# records the text of the elements of one symbol at every animation frame (what is painted)
+PAINTED = """(symbol) => {
+  window.__painted = [];
+  const tick = () => {
+    const el = document.querySelector(`span[data-symbol="${symbol}"]`);
+    const text = el ? el.textContent : null;
+    const last = window.__painted[window.__painted.length - 1];
+    if (!last || last[1] !== text) window.__painted.push([performance.now(), text]);
+    requestAnimationFrame(tick);
+  };
+  requestAnimationFrame(tick);
 }"""

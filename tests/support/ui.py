@@ -7,8 +7,13 @@ import asyncio
 import base64
 import json
 import os
+import re
 import socket
+import subprocess
+import sys
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -44,13 +49,13 @@ def hops_program(parts: int = 60) -> str:
     return "\n".join([*lines, "M30", ""])
 
 
-def ui_daemon(tmp: Path, *args: str, hops: bool = False, **ui: object) -> Daemon:
-    """`liftd run` on the demo (or `hops_program`), repeating, with the live view on a free
-    port, ready."""
+def ui_daemon(tmp: Path, *args: str, hops: bool | int = False, **ui: object) -> Daemon:
+    """`liftd run` on the demo (or `hops_program`, of `hops` parts when a number), repeating,
+    with the live view on a free port, ready."""
     program = None
     if hops:
         program = tmp / "hops.nc"
-        program.write_text(hops_program())
+        program.write_text(hops_program() if hops is True else hops_program(int(hops)))
     cfg = write_config(
         tmp,
         program_file=str(program) if program else None,
@@ -153,6 +158,25 @@ def never_reading(url: str) -> socket.socket:
     head = s.recv(256)
     assert head.startswith(b"HTTP/1.1 101"), head
     return s
+
+
+@contextmanager
+def liftd_view(trace: Path, config: str) -> Iterator[str]:
+    """`liftd view TRACE -c CONFIG` on a free port, running: its page's URL."""
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "liftd", "view", str(trace), "-c", config, "--port", "0"],
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        assert proc.stdout is not None
+        line = proc.stdout.readline()
+        found = re.search(r"http://\S+/", line)
+        assert found is not None, line
+        yield found.group(0)
+    finally:
+        proc.terminate()
+        proc.wait(10)
 
 
 def run(coro: Any) -> Any:

@@ -6,6 +6,7 @@
   const COLORS = { advanced: "#d32f2f", lifting: "#7b1fa2", direct: "#ef6c00" };
   let ws = null, hello = null, mode = "live", objects = {}, values = {}, els = {};
   let history = [], geometry = [], extras = {}, missing = new Set(), nextId = 1, dirty = true;
+  const pulsed = new Set();  // channels ("ch1") with a lift flag TRUE since the last sample
   const $ = (sel, root = document) => root.querySelector(sel);
 
   function fmt(o, v) {
@@ -138,23 +139,66 @@
     for (const sym in c) { values[sym] = c[sym]; show(sym); }
   }
 
+  // A lift flag's changes are shown one after another, each painted: a range of one GEO
+  // cycle arrives as TRUE and FALSE in one message (the feed's pulse), and applied in one
+  // go the browser would never paint the TRUE. A value with another behind it stays HOLD_MS
+  // (TRUE) or GAP_MS (the FALSE between two ranges); a FALSE for a TRUE not yet painted
+  // waits for HOLD_MS after it. A flag that lasts longer than that is shown as it comes.
+  const HOLD_MS = 150, GAP_MS = 50, QUEUED = 16;
+  const held = {};  // symbol → {queue, until, shownAt, frame, timer}
+  let frames = 0;  // animation frames run (a paint follows each)
+  const isFlag = (sym) => sym.endsWith(".lift_active") || sym.endsWith(".lift_suppressed");
+
+  function queueFlag(sym, v) {
+    const h = held[sym] || (held[sym] = { queue: [], until: 0, shownAt: 0, frame: -1, timer: null });
+    if (v) pulsed.add(sym.split(".")[1]);  // the Z plot shades it at the next sample
+    if (!v && values[sym] && !h.queue.length && h.frame === frames) h.until = Math.max(h.until, h.shownAt + HOLD_MS);
+    h.queue.push(v);
+    if (h.queue.length > QUEUED) h.queue.splice(0, h.queue.length - QUEUED);
+    drain(sym);
+  }
+
+  function drain(sym) {
+    const h = held[sym];
+    const now = performance.now();
+    if (now < h.until) {
+      if (!h.timer) h.timer = setTimeout(() => { h.timer = null; drain(sym); }, h.until - now);
+      return;
+    }
+    if (!h.queue.length) return;
+    const v = h.queue.shift();
+    values[sym] = v; show(sym);
+    h.shownAt = now; h.frame = frames;
+    h.until = h.queue.length ? now + (v ? HOLD_MS : GAP_MS) : 0;
+    if (h.queue.length) drain(sym);
+  }
+
+  function applyFrames(list) {
+    for (const f of list) {
+      const c = {};
+      for (const sym in f.c) if (isFlag(sym)) queueFlag(sym, f.c[sym]); else c[sym] = f.c[sym];
+      applyValues(c); applyExtras(f.x);
+    }
+  }
+
   function sample(times) {
     if (!hello || !times) return;
     hello.channels.forEach((ch, i) => {
       const g = `GEO.ch${ch.id}.`;
       const pos = ch.axes.map((a) => (values[`${g}${a}.command_position`] || 0) / 1e4);
-      const on = ch.axes.some((a) => values[`${g}${a}.lift_active`] || values[`${g}${a}.lift_suppressed`]);
+      const on = pulsed.has(`ch${ch.id}`) || ch.axes.some((a) => values[`${g}${a}.lift_active`] || values[`${g}${a}.lift_suppressed`]);
       const h = history[i] || (history[i] = []);
       const t = times[i];
       if (h.length && t < h[h.length - 1][0]) h.length = 0;
       h.push([t, pos, on]);
       while (h.length && t - h[0][0] > 10) h.shift();
     });
+    pulsed.clear();
   }
 
   function applyExtras(x) {
     if (!x) return;
-    if (x.geometry) geometry = x.geometry;
+    if (x.geometry) drawings(x.geometry);
     for (const k of ["range", "text", "peers", "geo", "trace", "error"]) if (k in x) extras[k] = x[k];
     if (x.events && x.events.length) addEvents(x.events);
     if (x.t) sample(x.t);
@@ -166,6 +210,19 @@
     if ("trace" in x) timeline(x.trace);
     if ("text" in x || "range" in x || "error" in x) notes();
     dirty = true;
+  }
+
+  // the program's drawing per channel: GET /drawing/<index>/<version>, once per version
+  const drawingAt = [];  // the version each channel's drawing has (or is being fetched at)
+  function drawings(versions) {
+    versions.forEach((v, i) => {
+      if (v === null) { geometry[i] = null; drawingAt[i] = null; dirty = true; return; }
+      if (drawingAt[i] === v) return;
+      drawingAt[i] = v;
+      fetch(`/drawing/${i}/${v}`).then((r) => r.ok ? r.json() : null).then((g) => {
+        if (g && drawingAt[i] === v) { geometry[i] = g; dirty = true; }
+      }).catch(() => { if (drawingAt[i] === v) drawingAt[i] = undefined; });
+    });
   }
 
   function addEvents(list) {
@@ -220,6 +277,7 @@
       $("#control-state").textContent = c.enabled ? "control: token" : `read only`;
       $("#control-state").title = c.detail || "";
       values = {}; history = m.state.history || []; extras = {};
+      for (const sym in held) { clearTimeout(held[sym].timer); delete held[sym]; }
       if (!same) build();
       $("#events").textContent = "";
       applyValues(m.state.values);
@@ -228,7 +286,7 @@
       document.body.dataset.mode = mode;
       document.body.dataset.ready = "true";
     } else if (m.op === "frames") {
-      for (const f of m.frames) { applyValues(f.c); applyExtras(f.x); }
+      applyFrames(m.frames);
     } else if (m.op === "auth") {
       for (const p of document.querySelectorAll(".control")) {
         p.classList.toggle("locked", !m.ok);
@@ -284,9 +342,9 @@
     ctx.lineWidth = 1; ctx.strokeStyle = "#9aa4ae"; line(ctx, path, map);
     $(".geo-note", node).textContent = geo ? (geo.error || "") : "path: being prepared (or no program)";
     ctx.strokeStyle = "rgba(21,101,192,0.35)"; ctx.lineWidth = 6; line(ctx, trail, map);
-    if (geo) for (const r of geo.ranges) {
-      ctx.strokeStyle = COLORS[r.method] || "#d32f2f"; ctx.lineWidth = 2;
-      ctx.setLineDash(r.method === "direct" ? [5, 4] : []); line(ctx, r.path, map);
+    if (geo) for (const [i0, i1, method] of geo.ranges) {  // spans of the drawn path
+      ctx.strokeStyle = COLORS[method] || "#d32f2f"; ctx.lineWidth = 2;
+      ctx.setLineDash(method === "direct" ? [5, 4] : []); line(ctx, path.slice(i0, i1 + 1), map);
     }
     ctx.setLineDash([]);
     if (trail.length) {
@@ -309,7 +367,7 @@
     if (z1 - z0 < 1) { z1 += 0.5; z0 -= 0.5; }
     const X = (t) => pad + (t - t0) / 10 * (W - 2 * pad), Y = (z) => H - pad - (z - z0) / (z1 - z0) * (H - 2 * pad);
     ctx.fillStyle = "rgba(198,40,40,0.10)";
-    for (let k = 1; k < h.length; k++) if (h[k][2]) ctx.fillRect(X(h[k - 1][0]), pad, Math.max(1, X(h[k][0]) - X(h[k - 1][0])), H - 2 * pad);
+    for (let k = 1; k < h.length; k++) if (h[k][2]) ctx.fillRect(X(h[k - 1][0]), pad, Math.max(2, X(h[k][0]) - X(h[k - 1][0])), H - 2 * pad);
     ctx.strokeStyle = "#ccc"; ctx.strokeRect(pad, pad, W - 2 * pad, H - 2 * pad);
     ctx.fillStyle = "#555"; ctx.font = "11px sans-serif";
     ctx.fillText(`${z1.toFixed(1)} mm`, 2, pad - 4); ctx.fillText(`${z0.toFixed(1)} mm`, 2, H - pad + 12);
@@ -332,6 +390,7 @@
 
   let drawn = 0;
   function frame(now) {
+    frames++;
     if (dirty && hello && now - drawn >= 100) {  // the figures at 10 Hz: the values stay at 50
       dirty = false;
       drawn = now;

@@ -81,12 +81,13 @@ def test_a_lift_between_two_updates_is_a_pulse() -> None:
     deltas = feed.update(view(20, count=1))  # TRUE for a cycle in between, FALSE again
     assert flags(deltas, ACTIVE) == [True, False]
     assert feed.values[ACTIVE] is False
+    assert [s.on for s in feed.history[0]] == [False, True]  # the Z plot shades it
 
 
 def test_a_suppressed_range_pulses_its_own_flag() -> None:
     feed = Feed(Catalog(CH))
     feed.update(view(1))
-    deltas = feed.update(view(20, count=1), suppressed_seen=[0])
+    deltas = feed.update(view(20, count=1), {0: [True]})
     assert flags(deltas, SUPPRESSED) == [True, False] and flags(deltas, ACTIVE) == []
 
 
@@ -95,6 +96,35 @@ def test_two_lifts_in_one_update_while_the_second_runs() -> None:
     feed.update(view(1, active=True, count=1))
     deltas = feed.update(view(20, active=True, count=3))  # ended, one more, the third running
     assert flags(deltas, ACTIVE) == [False, True, False, True]
+
+
+def test_a_range_that_ends_as_the_next_starts_shows_false_between() -> None:
+    feed = Feed(Catalog(CH))
+    feed.update(view(1))
+    feed.update(view(20, active=True, count=1))
+    deltas = feed.update(view(40, active=True, count=2))  # ended, a few cycles FALSE, the next
+    assert flags(deltas, ACTIVE) == [False, True]
+
+
+def test_each_range_between_two_updates_pulses_its_own_flag_in_order() -> None:
+    feed = Feed(Catalog(CH))
+    feed.update(view(1))
+    deltas = feed.update(view(20, count=2), {0: [False, True]})  # active, then suppressed
+    on = [(k, v) for d in deltas for k, v in d.items() if k in (ACTIVE, SUPPRESSED)]
+    assert on == [(ACTIVE, True), (ACTIVE, False), (SUPPRESSED, True), (SUPPRESSED, False)]
+
+
+def test_a_one_cycle_range_before_the_running_one_keeps_its_flag() -> None:
+    feed = Feed(Catalog(CH))
+    feed.update(view(1))
+    deltas = feed.update(view(20, active=True, count=2), {0: [True, False]})
+    on = [(k, v) for d in deltas for k, v in d.items() if k in (ACTIVE, SUPPRESSED)]
+    assert on == [(SUPPRESSED, True), (SUPPRESSED, False), (ACTIVE, True)]
+    feed = Feed(Catalog(CH))
+    feed.update(view(1))
+    deltas = feed.update(view(20, suppressed=True, count=2), {0: [False, True]})
+    on = [(k, v) for d in deltas for k, v in d.items() if k in (ACTIVE, SUPPRESSED)]
+    assert on == [(ACTIVE, True), (ACTIVE, False), (SUPPRESSED, True)]
 
 
 def test_a_new_program_counts_from_zero() -> None:

@@ -8,10 +8,13 @@ from pathlib import Path
 
 import pytest
 
+import liftd.ui.trace as trace_mod
 from liftd.objects.catalog import Catalog
+from liftd.settings import load_settings
 from liftd.sim.trace import TraceWriter
 from liftd.ui.feed import Feed
 from liftd.ui.trace import TraceError, load_traces, read_trace
+from tests.support.paths import REPO
 from tests.unit.ui.test_feed import CH, view
 
 
@@ -36,7 +39,9 @@ def test_a_row_gives_the_same_symbols_as_the_live_view(tmp_path: Path) -> None:
     assert "GEO.ch1.state" not in views.missing and "PLC.ch1.override" in views.missing
     feed.update(views.view(0.005))
     assert feed.values["GEO.ch1.Z.lift_count"] == 2  # the suppressed hop counts too
-    assert views.suppressed_between(0.002, 0.005) == [0]
+    assert views.starts_between(0.002, 0.005) == {0: [True]}
+    assert views.starts_between(0.0, 0.005) == {0: [False, True]}  # in order, each its kind
+    assert views.starts_between(0.002, 0.003) == {}
 
 
 @pytest.mark.parametrize(
@@ -60,3 +65,26 @@ def test_not_a_trace_of_the_channel(tmp_path: Path, text: str, fragment: str) ->
     with pytest.raises(TraceError) as exc:
         read_trace(str(bad), CH)
     assert str(bad) in str(exc.value) and fragment in str(exc.value)
+
+
+def test_the_row_budget_is_for_all_the_channel_files(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Review #9b: MAX_ROWS bounds the run, not each of its files."""
+    machine = load_settings(str(REPO / "config" / "liftd-2ch.toml")).machine
+    catalog = Catalog([c.params for c in machine])
+    paths = [tmp_path / "t.csv", tmp_path / "t.ch2.csv"]
+    for path, c in zip(paths, machine, strict=True):
+        with path.open("w") as f:
+            w = TraceWriter(f, c.params.axis_names)
+            for k in range(1, 6):
+                snap = view(k).snapshot
+                w.write(snap._replace(positions=(0.0,) * len(c.params.axes)))
+            w.flush()
+    names = [str(p) for p in paths]
+    monkeypatch.setattr(trace_mod, "MAX_ROWS", 10)
+    assert load_traces(catalog, names).traces[1] is not None
+    monkeypatch.setattr(trace_mod, "MAX_ROWS", 8)
+    with pytest.raises(TraceError, match=r"t\.ch2\.csv: line 5: more than 8 rows"):
+        load_traces(catalog, names)
+    assert read_trace(names[1], machine[1].params).n == 5  # one file alone is within it
