@@ -57,6 +57,7 @@ def _gain(u: float, x: np.ndarray, a: float, j: float) -> np.ndarray:
     (full jerk, then full acceleration; the acceleration at x free). By time reversal equally
     the highest velocity x before a point the path must pass at most at u with zero
     acceleration."""
+    u = max(u, 0.0)  # a velocity: a rounding residue below 0 would make p < 0 and d NaN
     if j == INF:
         return np.sqrt(u * u + 2.0 * a * x)
     t1 = a / j
