@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import socket
 import struct
+import time
 from typing import Any
 
 from liftd.ads import wire
@@ -92,16 +93,19 @@ class RawClient:
         return wire.decode_read_response(reply.payload)
 
     def closed_by_server(self, timeout: float = 3.0) -> bool:
-        self.sock.settimeout(timeout)
+        """Whether the server closes the connection within `timeout` s in all (what it sends
+        meanwhile is read and dropped: a server that keeps sending is not "closed")."""
+        end = time.monotonic() + timeout
         try:
-            while True:
-                data = self.sock.recv(65536)
-                if not data:
+            while (left := end - time.monotonic()) > 0:
+                self.sock.settimeout(left)
+                if not self.sock.recv(65536):
                     return True
         except (ConnectionResetError, BrokenPipeError):
             return True
         except TimeoutError:
             return False
+        return False
 
     def close(self) -> None:
         self.sock.close()
