@@ -46,6 +46,16 @@ def tool(name: str) -> str:
     return path
 
 
+def need_node_client() -> None:
+    """The Node ads-client of tests/interop/node, installed by `.ci/run` (npm ci): skipped
+    without it, failed under CI=1."""
+    if not (NODE_DIR / "node_modules" / "ads-client").is_dir():
+        missing = "tests/interop/node/node_modules is missing: `.ci/run` runs npm ci"
+        if os.environ.get("CI"):
+            pytest.fail(missing)
+        pytest.skip(missing)
+
+
 def free_udp_port() -> int:
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
         s.bind(("127.0.0.1", 0))
@@ -88,11 +98,7 @@ class Session:
 
     def node(self, mode: str, *extra: str) -> dict[str, Any]:
         node = tool("node")
-        if not (NODE_DIR / "node_modules" / "ads-client").is_dir():
-            missing = "tests/interop/node/node_modules is missing: `.ci/run` runs npm ci"
-            if os.environ.get("CI"):
-                pytest.fail(missing)
-            pytest.skip(missing)
+        need_node_client()
         run = subprocess.run(
             [node, "session.mjs", mode, str(self.port), self.net_id, *extra],
             cwd=NODE_DIR,
@@ -223,6 +229,7 @@ def test_rust_ads_crate_requests_replayed(session: Session) -> None:
 
 
 def test_wireshark_dissects_the_whole_session_without_malformed_frames(session: Session) -> None:
+    need_node_client()  # the session it dissects is mostly the Node client's
     session.stop_capture()
     tshark = tool("tshark")
 
