@@ -28,8 +28,6 @@ OUTSIDE = re.compile(
     r"(?:(?:isg-cnc|ads|lift-algorithm|path-planning|rt-python|style-anchors)\.md|DESIGN\.md)"
     r"|(?<![\w/.-])(?:shared/)?seeds/"
 )
-# Paths of other repositories that the research notes name (Klipper's docs/Kinematics.md)
-FOREIGN = {("docs/reference/path-planning.md", "docs/Kinematics.md")}
 
 
 def _texts() -> Iterator[Path]:
@@ -67,7 +65,7 @@ def _citations() -> list[tuple[str, int, str, bool]]:
                 held = relative and target.is_file() and target.is_relative_to(REPO)
                 found.append((rel, lineno, m.group(0), held))
             for m in DOCS_PATH.finditer(line):
-                ok = _exists(m.group(0)) or (rel, m.group(0)) in FOREIGN
+                ok = _exists(m.group(0))
                 found.append((rel, lineno, m.group(0), ok))
     return found
 
