@@ -124,6 +124,11 @@ class Setup:
         for _ in range(2):
             self.cluster.add_worker(preload=root / "crash_hook.py")
 
+    def study(self, library: str, out: str) -> subprocess.CompletedProcess[str]:
+        """`liftd study LIBRARY -c … --scheduler … --out OUT` in the test's root."""
+        args = ["-c", str(self.toml), "--scheduler", self.cluster.address, "--out", out]
+        return liftd("study", library, *args, cwd=self.root)
+
     def client(self) -> distributed.Client:
         client = distributed.Client(self.cluster.address, timeout=60, set_as_default=False)
         client.wait_for_workers(
@@ -169,17 +174,7 @@ def test_the_workers_cannot_read_the_programs(setup: Setup) -> None:
 
 
 def test_the_report_equals_the_local_one_row_for_row(setup: Setup, local: dict) -> None:
-    r = liftd(
-        "study",
-        "library",
-        "-c",
-        str(setup.toml),
-        "--scheduler",
-        setup.cluster.address,
-        "--out",
-        "on_cluster",
-        cwd=setup.root,
-    )
+    r = setup.study("library", "on_cluster")
     assert r.returncode == 1, r.stderr
     out = setup.root / "on_cluster"
     got = json.loads((out / "report.json").read_text())
@@ -269,17 +264,7 @@ def test_a_program_that_kills_its_worker_is_a_failed_row(setup: Setup) -> None:
         (crash / f"hop_{k}.nc").write_text(TINY.format(limit=30, x=50 + 10 * k))
     (crash / "crash_me.nc").write_text(TINY.format(limit=30, x=99))
     (crash / "recurse.nc").write_text(TINY.format(limit=30, x=98))
-    r = liftd(
-        "study",
-        "crashing",
-        "-c",
-        str(setup.toml),
-        "--scheduler",
-        setup.cluster.address,
-        "--out",
-        "crash_out",
-        cwd=setup.root,
-    )
+    r = setup.study("crashing", "crash_out")
     assert r.returncode == 1, r.stderr
     rows = list(csv.DictReader((setup.root / "crash_out" / "report.csv").open(newline="")))
     status = {Path(row["program"]).name: row["status"] for row in rows}
@@ -379,17 +364,7 @@ def test_a_worker_of_another_liftd_version_is_refused(setup: Setup) -> None:
     good = list(setup.cluster.workers)
     setup.cluster.add_worker(preload=setup.root / "other_version.py")
     setup.client().close()  # all three joined
-    r = liftd(
-        "study",
-        "library",
-        "-c",
-        str(setup.toml),
-        "--scheduler",
-        setup.cluster.address,
-        "--out",
-        "mixed",
-        cwd=setup.root,
-    )
+    r = setup.study("library", "mixed")
     assert r.returncode == 2, r.stderr
     assert f"runs liftd 0.0.0+other, this client liftd {__version__}" in r.stderr
     assert not (setup.root / "mixed").exists()
