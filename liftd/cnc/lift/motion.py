@@ -12,6 +12,8 @@ The GEO task holds the active one; it never asks which kind it is.
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
+
 from liftd.cnc.lift.advanced import (
     DONE,
     DOWN,
@@ -56,45 +58,47 @@ class OverrideVerdict:
         self.path_waits = path_waits  # not even a crawl gives Z the time: the path waits at k
 
 
-class LiftMotion:
-    """The lift axis inside one range (positions of the lift axis in m, times absolute).
-    A base class, not a Protocol: the compiled core calls a Protocol's methods as generic
-    Python calls with boxed floats, a base class's through its vtable (about ten calls in
-    every lift cycle)."""
+class LiftMotion(ABC):
+    """The lift axis inside one range (positions in m, times absolute), as `TimeBasedLift` and
+    `CoupledLift` move it. An abstract base class, not a Protocol: the compiled core calls a
+    Protocol's methods as generic Python calls with boxed floats, a base class's through its
+    vtable (about ten calls in every lift cycle); mypyc compiles an `abc.ABCMeta` class as a
+    native one (https://mypyc.readthedocs.io/en/latest/native_classes.html, "Metaclasses")."""
 
     @property
-    def z(self) -> float:
-        raise NotImplementedError
+    @abstractmethod
+    def z(self) -> float: ...
 
     @property
-    def vz(self) -> float:
-        raise NotImplementedError
+    @abstractmethod
+    def vz(self) -> float: ...
 
     @property
-    def az(self) -> float:
-        raise NotImplementedError
+    @abstractmethod
+    def az(self) -> float: ...
 
     @property
-    def t(self) -> float:
-        raise NotImplementedError
+    @abstractmethod
+    def t(self) -> float: ...
 
     @property
-    def landed(self) -> float:
-        raise NotImplementedError
+    @abstractmethod
+    def landed(self) -> float: ...
 
     @property
-    def done(self) -> bool:
-        raise NotImplementedError
+    @abstractmethod
+    def done(self) -> bool: ...
 
     @property
-    def phase(self) -> LiftPhase:
-        raise NotImplementedError
+    @abstractmethod
+    def phase(self) -> LiftPhase: ...
 
     @property
+    @abstractmethod
     def uses_time(self) -> bool:
         """Whether `step` needs the remaining path time (else the path position)."""
-        raise NotImplementedError
 
+    @abstractmethod
     def step(
         self,
         t_new: float,
@@ -108,29 +112,28 @@ class LiftMotion:
         """Move to t_new (`t_rem`: the path's remaining time to the horizon, time-based, or a
         lower bound of it that `refine()` makes exact when the decision needs it; s, v, a:
         the path's state, coupled; `override`: in effect)."""
-        raise NotImplementedError
 
-    def needed_time(self) -> float:
-        raise NotImplementedError
+    @abstractmethod
+    def needed_time(self) -> float: ...
 
+    @abstractmethod
     def landing_time(self) -> float:
         """Time Z needs from its state now to be at POS: the descent in hand, or, while it
         rises, the time-optimal one from here (`BoundaryActions.flush_may_go`)."""
-        raise NotImplementedError
 
-    def resume_in_range(self, t: float) -> None:
-        raise NotImplementedError
+    @abstractmethod
+    def resume_in_range(self, t: float) -> None: ...
 
-    def error_in_range(self, t: float) -> None:
-        raise NotImplementedError
+    @abstractmethod
+    def error_in_range(self, t: float) -> None: ...
 
+    @abstractmethod
     def limit_override(
         self, ov_req: float, ov_eff: float, was_holding: bool, k: int, path: Interpolator
-    ) -> OverrideVerdict:
-        raise NotImplementedError
+    ) -> OverrideVerdict: ...
 
-    def take_findings(self) -> list[GuardFinding]:
-        raise NotImplementedError
+    @abstractmethod
+    def take_findings(self) -> list[GuardFinding]: ...
 
 
 def stop_margin(vz: float, az: float, a: float, j: float) -> float:

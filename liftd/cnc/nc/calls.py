@@ -1,48 +1,37 @@
-"""Subroutine calls of the NC decoder: ``LL name`` (a local subroutine of the calling file),
-``L file`` (a global subroutine file, read by the caller into `DecoderContext.sources`, parsed
-once) and ``L SEQUENCE [..]`` (a block range, repeated), each pushed as a frame on the
-decoder's stack; after the first error each body is run once only, for checking. Changes with
-how the decoder finds and calls subroutines; the program decoder (`decoder.py`) runs the
-frames.
+"""Subroutine calls of the NC decoder: `SubroutineCalls` owns the global subroutine files (read by
+the caller into `DecoderContext.sources`, parsed once; a missing one reported once) and the
+bodies run once for checking after the first error, and pushes each call as a frame on the
+frame stack (`report.Report.stack`): ``LL name`` (a local subroutine of the calling file),
+``L file`` (a global subroutine file's main program part) and ``L SEQUENCE [..]`` (a block
+range, repeated). Changes with how the decoder finds and calls subroutines; the program decoder
+(`decoder.py`) runs the frames and returns from them.
 """
 
 from __future__ import annotations
 
-from liftd.cnc.nc.blocks import CallSite, ErrorId, NcFault, Severity
+from liftd.cnc.nc.blocks import CallSite, ErrorId, NcFault
+from liftd.cnc.nc.context import DecoderContext
+from liftd.cnc.nc.execution import Execution
 from liftd.cnc.nc.lexer import Token
-from liftd.cnc.nc.modal import AlreadyReported, ModalDecoder
+from liftd.cnc.nc.report import AlreadyReported, Report
 from liftd.cnc.nc.sources import Frame, Section, Source, parse_source, sequence_args, sequence_range
 
 
-class SubroutineCalls(ModalDecoder):
-    """The call stack's part of the program decoder (set up by `decoder._Decoder.__init__`)."""
+class SubroutineCalls:
+    """The calls' part of the program decoder: finds the called section, pushes its frame."""
 
-    stack: list[Frame]
-    files: dict[str, Source]  # global subroutine files parsed, by name
-    missing: set[str]  # global subroutine files not found (reported once)
-    visited_after_stop: set[tuple[str, int]]
-    stopped: bool
-
-    # -- what the program decoder provides -----------------------------------------------------
-    def _error(
-        self,
-        eid: ErrorId | int,
-        column: int,
-        message: str,
-        *,
-        line: int | None = None,
-        file: str | None = None,
-        severity: Severity = Severity.ERROR,
-    ) -> None:
-        raise NotImplementedError
-
-    # -- the call stack --------------------------------------------------------------------------
-    def _file(self, frame: Frame | None = None) -> str:
-        f = frame or (self.stack[-1] if self.stack else None)
-        return f.source.name if f is not None else self.ctx.sources.program
+    def __init__(self, ctx: DecoderContext, report: Report, execution: Execution) -> None:
+        self.ctx = ctx
+        self.report = report
+        self.stack = report.stack  # the frame stack the calls push on
+        self.execution = execution  # stopped at the first error: each body is checked once
+        self.files: dict[str, Source] = {}  # global subroutine files parsed, by name
+        self.missing: set[str] = set()  # global subroutine files not found (reported once)
+        self.visited_after_stop: set[tuple[str, int]] = set()
 
     # -- subroutines ---------------------------------------------------------------------------
-    def _call(self, frame: Frame, tok: Token, lineno: int) -> None:
+    def call(self, frame: Frame, tok: Token, lineno: int) -> None:
+        """The call `tok` in line `lineno` of `frame`: push the called section's frame."""
         kind, name, col = tok.letter, tok.text, tok.column
         written = (
             f"{'LL ' if kind == 'LL' else 'L '}{name}"
@@ -86,13 +75,13 @@ class SubroutineCalls(ModalDecoder):
                         f"L {name}: the file has no main program part to run",
                     )
                 start, end = source.main.start, source.main.end
-        if self.stopped:  # checking only: each body once
+        if self.execution.stopped:  # checking only: each body once
             key = (source.name, start)
             if key in self.visited_after_stop:
                 return
             self.visited_after_stop.add(key)
             reps = 0
-        site = CallSite(self._file(frame) or "(program)", lineno, written)
+        site = CallSite(self.report.file(frame) or "(program)", lineno, written)
         tag = "" if source.name == self.ctx.sources.program else source.name
         self.stack.append(Frame(source, start, end, site, reps, tag))
 
@@ -106,13 +95,16 @@ class SubroutineCalls(ModalDecoder):
         if nc_file is None or nc_file.text is None:
             self.missing.add(name)
             reason = nc_file.error if nc_file is not None and nc_file.error else "not found"
-            self._error(ErrorId.FILE_NOT_FOUND, col, f"L {name}: global subroutine {reason}")
+            self.execution.error(
+                ErrorId.FILE_NOT_FOUND, col, f"L {name}: global subroutine {reason}"
+            )
             raise AlreadyReported
         source = parse_source(nc_file.path, nc_file.text, called=True)
         self.files[name] = source
-        self._source_problems(source)
+        self.source_problems(source)
         return source
 
-    def _source_problems(self, source: Source) -> None:
+    def source_problems(self, source: Source) -> None:
+        """The structure errors found parsing a file, at their lines."""
         for p in source.problems:
-            self._error(p.error_id, 1, p.message, line=p.line, file=source.name)
+            self.execution.error(p.error_id, 1, p.message, line=p.line, file=source.name)

@@ -1,8 +1,9 @@
-"""The G functions of one NC block against the decoder's modal state: the G groups (one of each
-per block), motion mode, G90/G91, G161/G162, inch/metric, zero offsets (G53..G59, G92), tool
-radius compensation's selection (D, G40/G41/G42, G138/G139) and the smoothing liftd accepts
-and runs unsmoothed. Changes with the G functions liftd emulates; `ModalDecoder` (modal.py),
-which interprets the rest of a block, is built on it.
+"""The G functions of one NC block: `GFunctions` owns their modal state, the G groups (one of
+each per block), motion mode, G90/G91, G161/G162, inch/metric, zero offsets (G53..G59, G92),
+tool radius compensation's selection (D, G40/G41/G42, G138/G139, the `trc.Trc` it selects) and
+the smoothing liftd accepts and runs unsmoothed. Changes with the G functions liftd emulates;
+the modal decoder (`modal.py`), which interprets the rest of a block, holds the same
+`GFunctions` as the program decoder does.
 """
 
 from __future__ import annotations
@@ -10,6 +11,7 @@ from __future__ import annotations
 from liftd.cnc import units
 from liftd.cnc.nc.blocks import ErrorId, LiftStart, MotionKind, NcFault
 from liftd.cnc.nc.context import DecoderContext
+from liftd.cnc.nc.report import Report
 from liftd.cnc.nc.trc import Trc
 from liftd.cnc.nc.words import Words
 from liftd.cnc.params import LiftMethod
@@ -44,35 +46,23 @@ NO_RADIUS = "G41/G42 without a tool radius (programmed contour)"
 
 
 class GFunctions:
-    """The G functions' part of the modal state (set up by `ModalDecoder.__init__`)."""
+    """The G functions' part of the modal state; the lift range open (`ModalDecoder.open_lift`)
+    is passed in where a G function is refused inside one."""
 
-    ctx: DecoderContext
-    z: int  # the configured lift axis
-    axis_index: dict[str, int]
-    motion: MotionKind
-    incremental: bool
-    center_absolute: bool
-    unit: float
-    zero_group: int
-    g92: tuple[float, ...]
-    offset: tuple[float, ...]
-    trc: Trc
-    tool_configured: bool
-    open_lift: LiftStart | None
-
-    # -- what the program decoder provides -----------------------------------------------------
-    def _depth(self) -> int:
-        """Sections on the call stack: 1 in the main program."""
-        raise NotImplementedError
-
-    def _warn(self, eid: ErrorId, column: int, message: str) -> None:
-        raise NotImplementedError
-
-    def _count(
-        self, kind: str, column: int, message: str, eid: ErrorId = ErrorId.NOT_EMULATED
-    ) -> None:
-        """Something accepted but run approximated: one warning per kind, counted per block."""
-        raise NotImplementedError
+    def __init__(self, ctx: DecoderContext, report: Report) -> None:
+        self.ctx = ctx
+        self.report = report
+        self.z = ctx.axis_names.index(ctx.lift_axis)  # the configured lift axis
+        self.axis_index = {name: k for k, name in enumerate(ctx.axis_names)}
+        self.motion = MotionKind.LINEAR
+        self.incremental = False
+        self.center_absolute = False  # G161 absolute, G162 (default) relative centre
+        self.unit = units.M_PER_MM  # G71 (initial); G70: inch
+        self.zero_group = ctx.zero_offset_default
+        self.g92 = tuple(0.0 for _ in ctx.axis_names)
+        self.offset = self._offsets()
+        self.trc = Trc()
+        self.tool_configured = False  # the active D has a radius in the tool table
 
     def _offsets(self) -> tuple[float, ...]:
         """The zero offset in effect per axis: the selected group (G53 only with
@@ -83,7 +73,11 @@ class GFunctions:
             return self.g92
         return tuple(a + b for a, b in zip(values, self.g92, strict=True))
 
-    def _gcodes(self, w: Words, faults: list[NcFault]) -> tuple[bool, bool]:
+    def apply(
+        self, w: Words, faults: list[NcFault], open_lift: LiftStart | None
+    ) -> tuple[bool, bool]:
+        """Apply a block's G functions (their faults into `faults`); returns whether the block
+        is a dwell (G04) and whether it sets the G92 offset (then `g92` applies its words)."""
         dwell = g92 = False
         groups: set[ErrorId] = set()
         side: int | None = None
@@ -117,7 +111,7 @@ class GFunctions:
                 self.trc.direct = code == 138
             elif code in SMOOTHING_G:
                 kind, selects = SMOOTHING_G[code]
-                fault = self._smoothing(kind, selects, col)
+                fault = self.smoothing(kind, selects, col, open_lift)
                 if fault is not None:
                     faults.append(fault)
             elif code not in MODE_G:
@@ -125,28 +119,29 @@ class GFunctions:
                     NcFault(ErrorId.UNSUPPORTED, col, f"G{code:02d} is not emulated by liftd")
                 )
         if side is not None:
-            fault = self._select_trc(side, w.gcodes[0][1])
+            fault = self._select_trc(side, w.gcodes[0][1], open_lift)
             if fault is not None:
                 faults.append(fault)
         return dwell, g92
 
-    def _smoothing(self, kind: str, selects: bool, column: int) -> NcFault | None:
+    def smoothing(
+        self, kind: str, selects: bool, column: int, open_lift: LiftStart | None
+    ) -> NcFault | None:
         """Smoothing is accepted and runs unsmoothed (one warning per kind). Inside a lift
         range no smoothing may be selected (vendor §2.4: "additional contour smoothing of the
         lift axis (contouring, G61/G261, G151, #SPLINE ON, #HSC ON) is not possible in the
         lifting range"); with path-based Lifting not deselected either (§2.2.1: "between
         LIFT_START and LIFT_END smoothing can not be selected or deselected")."""
-        rng = self.open_lift
-        if rng is not None and (selects or self.ctx.lift_method is LiftMethod.LIFTING):
+        if open_lift is not None and (selects or self.ctx.lift_method is LiftMethod.LIFTING):
             what = "selected" if selects else "deselected"
             return NcFault(
                 ErrorId.SMOOTHING_IN_LIFT_RANGE,
                 column,
                 f"{kind.split(' (', 1)[0]}: smoothing {what} inside the lift range started in "
-                f"line {rng.line} (vendor §2.4)",
+                f"line {open_lift.line} (vendor §2.4)",
             )
         if selects:
-            self._count(
+            self.report.count(
                 kind,
                 column,
                 f"{kind}: smoothing is not emulated by liftd; the path "
@@ -154,7 +149,7 @@ class GFunctions:
             )
         return None
 
-    def _tool(self, word: tuple[float, int]) -> None:
+    def tool(self, word: tuple[float, int]) -> None:
         """D selects the tool radius for TRC (tool data wz[i].radius, P-TOOL-00004)."""
         number, col = word
         if number != int(number) or number < 0:
@@ -163,9 +158,9 @@ class GFunctions:
         self.tool_configured = radius is not None or number == 0
         self.trc.set_radius(radius or 0.0)
 
-    def _select_trc(self, side: int, column: int) -> NcFault | None:
+    def _select_trc(self, side: int, column: int, open_lift: LiftStart | None) -> NcFault | None:
         if side != 0 and not self.tool_configured and self.trc.side == 0:
-            self._count(
+            self.report.count(
                 NO_RADIUS,
                 column,
                 "G41/G42: no tool radius configured for the selected "
@@ -175,19 +170,19 @@ class GFunctions:
             )
         if (
             side != 0
-            and self.open_lift is not None
-            and self.axis_index.get(self.open_lift.axis, self.z) in (0, 1)
+            and open_lift is not None
+            and self.axis_index.get(open_lift.axis, self.z) in (0, 1)
         ):
             return NcFault(
                 ErrorId.TRC_LIFT_AXIS,
                 column,
-                f"tool radius compensation in the plane of the lift axis {self.open_lift.axis} "
-                f"inside the lift range started in line {self.open_lift.line} (vendor §2.4)",
+                f"tool radius compensation in the plane of the lift axis {open_lift.axis} "
+                f"inside the lift range started in line {open_lift.line} (vendor §2.4)",
             )
         self.trc.set_side(side)
         return None
 
-    def _g92(self, w: Words) -> None:
+    def g92_words(self, w: Words) -> None:
         """G92 reference point offset in the programmed axes: absolute under G90, added under
         G91; takes effect with the next absolute coordinate of the axis (programming manual
         https://infosys.beckhoff.com/content/1033/tf5200_programming_manual/206145291.html)."""

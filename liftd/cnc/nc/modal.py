@@ -1,9 +1,11 @@
-"""One NC block against the decoder's modal state: F, R, the motion target, dwell, M functions
-and the lift commands, on top of the G functions (`gfunctions.py`: G groups, zero offsets,
-inch/metric, tool radius compensation's selection, smoothing). Every part of a block that can
-be applied is applied, so a rejected word does not take the block's modal state with it; the
-first problem is raised as an `NcFault` at the end of the block. `ModalDecoder` is the base of
-the program decoder (`decoder.py`), which runs the lines, the subroutines and the reporting.
+"""One NC block against the decoder's modal state: `ModalDecoder` owns the position, F, R, the
+P parameters, the slope, the lift range open (or refused) and the program end, and interprets a
+block's words: the motion target, dwell, M functions and the lift commands, applying its G
+functions through the `GFunctions` it holds (`gfunctions.py`: G groups, zero offsets,
+inch/metric, tool radius compensation's selection, smoothing). Every part of a block that can be
+applied is applied, so a rejected word does not take the block's modal state with it; the first
+problem is raised as an `NcFault` at the end of the block. The program decoder (`decoder.py`)
+holds it and runs the lines, the subroutines and the reporting.
 """
 
 from __future__ import annotations
@@ -11,7 +13,6 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import TypeVar
 
-from liftd.cnc import units
 from liftd.cnc.nc import lift_rules
 from liftd.cnc.nc.arcs import build_arc
 from liftd.cnc.nc.blocks import (
@@ -29,7 +30,7 @@ from liftd.cnc.nc.context import DecoderContext
 from liftd.cnc.nc.expr import Params
 from liftd.cnc.nc.gfunctions import GFunctions
 from liftd.cnc.nc.lift_words import LiftKeyword, LiftWords
-from liftd.cnc.nc.trc import Trc
+from liftd.cnc.nc.report import AlreadyReported, Report
 from liftd.cnc.nc.words import Words
 
 # M functions the ISG kernel handles internally when m_synch does not configure them
@@ -41,34 +42,26 @@ REFUSED_FEED = 0.1  # m/s: stands in after a refused F (those blocks never run)
 _T = TypeVar("_T")
 
 
-class ModalDecoder(GFunctions):
+class ModalDecoder:
     """The modal state of one channel's decoder and the interpretation of one block."""
 
-    def __init__(self, ctx: DecoderContext) -> None:
+    def __init__(self, ctx: DecoderContext, gfunctions: GFunctions, report: Report) -> None:
         self.ctx = ctx
+        self.gfunctions = gfunctions  # the G functions' modal state
+        self.report = report  # warnings, and the call depth (M17/M29, M02/M30)
         self.pos = tuple(ctx.start_position)
-        self.z = ctx.axis_names.index(ctx.lift_axis)
+        self.z = gfunctions.z  # the configured lift axis
         self.axes = frozenset(ctx.axis_names)
-        self.axis_index = {name: k for k, name in enumerate(ctx.axis_names)}
-        self.lift_axis = ctx.lift_axis
+        self.axis_index = gfunctions.axis_index
         self.limits = tuple((lo - 1e-12, hi + 1e-12) for lo, hi in ctx.sw_limits)
-        self.motion = MotionKind.LINEAR
-        self.incremental = False
-        self.center_absolute = False  # G161 absolute, G162 (default) relative centre
         self.feed: float | None = None  # m/s
         # an F word was refused while no feed was in effect: the blocks after it that need one
         # are that error's consequence, not errors of their own (the program stops at the
         # first error, so they never run)
         self.feed_refused = False
         self.radius: float | None = None  # m, modal R
-        self.unit = units.M_PER_MM  # G71 (initial); G70: inch
         self.slope = ctx.slope
         self.params: Params = {}
-        self.zero_group = ctx.zero_offset_default
-        self.g92 = tuple(0.0 for _ in ctx.axis_names)
-        self.offset = self._offsets()
-        self.trc = Trc()
-        self.tool_configured = False  # the active D has a radius in the tool table
         self.open_lift: LiftStart | None = None
         # (axis, line) of a refused LIFT_START (POS_LIMIT missing, POS beyond the software
         # limit, HSC slope ...): its range counts as started until its LIFT_END, which closes
@@ -80,7 +73,7 @@ class ModalDecoder(GFunctions):
         self.tag = ""  # Block.file of the line being decoded
 
     # -- modal state ---------------------------------------------------------------------------
-    def _close_lift(self, cause: LiftEndCause) -> LiftEnd:
+    def close_lift(self, cause: LiftEndCause) -> LiftEnd:
         assert self.open_lift is not None
         start = self.open_lift
         pos = list(self.pos)
@@ -89,7 +82,7 @@ class ModalDecoder(GFunctions):
         self.open_lift = None
         return LiftEnd(start.axis, cause, start.line)
 
-    def _block(self, lineno: int, w: Words) -> Block | None:
+    def interpret(self, lineno: int, w: Words) -> Block | None:
         """Interpret one block's words: every part that can be applied is applied (modal G
         functions, F, R, D, the motion, the lift command), so that a rejected word does not
         take the block's modal state with it; the first problem is raised at the end."""
@@ -99,7 +92,7 @@ class ModalDecoder(GFunctions):
         if w.refused_start is not None and self.open_lift is None and self.refused_lift is None:
             self.refused_lift = (w.refused_start, lineno)  # its words could not be read
         if w.gcodes:
-            dwell, g92 = self._gcodes(w, faults)
+            dwell, g92 = self.gfunctions.apply(w, faults, self.open_lift)
         if w.bare and (not dwell or len(w.bare) > 1):
             # A value without an address letter is the time of G04 only (`G04 2.5`, TF5200
             # programming manual, dwell time: https://infosys.beckhoff.com/content/1033/
@@ -116,11 +109,13 @@ class ModalDecoder(GFunctions):
                 faults.append(NcFault(ErrorId.FEED_ZERO, feed_word[1], "feed rate F must be > 0"))
                 self.feed_refused = self.feed is None
             else:
-                self.feed = feed_word[0] * self.unit / 60.0  # mm/min (G71) or inch/min (G70)
+                self.feed = (
+                    feed_word[0] * self.gfunctions.unit / 60.0
+                )  # mm/min (G71) or inch/min (G70)
         if "R" in values:
-            self.radius = values["R"][0] * self.unit
+            self.radius = values["R"][0] * self.gfunctions.unit
         if "D" in values:
-            attempt(faults, self._tool, values["D"])
+            attempt(faults, self.gfunctions.tool, values["D"])
         if "K" in values:
             faults.append(
                 NcFault(
@@ -131,7 +126,7 @@ class ModalDecoder(GFunctions):
             )
         block: Block | None = None
         if g92:
-            self._g92(w)
+            self.gfunctions.g92_words(w)
         elif dwell:
             seconds = attempt(faults, self._dwell, lineno, w)
             if seconds is not None:
@@ -158,7 +153,7 @@ class ModalDecoder(GFunctions):
             start = attempt(faults, self._lift_start, lineno, w.lift[0], lift, w.lift[2])
         motion: Motion | None = None
         try:
-            motion = self._motion(lineno, w) if dwell is None else None
+            motion = self.motion_of(lineno, w) if dwell is None else None
         except NcFault as fault:
             faults.append(fault)
         end: LiftEnd | None = None
@@ -166,12 +161,12 @@ class ModalDecoder(GFunctions):
             # the single block's own range (also when refused after it opened, 990029); a
             # refused LIFT inside an open range (120604) leaves that range open
             if self.open_lift is not None and self.open_lift.single_block:
-                end = self._close_lift(LiftEndCause.SINGLE_BLOCK)
+                end = self.close_lift(LiftEndCause.SINGLE_BLOCK)
         elif lift is not None and lift.keyword is LiftKeyword.END:
             assert w.lift is not None
             end = attempt(faults, self._lift_end, w.lift[0], w.lift[2])
         if program_end and self.open_lift is not None and end is None:
-            end = self._close_lift(LiftEndCause.PROGRAM_END)  # vendor §2.4
+            end = self.close_lift(LiftEndCause.PROGRAM_END)  # vendor §2.4
         if program_end:
             self.refused_lift = None
         self.ended = program_end
@@ -186,9 +181,6 @@ class ModalDecoder(GFunctions):
             program_end=program_end,
             file=self.tag,
         )
-
-    def _file_tag(self) -> str:
-        return self.tag
 
     def _dwell(self, lineno: int, w: Words) -> float:
         """G04 X<s> (first main axis), G04 <s>, lenient G04 F<s> (docs/reference/isg-cnc.md
@@ -205,7 +197,9 @@ class ModalDecoder(GFunctions):
             raise NcFault(ErrorId.DWELL_MISSING, 1, "G04 needs a time in seconds")
         for letter, (_, col) in w.values.items():
             if letter not in (first_axis, "F"):
-                self._warn(ErrorId.DWELL_WITH_AXES, col, f"{letter} in a G04 block is ignored")
+                self.report.warn(
+                    ErrorId.DWELL_WITH_AXES, col, f"{letter} in a G04 block is ignored"
+                )
         return chosen[0]
 
     def _m_functions(self, w: Words) -> tuple[tuple[int, ...], bool]:
@@ -213,7 +207,7 @@ class ModalDecoder(GFunctions):
         end = False
         for number, col in w.m:
             if number in (17, 29):
-                if self._depth() <= 1:
+                if self.report.depth() <= 1:
                     raise NcFault(
                         ErrorId.SUBROUTINE_END_OUTSIDE,
                         col,
@@ -237,9 +231,9 @@ class ModalDecoder(GFunctions):
                 )
             if number in (2, 30):
                 end = True
-                if self._depth() > 1:
+                if self.report.depth() > 1:
                     # the manual: a program abort with M02/M30 in a subroutine gives a warning
-                    self._warn(
+                    self.report.warn(
                         ErrorId.PROGRAM_END_IN_SUBROUTINE,
                         col,
                         f"M{number:02d} in a subroutine ends the whole program",
@@ -247,14 +241,15 @@ class ModalDecoder(GFunctions):
             numbers.append(number)
         return tuple(numbers), end
 
-    def _motion(self, lineno: int, w: Words) -> Motion | None:
+    def motion_of(self, lineno: int, w: Words) -> Motion | None:
         values = w.values
         start = self.pos
         end = list(start)
         column = 0  # column of the first axis word, for messages
-        unit = self.unit
-        offset = self.offset
-        incremental = self.incremental
+        g = self.gfunctions
+        unit = g.unit
+        offset = g.offset
+        incremental = g.incremental
         axis_index = self.axis_index
         limits = self.limits
         beyond = -1  # an axis beyond its software limit (reported after the other checks)
@@ -268,7 +263,7 @@ class ModalDecoder(GFunctions):
                     beyond = k
                 if not column or col < column:
                     column = col
-        kind = self.motion
+        kind = g.motion
         is_arc = kind is MotionKind.ARC_CW or kind is MotionKind.ARC_CCW
         if not column:
             if not (is_arc and ("I" in values or "J" in values)):
@@ -309,7 +304,7 @@ class ModalDecoder(GFunctions):
                     "circle with both a centre (I/J) and a radius (R): program one of them",
                 )
             ij = (i[0] * unit if i else None, j[0] * unit if j else None)
-            if self.center_absolute:  # G161: the centre is a position, offsets apply
+            if g.center_absolute:  # G161: the centre is a position, offsets apply
                 ij = (
                     None if ij[0] is None else ij[0] + offset[0],
                     None if ij[1] is None else ij[1] + offset[1],
@@ -320,19 +315,19 @@ class ModalDecoder(GFunctions):
                 end_t,
                 kind is MotionKind.ARC_CCW,
                 ij,
-                self.center_absolute,
+                g.center_absolute,
                 self.radius,
                 self.ctx.max_radius_diff,
                 column,
             )
             motion = Motion(kind, start, end_t, feed, center, sweep)
         elif start == end_t:
-            self._warn(ErrorId.ZERO_LENGTH, column, "motion block without motion, skipped")
+            self.report.warn(ErrorId.ZERO_LENGTH, column, "motion block without motion, skipped")
             return None
         else:
             motion = Motion(kind, start, end_t, feed)
         self.pos = end_t
-        if not self.trc.engaged:  # under TRC the compensated path is checked (_output)
+        if not g.trc.engaged:  # under TRC the compensated path is checked (Execution)
             if beyond >= 0:
                 self.ctx.check_position(beyond, end_t[beyond], column)
             if is_arc:
@@ -355,8 +350,8 @@ class ModalDecoder(GFunctions):
                 lineno=lineno,
                 column=column,
                 warnings=warnings,
-                unit=self.unit,
-                offset=self.offset[zi],
+                unit=self.gfunctions.unit,
+                offset=self.gfunctions.offset[zi],
                 refused_line=refused[1] if refused is not None else None,
             )
         except NcFault:
@@ -364,8 +359,8 @@ class ModalDecoder(GFunctions):
                 self.refused_lift = (axis, lineno)
             raise
         for warning in warnings:
-            self._warn(ErrorId(warning.id), warning.column, warning.message)
-        if self.trc.side != 0 and zi in (0, 1):
+            self.report.warn(ErrorId(warning.id), warning.column, warning.message)
+        if self.gfunctions.trc.side != 0 and zi in (0, 1):
             raise NcFault(
                 ErrorId.TRC_LIFT_AXIS,
                 column,
@@ -382,14 +377,7 @@ class ModalDecoder(GFunctions):
             self.refused_lift = None
             return None
         lift_rules.check_end(self.ctx, axis, self.open_lift, column)
-        return self._close_lift(LiftEndCause.PROGRAMMED)
-
-
-class AlreadyReported(NcFault):
-    """An error that was reported where it was found (raised to reject its block only)."""
-
-    def __init__(self) -> None:
-        super().__init__(ErrorId.FILE_NOT_FOUND, 1, "")
+        return self.close_lift(LiftEndCause.PROGRAMMED)
 
 
 def attempt(faults: list[NcFault], fn: Callable[..., _T], *args: object) -> _T | None:
