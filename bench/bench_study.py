@@ -5,14 +5,20 @@ the size of the library (results streamed, aggregates bounded).
 
 Each run is the CLI as a user starts it (a subprocess); the memory figures are the ones the
 study writes into report.json ("run": ru_maxrss of the parent, and the largest any worker
-reported with its results). One JSON line per figure.
-Run: .venv/bin/python bench/bench_study.py   (~8 min on 2 cores)
+reported with its results). `cpu_s` is the CPU time of the study and its workers (user +
+system, from the OS), `programs_per_core_s` the programs over it: a study's cost, which
+the simulation's speed sets (issue 39). One JSON line per figure.
+`--jobs 1` runs only that study of the 200 jobs, `--no-small` leaves out the 2000 small
+programs. `liftd` is imported from the current directory when it has one (`python -m`):
+run from another worktree to measure that tree's liftd with the same library.
+Run: .venv/bin/python bench/bench_study.py [--jobs N ...] [--no-small]   (~8 min on 2 cores)
 """
 
 from __future__ import annotations
 
 import json
 import os
+import resource
 import subprocess
 import sys
 import tempfile
@@ -33,6 +39,7 @@ def run_study(library: Path, out: Path, *extra: str) -> tuple[float, dict]:
     """`liftd study LIBRARY --out OUT EXTRA…` as a subprocess: its wall time and report.json
     (exits when the study does not exit 0)."""
     t0 = time.perf_counter()
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     r = subprocess.run(
         [
             sys.executable,
@@ -51,9 +58,13 @@ def run_study(library: Path, out: Path, *extra: str) -> tuple[float, dict]:
         check=False,
     )
     wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
     if r.returncode != 0:
         raise SystemExit(f"liftd study exited {r.returncode}: {r.stderr[-3000:]}")
-    return wall, json.loads((out / "report.json").read_text())
+    report = json.loads((out / "report.json").read_text())
+    # the study's process and its workers (waited for by it): their CPU time
+    report["cpu_s"] = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return wall, report
 
 
 def study(library: Path, jobs: int, out: Path) -> dict[str, object]:
@@ -68,6 +79,9 @@ def study(library: Path, jobs: int, out: Path) -> dict[str, object]:
         "study_wall_s": run["wall_s"],
         "simulated_s": round(simulated, 1),
         "x_real_time": round(simulated / wall, 1),
+        "cpu_s": round(report["cpu_s"], 1),
+        "programs_per_core_s": round(summary["programs"] / report["cpu_s"], 2),
+        "liftd": str(Path.cwd()) if (Path.cwd() / "liftd").is_dir() else "installed",
         "max_rss_parent_mib": run["max_rss_mib"]["parent"],
         "max_rss_worker_mib": run["max_rss_mib"]["worker"],
         "clearance_ratio_of_means": summary["clearance_ratio_of_means"],
@@ -76,7 +90,10 @@ def study(library: Path, jobs: int, out: Path) -> dict[str, object]:
 
 
 def main() -> None:
-    parser(__doc__).parse_args()
+    ap = parser(__doc__)
+    ap.add_argument("--jobs", type=int, nargs="+", default=[1, 2], help="the studies of 200")
+    ap.add_argument("--no-small", action="store_true", help="without the 2000 small programs")
+    args = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         base = Path(tmp)
         library = base / "library"
@@ -94,11 +111,15 @@ def main() -> None:
             flush=True,
         )
         walls = {}
-        for jobs in (1, 2):
+        for jobs in args.jobs:
             fig = study(library, jobs, base / f"out{jobs}")
             walls[jobs] = fig["wall_s"]
             print(json.dumps({"bench": "study_200", **fig}), flush=True)
-        print(json.dumps({"bench": "study_speedup", "jobs_2_vs_1": round(walls[1] / walls[2], 2)}))
+        if 1 in walls and 2 in walls:
+            speedup = round(walls[1] / walls[2], 2)
+            print(json.dumps({"bench": "study_speedup", "jobs_2_vs_1": speedup}))
+        if args.no_small:
+            return
         tiny = base / "tiny"
         tiny.mkdir()
         for i in range(2000):
