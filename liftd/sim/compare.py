@@ -17,6 +17,7 @@ from typing import Generic, TextIO, TypeVar
 
 import numpy as np
 
+from liftd.cnc import batch as cycle_row
 from liftd.cnc.params import ChannelParams
 from liftd.cnc.plc import Schedule
 from liftd.cnc.snapshot import GeoSnapshot
@@ -73,6 +74,62 @@ class LiftSampler:
             elif ev.name == "lift.end" and self.open is not None and self.open.t_end < 0.0:
                 self.open.t_end, self.open.s_end = ev.t, self.s
                 self.tail = MARGIN
+        self.recent.append(row)
+        if self.open is None:
+            return
+        self.open.rows.append(row)
+        if self.open.t_end >= 0.0:
+            self.tail -= 1
+            if self.tail <= 0:
+                self.open = None
+
+    def add_rows(self, rows: list[float], axes_at: int, width: int) -> None:
+        """The rows of quiet cycles (liftd/cnc/batch.py; no event: no lift starts or ends in
+        them), as `add` of each: s by a sequential sum (`np.add.accumulate`, the same
+        additions in the same order), Z's second difference elementwise as `add` writes it;
+        the row tuples built only for an open lift and the last MARGIN."""
+        n = len(rows) // width
+        k = 0
+        while k < n and (self.z1 is None or self.z2 is None):  # a run's first cycles
+            self._add_row(rows, k * width, axes_at)
+            k += 1
+        if k == n:
+            return
+        base = k * width
+        t = rows[base + cycle_row.T :: width]
+        v = np.array([self.v, *rows[base + cycle_row.V_PATH :: width]])
+        z = np.array([self.z2, self.z1, *rows[base + axes_at + self.z_index :: width]])
+        s = np.add.accumulate(np.concatenate(([self.s], 0.5 * (v[:-1] + v[1:]) * self.dt)))[1:]
+        a = (z[2:] - 2.0 * z[1:-1] + z[:-2]) / (self.dt * self.dt)
+        m = n - k
+        self.s, self.v = float(s[-1]), float(v[-1])
+        self.z2, self.z1 = float(z[-2]), float(z[-1])
+        first = 0 if self.open is not None else max(m - MARGIN, 0)  # the rows kept
+        new = list(zip(t[first:], s[first:].tolist(), z[first + 2 :].tolist(),
+                       a[first:].tolist(), strict=True))  # fmt: skip
+        self.recent.extend(new[-MARGIN:])
+        if self.open is None:
+            return
+        if self.open.t_end < 0.0:
+            self.open.rows.extend(new)
+            return
+        take = min(self.tail, m)
+        self.open.rows.extend(new[:take])
+        self.tail -= take
+        if self.tail <= 0:
+            self.open = None
+
+    def _add_row(self, rows: list[float], base: int, axes_at: int) -> None:
+        """`add` of one quiet row."""
+        v_path = rows[base + cycle_row.V_PATH]
+        self.s += 0.5 * (self.v + v_path) * self.dt
+        self.v = v_path
+        z = rows[base + axes_at + self.z_index]
+        a = 0.0
+        if self.z1 is not None and self.z2 is not None:
+            a = (z - 2.0 * self.z1 + self.z2) / (self.dt * self.dt)
+        self.z2, self.z1 = self.z1, z
+        row = (rows[base + cycle_row.T], self.s, z, a)
         self.recent.append(row)
         if self.open is None:
             return
@@ -265,7 +322,9 @@ def compare(
     traces: dict[str, TextIO] | None = None,
     max_time: float = 3600.0,
     program: str = "",
+    batch: bool = True,
 ) -> Comparison:
+    """Both runs (`batch`: simulate's, the samplers take the quiet cycles' rows)."""
     results: dict[str, SimResult] = {}
     samplers: dict[str, LiftSampler] = {}
     for method in METHODS:
@@ -273,8 +332,9 @@ def compare(
         sampler = LiftSampler(run_ch.lift_axis_index, run_ch.cycle_time)
         trace = (traces or {}).get(method)
         results[method] = simulate(
-            run_ch, text, schedule, m_ack_delay, trace, max_time, sampler.add
-        )
+            run_ch, text, schedule, m_ack_delay, trace, max_time, sampler.add,
+            batch=batch, on_rows=sampler.add_rows,
+        )  # fmt: skip
         samplers[method] = sampler
     summary = compare_summary(results["advanced"].summary, results["lifting"].summary, program)
     return Comparison(results, samplers, summary)

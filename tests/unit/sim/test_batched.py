@@ -1,5 +1,6 @@
 """`simulate` with its quiet cycles in batches (the default) gives the run it gives by single
-steps, bit for bit: the trace text, the summary (its step times aside) and the plot's series;
+steps, bit for bit: the trace text, the summary (its step times aside) and the plot's series,
+and `--compare`'s samples;
 with override steps (0 % too) and feed holds on a cycle's time, a hair before and after it,
 M functions, lift ranges of both methods, an NC error."""
 
@@ -14,6 +15,7 @@ import pytest
 from liftd.cnc.params import ChannelParams, LiftMethod
 from liftd.cnc.plc import Schedule
 from liftd.settings import load_settings
+from liftd.sim.compare import Comparison, compare
 from liftd.sim.simulate import SimResult, quiet_span, simulate
 from tests.support.paths import REPO
 from tests.support.programs import nesting_program
@@ -83,3 +85,30 @@ def test_a_batch_stops_before_the_schedules_next_step() -> None:
     assert quiet_span(500, dt, 10_000, edges) == 400  # 0.5 s on: up to 0.899 s
     assert quiet_span(950, dt, 10_000, edges) == 1024  # the last step behind: BATCH
     assert quiet_span(950, dt, 1000, edges) == 51  # up to the run's last cycle
+
+
+@pytest.mark.parametrize("name", ["demo-schedule", "nesting-4-schedule", "nc-error", "wide-5"])
+def test_compare_with_batches_samples_every_cycle(name: str) -> None:
+    """`--compare` (the study's run) with batches: each method's summary and the per-lift
+    samples of its figure (t, path distance, Z, Z's second difference: sums over every
+    cycle) as by single steps, bit for bit."""
+    ch, text, schedule = CASES[name]
+    got = compare(ch, text, schedule, 0.02, max_time=300.0)
+    want = compare(ch, text, schedule, 0.02, max_time=300.0, batch=False)
+    assert _json(got) == _json(want)
+    for method in got.samples:
+        a, b = got.samples[method], want.samples[method]
+        assert repr(a.lifts) == repr(b.lifts)
+        assert repr(list(a.recent)) == repr(list(b.recent))
+        assert (a.s, a.v, a.z1, a.z2) == (b.s, b.v, b.z1, b.z2)
+    assert sum(len(lift.rows) for lift in got.samples["advanced"].lifts) > 0
+
+
+def _json(cmp: Comparison) -> str:
+    """The comparison's JSON without the step times (the one field that differs)."""
+    out = cmp.summary.to_json()
+    for method in ("advanced", "lifting"):
+        summary = out[method]
+        assert isinstance(summary, dict)
+        summary.pop("step_cpu_us")
+    return json.dumps(out, default=str)
