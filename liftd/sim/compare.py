@@ -59,14 +59,7 @@ class LiftSampler:
         self.z2: float | None = None
 
     def add(self, snap: GeoSnapshot) -> None:
-        self.s += 0.5 * (self.v + snap.v_path) * self.dt
-        self.v = snap.v_path
-        z = snap.positions[self.z_index]
-        a = 0.0
-        if self.z1 is not None and self.z2 is not None:
-            a = (z - 2.0 * self.z1 + self.z2) / (self.dt * self.dt)
-        self.z2, self.z1 = self.z1, z
-        row = (snap.t, self.s, z, a)
+        row = self._sample(snap.t, snap.v_path, snap.positions[self.z_index])
         for ev in snap.events:
             if ev.name == "lift.start" and len(self.lifts) < self.limit:
                 self.open = LiftSamples(ev.line, list(self.recent), ev.t, self.s)
@@ -74,6 +67,20 @@ class LiftSampler:
             elif ev.name == "lift.end" and self.open is not None and self.open.t_end < 0.0:
                 self.open.t_end, self.open.s_end = ev.t, self.s
                 self.tail = MARGIN
+        self._keep(row)
+
+    def _sample(self, t: float, v_path: float, z: float) -> tuple[float, float, float, float]:
+        """A cycle's row: the distance and Z's second difference brought up to it."""
+        self.s += 0.5 * (self.v + v_path) * self.dt
+        self.v = v_path
+        a = 0.0
+        if self.z1 is not None and self.z2 is not None:
+            a = (z - 2.0 * self.z1 + self.z2) / (self.dt * self.dt)
+        self.z2, self.z1 = self.z1, z
+        return (t, self.s, z, a)
+
+    def _keep(self, row: tuple[float, float, float, float]) -> None:
+        """A cycle's row into the recent ones and, while a lift is open or just ended, its."""
         self.recent.append(row)
         if self.open is None:
             return
@@ -91,7 +98,9 @@ class LiftSampler:
         n = len(rows) // width
         k = 0
         while k < n and (self.z1 is None or self.z2 is None):  # a run's first cycles
-            self._add_row(rows, k * width, axes_at)
+            at = k * width
+            z_at = rows[at + axes_at + self.z_index]
+            self._keep(self._sample(rows[at + cycle_row.T], rows[at + cycle_row.V_PATH], z_at))
             k += 1
         if k == n:
             return
@@ -118,26 +127,6 @@ class LiftSampler:
         self.tail -= take
         if self.tail <= 0:
             self.open = None
-
-    def _add_row(self, rows: list[float], base: int, axes_at: int) -> None:
-        """`add` of one quiet row."""
-        v_path = rows[base + cycle_row.V_PATH]
-        self.s += 0.5 * (self.v + v_path) * self.dt
-        self.v = v_path
-        z = rows[base + axes_at + self.z_index]
-        a = 0.0
-        if self.z1 is not None and self.z2 is not None:
-            a = (z - 2.0 * self.z1 + self.z2) / (self.dt * self.dt)
-        self.z2, self.z1 = self.z1, z
-        row = (rows[base + cycle_row.T], self.s, z, a)
-        self.recent.append(row)
-        if self.open is None:
-            return
-        self.open.rows.append(row)
-        if self.open.t_end >= 0.0:
-            self.tail -= 1
-            if self.tail <= 0:
-                self.open = None
 
 
 T = TypeVar("T", int, float)
