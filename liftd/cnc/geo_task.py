@@ -228,9 +228,8 @@ class GeoTask:
         return snap
 
     def advance(self, inputs: GeoInputs, t: float) -> tuple[float, ...]:
-        """The cycle to t up to its snapshot (`step` without it): its positions. The caller
-        reads the cycle (`snapshot` or the batch's row, liftd/cnc/batch.py) and then calls
-        `after_cycle`, as `step` does."""
+        """`step` up to its snapshot: the positions; then the caller reads the cycle (`snapshot`,
+        or a row: liftd/cnc/batch.py) and calls `after_cycle`."""
         self.cycle += 1
         # inputs take effect at the start of the cycle; a task's first cycle (which may come
         # mid-run, after a reload) starts at the previous cycle's t = (k − 1)·dt, not at 0

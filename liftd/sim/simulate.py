@@ -3,7 +3,9 @@
 Drives GeoTask.step with t = k × cycle time, applies the override / feed-hold schedules, plays a
 simple PLC that acknowledges M functions (and continues after M00) after `plc.m_ack_delay_ms`,
 streams the trace CSV, keeps a decimated copy for the plot, and builds the summary of
-docs/reference/design.md §3.3 (summary.SimSummary).
+docs/reference/design.md §3.3 (summary.SimSummary). The cycles that leave the PLC nothing to
+answer run in batches inside the core (`run_batched`, liftd/cnc/batch.py), bit for bit the run
+of single steps.
 """
 
 from __future__ import annotations
