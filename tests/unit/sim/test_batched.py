@@ -112,3 +112,21 @@ def _json(cmp: Comparison) -> str:
         assert isinstance(summary, dict)
         summary.pop("step_cpu_us")
     return json.dumps(out, default=str)
+
+
+def test_a_run_cut_by_max_time_ends_at_the_same_cycle() -> None:
+    """`--max-time` inside a batch: the same last cycle, trace and summary (not finished)."""
+    out, out1 = io.StringIO(), io.StringIO()
+    res = simulate(CH, DEMO, SCHEDULE, 0.02, out, max_time=2.5)
+    res1 = simulate(CH, DEMO, SCHEDULE, 0.02, out1, max_time=2.5, batch=False)
+    assert not res.finished and not res1.finished
+    assert res.summary.cycles == res1.summary.cycles == 2500
+    assert out.getvalue() == out1.getvalue()
+
+
+def test_an_on_cycle_hook_without_on_rows_sees_every_cycle() -> None:
+    """A caller that wants every snapshot gets every one: no batches without `on_rows`."""
+    seen: list[float] = []
+    res = simulate(CH, DEMO, Schedule(), 0.02, on_cycle=lambda s: seen.append(s.t))
+    assert len(seen) == res.summary.cycles
+    assert seen == [k * CH.cycle_time for k in range(1, len(seen) + 1)]
