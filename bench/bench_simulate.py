@@ -3,10 +3,12 @@
 
 Figures to reach: ≥ 50× real time at 1 ms cycles, constant memory (trace streamed), start-up
 included (issue 3); on the nesting job ≥ 100× with the trace and ≥ 200× without, start-up
-excluded (issue 14): `x_real_time_cycles` divides the simulated time by the wall time less the
-start-up (`GeoTask` construction: decode and preparation of the program, `startup_s`, the
-fastest of `repeat` constructions).
-Run: .venv/bin/python bench/bench_simulate.py
+excluded (issue 14); ≥ 300× with the trace and ≥ 500× without (issue 39): `x_real_time_cycles`
+divides the simulated time by the wall time less the start-up (`GeoTask` construction: decode
+and preparation of the program, `startup_s`, the fastest of `repeat` constructions).
+`simulate` runs its quiet cycles in batches (liftd/cnc/batch.py); `--single-steps` measures
+the same runs cycle by cycle (`simulate(batch=False)`, as before issue 39).
+Run: .venv/bin/python bench/bench_simulate.py [--single-steps]
 """
 
 from __future__ import annotations
@@ -40,6 +42,9 @@ class Sink(io.TextIOBase):
         return len(s)
 
 
+BATCH = {"batch": True}  # simulate's keyword: False with --single-steps
+
+
 def run(
     name: str, text: str, trace: bool, schedule: Schedule | None = None, repeat: int = 3
 ) -> None:
@@ -57,7 +62,9 @@ def run(
         sink = Sink() if trace else None
         t0 = time.perf_counter()
         # as `liftd simulate` without --plot: no decimated series for a figure
-        res = simulate(settings.channel, text, schedule or Schedule(), 0.02, sink, series=False)  # type: ignore[arg-type]
+        res = simulate(
+            settings.channel, text, schedule or Schedule(), 0.02, sink, series=False, **BATCH
+        )  # type: ignore[arg-type]
         walls.append(time.perf_counter() - t0)
     rss1 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     wall = min(walls)
@@ -69,6 +76,7 @@ def run(
                 "program": name,
                 "blocks": count_blocks(text),
                 "trace": trace,
+                "batch": BATCH["batch"],
                 "cycles": s.cycles,
                 "simulated_s": s.duration_s,
                 "wall_s": round(wall, 3),
@@ -87,7 +95,9 @@ def run(
 
 
 def main() -> None:
-    parser(__doc__).parse_args()
+    ap = parser(__doc__)
+    ap.add_argument("--single-steps", action="store_true", help="simulate(batch=False)")
+    BATCH["batch"] = not ap.parse_args().single_steps
     demo = (ROOT / "config" / "programs" / "demo.nc").read_text()
     run("demo.nc", demo, trace=False)
     run("demo.nc", demo, trace=True)

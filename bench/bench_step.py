@@ -6,7 +6,7 @@ feed hold every 5 s (0.5 s long); one lift range of 2 000 short blocks. Then the
 programs of the issue's "bad input" (10 000 blocks in one range, 0.001 mm blocks, a feed hold
 released just before LIFT_END, override 0 %), which must stay within the same budget.
 
-Each step is timed through `liftd simulate`'s cycle driver (the summary's `step_cpu_us`) with
+Each step is timed through `liftd simulate` by single steps (`batch=False`: `step_cpu_us`) with
 the garbage collector frozen and disabled as in the GEO process: with perf_counter as the GEO
 loop times its compute (`wall_us`: preemption by the VM counts against us; run it on an
 otherwise idle machine) and with the thread's CPU clock (`cpu_us`: each reading is a 3.4 µs
@@ -122,7 +122,7 @@ def _best(
         gc.freeze()
         gc.disable()
         try:
-            res = simulate(ch, text, schedule, 0.02, max_time=3600.0, step_clock=clock)
+            res = simulate(ch, text, schedule, 0.02, max_time=3600.0, step_clock=clock, batch=False)  # fmt: skip
         finally:
             gc.enable()
             gc.unfreeze()

@@ -13,6 +13,7 @@ CPU per cycle, bit-identical results. Without a C compiler they run as Python.
 # failures patch `lift/profile.py` in the core run as Python (tests/support/pure_core.py).
 COMPILED: tuple[str, ...] = (
     "liftd.cnc.actions",
+    "liftd.cnc.batch",
     "liftd.cnc.channel_state",
     "liftd.cnc.events",
     "liftd.cnc.geo_task",

@@ -222,6 +222,14 @@ class GeoTask:
     # -- cycle ------------------------------------------------------------------------------------
     def step(self, inputs: GeoInputs, t: float) -> GeoSnapshot:
         """Advance the channel to absolute time t (a multiple of the cycle time)."""
+        positions = self.advance(inputs, t)
+        snap = self.snapshot(t, inputs, positions)
+        self.after_cycle()
+        return snap
+
+    def advance(self, inputs: GeoInputs, t: float) -> tuple[float, ...]:
+        """`step` up to its snapshot: the positions; then the caller reads the cycle (`snapshot`,
+        or a row: liftd/cnc/batch.py) and calls `after_cycle`."""
         self.cycle += 1
         # inputs take effect at the start of the cycle; a task's first cycle (which may come
         # mid-run, after a reload) starts at the previous cycle's t = (k − 1)·dt, not at 0
@@ -273,12 +281,14 @@ class GeoTask:
                 self.interp.prime_leaving()  # the resume's profile, in a quiet cycle of the wait
         positions = self._positions()
         self._monitor(positions, t)
-        snap = self._snapshot(t, inputs, positions)
+        return positions
+
+    def after_cycle(self) -> None:
+        """The cycle's deferred work, after its snapshot: a piece of the next run's build."""
         if self._started:
             self._started = False
         else:
-            self.next_runs.deferred(self.path.end_position, ch.runs)
-        return snap
+            self.next_runs.deferred(self.path.end_position, self.channel.runs)
 
     # -- the PLC's commands: what a transition of the channel does to the path and the lift ------
     def _start(self, t: float) -> None:
@@ -385,7 +395,7 @@ class GeoTask:
             if self.interp.stopped_at is None or self.channel.state is not ACTIVE:
                 return
 
-    def _snapshot(self, t: float, inputs: GeoInputs, positions: tuple[float, ...]) -> GeoSnapshot:
+    def snapshot(self, t: float, inputs: GeoInputs, positions: tuple[float, ...]) -> GeoSnapshot:
         lift, ch = self.lift, self.channel
         if lift.current is None:
             phase, vz, az = NO_PHASE, 0.0, 0.0

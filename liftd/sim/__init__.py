@@ -11,4 +11,9 @@ only (the optional `cluster` extra); nothing of the service, the runtime, the se
 
 # The per-cycle part of `simulate` (its cycle driver, the trace writer, the summary) compiled
 # with mypyc by `make` like the core's cycle (liftd.cnc.COMPILED, tools/compile_core.py).
-COMPILED: tuple[str, ...] = ("liftd.sim.simulate", "liftd.sim.summary", "liftd.sim.trace")
+COMPILED: tuple[str, ...] = (
+    "liftd.sim.recorders",
+    "liftd.sim.simulate",
+    "liftd.sim.summary",
+    "liftd.sim.trace",
+)

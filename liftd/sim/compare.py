@@ -17,6 +17,7 @@ from typing import Generic, TextIO, TypeVar
 
 import numpy as np
 
+from liftd.cnc import batch as cycle_row
 from liftd.cnc.params import ChannelParams
 from liftd.cnc.plc import Schedule
 from liftd.cnc.snapshot import GeoSnapshot
@@ -58,14 +59,7 @@ class LiftSampler:
         self.z2: float | None = None
 
     def add(self, snap: GeoSnapshot) -> None:
-        self.s += 0.5 * (self.v + snap.v_path) * self.dt
-        self.v = snap.v_path
-        z = snap.positions[self.z_index]
-        a = 0.0
-        if self.z1 is not None and self.z2 is not None:
-            a = (z - 2.0 * self.z1 + self.z2) / (self.dt * self.dt)
-        self.z2, self.z1 = self.z1, z
-        row = (snap.t, self.s, z, a)
+        row = self._sample(snap.t, snap.v_path, snap.positions[self.z_index])
         for ev in snap.events:
             if ev.name == "lift.start" and len(self.lifts) < self.limit:
                 self.open = LiftSamples(ev.line, list(self.recent), ev.t, self.s)
@@ -73,6 +67,20 @@ class LiftSampler:
             elif ev.name == "lift.end" and self.open is not None and self.open.t_end < 0.0:
                 self.open.t_end, self.open.s_end = ev.t, self.s
                 self.tail = MARGIN
+        self._keep(row)
+
+    def _sample(self, t: float, v_path: float, z: float) -> tuple[float, float, float, float]:
+        """A cycle's row: the distance and Z's second difference brought up to it."""
+        self.s += 0.5 * (self.v + v_path) * self.dt
+        self.v = v_path
+        a = 0.0
+        if self.z1 is not None and self.z2 is not None:
+            a = (z - 2.0 * self.z1 + self.z2) / (self.dt * self.dt)
+        self.z2, self.z1 = self.z1, z
+        return (t, self.s, z, a)
+
+    def _keep(self, row: tuple[float, float, float, float]) -> None:
+        """A cycle's row into the recent ones and, while a lift is open or just ended, its."""
         self.recent.append(row)
         if self.open is None:
             return
@@ -81,6 +89,44 @@ class LiftSampler:
             self.tail -= 1
             if self.tail <= 0:
                 self.open = None
+
+    def add_rows(self, rows: list[float], axes_at: int, width: int) -> None:
+        """The rows of quiet cycles (liftd/cnc/batch.py; no event: no lift starts or ends in
+        them), as `add` of each: s by a sequential sum (`np.add.accumulate`, the same
+        additions in the same order), Z's second difference elementwise as `add` writes it;
+        the row tuples built only for an open lift and the last MARGIN."""
+        n = len(rows) // width
+        k = 0
+        while k < n and (self.z1 is None or self.z2 is None):  # a run's first cycles
+            at = k * width
+            z_at = rows[at + axes_at + self.z_index]
+            self._keep(self._sample(rows[at + cycle_row.T], rows[at + cycle_row.V_PATH], z_at))
+            k += 1
+        if k == n:
+            return
+        base = k * width
+        t = rows[base + cycle_row.T :: width]
+        v = np.array([self.v, *rows[base + cycle_row.V_PATH :: width]])
+        z = np.array([self.z2, self.z1, *rows[base + axes_at + self.z_index :: width]])
+        s = np.add.accumulate(np.concatenate(([self.s], 0.5 * (v[:-1] + v[1:]) * self.dt)))[1:]
+        a = (z[2:] - 2.0 * z[1:-1] + z[:-2]) / (self.dt * self.dt)
+        m = n - k
+        self.s, self.v = float(s[-1]), float(v[-1])
+        self.z2, self.z1 = float(z[-2]), float(z[-1])
+        first = 0 if self.open is not None else max(m - MARGIN, 0)  # the rows kept
+        new = list(zip(t[first:], s[first:].tolist(), z[first + 2 :].tolist(),
+                       a[first:].tolist(), strict=True))  # fmt: skip
+        self.recent.extend(new[-MARGIN:])
+        if self.open is None:
+            return
+        if self.open.t_end < 0.0:
+            self.open.rows.extend(new)
+            return
+        take = min(self.tail, m)
+        self.open.rows.extend(new[:take])
+        self.tail -= take
+        if self.tail <= 0:
+            self.open = None
 
 
 T = TypeVar("T", int, float)
@@ -265,7 +311,9 @@ def compare(
     traces: dict[str, TextIO] | None = None,
     max_time: float = 3600.0,
     program: str = "",
+    batch: bool = True,
 ) -> Comparison:
+    """Both runs (`batch`: simulate's, the samplers take the quiet cycles' rows)."""
     results: dict[str, SimResult] = {}
     samplers: dict[str, LiftSampler] = {}
     for method in METHODS:
@@ -273,8 +321,9 @@ def compare(
         sampler = LiftSampler(run_ch.lift_axis_index, run_ch.cycle_time)
         trace = (traces or {}).get(method)
         results[method] = simulate(
-            run_ch, text, schedule, m_ack_delay, trace, max_time, sampler.add
-        )
+            run_ch, text, schedule, m_ack_delay, trace, max_time, sampler.add,
+            batch=batch, on_rows=sampler.add_rows,
+        )  # fmt: skip
         samplers[method] = sampler
     summary = compare_summary(results["advanced"].summary, results["lifting"].summary, program)
     return Comparison(results, samplers, summary)

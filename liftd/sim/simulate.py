@@ -3,33 +3,38 @@
 Drives GeoTask.step with t = k × cycle time, applies the override / feed-hold schedules, plays a
 simple PLC that acknowledges M functions (and continues after M00) after `plc.m_ack_delay_ms`,
 streams the trace CSV, keeps a decimated copy for the plot, and builds the summary of
-docs/reference/design.md §3.3 (summary.SimSummary).
+docs/reference/design.md §3.3 (summary.SimSummary). The cycles that leave the PLC nothing to
+answer run in batches inside the core (`run_batched`, liftd/cnc/batch.py), bit for bit the run
+of single steps.
 """
 
 from __future__ import annotations
 
+import bisect
 import contextlib
 import dataclasses
 import gc
 import time
-from array import array
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import Final, Protocol, TextIO
 
-import numpy as np
-
+from liftd.cnc import batch as row
 from liftd.cnc.geo_task import LIFT_LATE_ID, GeoTask
 from liftd.cnc.machine import ChannelProgram, Machine
 from liftd.cnc.params import ChannelParams, LiftMethod
 from liftd.cnc.plc import Schedule, SimPlc
 from liftd.cnc.snapshot import ChannelState, GeoInputs, GeoSnapshot
+from liftd.sim.recorders import SeriesBuffer, StepTimer
 from liftd.sim.summary import ErrorEntry, LiftSummary, Limits, Overload, SimSummary, StepCpu
 from liftd.sim.trace import LimitMonitor, TraceWriter
 
 # READY or ERROR: the program has ended (a C static of the compiled module; an enum attribute is
 # two lookups a use)
 ENDED: Final = (ChannelState.READY, ChannelState.ERROR)
+ACTIVE: Final = ChannelState.ACTIVE
+# quiet cycles run in one call of the core at most (liftd/cnc/batch.py; their rows: ~0.4 MB)
+BATCH: Final = 1024
 
 
 class Plc(Protocol):
@@ -37,41 +42,6 @@ class Plc(Protocol):
     own (a protocol, not the class: the compiled driver checks argument types)."""
 
     def inputs(self, last: GeoSnapshot | None, t: float, schedule: Schedule) -> GeoInputs: ...
-
-
-class SeriesBuffer:
-    """Decimated copy of the run for plotting, constant memory: when full, every other sample
-    is dropped and the stride doubles. Samples are kept flat in an `array` of doubles
-    (appending a row to a numpy array costs ~1 µs, extending an array ~0.1 µs)."""
-
-    def __init__(self, columns: int, capacity: int = 20000) -> None:
-        self.columns = columns
-        self.capacity = capacity
-        self.data = array("d")
-        self.n = 0
-        self.stride = 1
-        self.count = 0
-
-    def wants(self) -> bool:
-        """Count a sample; True if it is kept (build the row only then)."""
-        self.count += 1
-        return not (self.count - 1) % self.stride
-
-    def add(self, row: tuple[float, ...]) -> None:
-        """Store a sample that `wants()` accepted."""
-        if self.n == self.capacity:
-            kept = self.rows[::2]
-            self.data = array("d", kept.tobytes())
-            self.n = kept.shape[0]
-            self.stride *= 2
-            if (self.count - 1) % self.stride:
-                return
-        self.data.extend(row)
-        self.n += 1
-
-    @property
-    def rows(self) -> np.ndarray:
-        return np.frombuffer(self.data, dtype=float).reshape(self.n, self.columns).copy()
 
 
 @dataclass(frozen=True)
@@ -90,49 +60,6 @@ def channel_for(ch: ChannelParams, method: str) -> ChannelParams:
     if method == "config":
         return ch
     return dataclasses.replace(ch, lift_method=LiftMethod(method))
-
-
-class StepTimer:
-    """Time of `GeoTask.step`: a histogram of 1 µs buckets up to 10 ms and the exact maximum,
-    constant memory. By default measured as the GEO loop measures its compute (perf_counter:
-    the step's CPU time plus any preemption, an upper bound). The thread's CPU clock, which
-    issue 14 names, costs 3.4 µs per call on this VM (a system call, 15 % of a simulated
-    cycle) and its accounting is no quieter in the tail (an empty pair of readings measured up
-    to 0.7 ms); bench/bench_step.py reports both, next to each clock's own noise."""
-
-    BUCKETS = 10_000
-
-    def __init__(self, clock: Callable[[], int] = time.perf_counter_ns) -> None:
-        self.clock = clock
-        self.counts = [0] * (self.BUCKETS + 1)
-        self.n = 0
-        self.max_ns = 0
-
-    def add(self, ns: int) -> None:
-        self.n += 1
-        self.max_ns = max(self.max_ns, ns)
-        us = ns // 1000
-        self.counts[us if us < self.BUCKETS else self.BUCKETS] += 1
-
-    def percentile(self, q: float) -> float:
-        """The q-quantile in µs (upper edge of its 1 µs bucket)."""
-        if self.n == 0:
-            return 0.0
-        rank = q * self.n
-        seen = 0
-        for us, c in enumerate(self.counts):
-            seen += c
-            if seen >= rank:
-                return float(min(us + 1, self.max_ns / 1e3))
-        return self.max_ns / 1e3
-
-    def summary(self) -> StepCpu:
-        return StepCpu(
-            self.percentile(0.5),
-            self.percentile(0.99),
-            self.percentile(0.999),
-            round(self.max_ns / 1e3, 1),
-        )
 
 
 def at_rest(snap: GeoSnapshot) -> bool:
@@ -180,9 +107,11 @@ class ChannelRun:
         on_cycle: Callable[[GeoSnapshot], None] | None = None,
         step_clock: Callable[[], int] = time.perf_counter_ns,
         series: bool = True,
+        on_rows: Callable[[list[float], int, int], None] | None = None,
     ) -> None:
         """`series`: keep the decimated samples for a figure (--plot); without, `series` stays
-        empty (~0.3 µs a cycle saved)."""
+        empty (~0.3 µs a cycle saved). `on_rows(rows, axes_at, width)`: `on_cycle` for the
+        rows of quiet cycles (`add_rows`)."""
         self.ch = ch
         self.writer = TraceWriter(trace, ch.axis_names) if trace is not None else None
         self.monitor = LimitMonitor(len(ch.axes), ch.cycle_time)
@@ -193,6 +122,8 @@ class ChannelRun:
         self.cycles = 0
         self.timer = StepTimer(step_clock)
         self.on_cycle = on_cycle
+        self.on_rows = on_rows
+        self.width = row.row_width(len(ch.axes))  # a quiet cycle's row (`add_rows`)
 
     def add(self, snap: GeoSnapshot) -> None:
         self.cycles += 1
@@ -219,6 +150,33 @@ class ChannelRun:
                 self.errors.append(ErrorEntry(int(ev.value), ev.line, ev.text))
             elif ev.name == "lift.late":
                 self.errors.append(ErrorEntry(LIFT_LATE_ID, ev.line, ev.text))
+
+    def add_rows(self, rows: list[float]) -> None:
+        """The rows of quiet cycles (liftd/cnc/batch.py: no event, nothing for `on_cycle`),
+        recorded as `add` records their snapshots."""
+        width = self.width
+        self.cycles += len(rows) // width
+        if self.writer is not None:
+            self.writer.write_rows(rows, row.POSITIONS, width)
+        self.monitor.add_rows(rows, row.POSITIONS, width)
+        if self.on_rows is not None:
+            self.on_rows(rows, row.POSITIONS, width)
+        if self.keep_series:
+            n_axes = width - row.POSITIONS
+            for base in range(0, len(rows), width):
+                if self.series.wants():
+                    at = base + row.POSITIONS
+                    self.series.add(
+                        (
+                            rows[base + row.T],
+                            *rows[at : at + n_axes],
+                            rows[base + row.V_PATH],
+                            rows[base + row.OVERRIDE],
+                            rows[base + row.LIFT_ACTIVE],
+                            rows[base + row.LIFT_SUPPRESSED],
+                            rows[base + row.LINE],
+                        )
+                    )
 
     def result(self, task: GeoTask) -> SimResult:
         if self.writer is not None:
@@ -264,14 +222,88 @@ def simulate(
     on_cycle: Callable[[GeoSnapshot], None] | None = None,
     step_clock: Callable[[], int] = time.perf_counter_ns,
     series: bool = True,
+    batch: bool = True,
+    on_rows: Callable[[list[float], int, int], None] | None = None,
 ) -> SimResult:
+    """`batch`: the quiet cycles in batches (`run_batched`; with an `on_cycle` only when
+    `on_rows` takes their rows); the same run, trace and summary bit for bit except
+    `step_cpu_us`, which then counts each cycle of a batch at the batch's average (single
+    steps: `batch=False`)."""
     task = GeoTask(ch, text)
-    run = ChannelRun(ch, trace, on_cycle, step_clock, series)
+    run = ChannelRun(ch, trace, on_cycle, step_clock, series, on_rows)
     plc = SimPlc(m_ack_delay)
     with collector_off():
-        for snap in run_cycles(task, plc, schedule, ch.cycle_time, max_time, run.timer):
-            run.add(snap)
+        if batch and (on_cycle is None or on_rows is not None):
+            run_batched(task, plc, schedule, ch.cycle_time, max_time, run)
+        else:
+            for snap in run_cycles(task, plc, schedule, ch.cycle_time, max_time, run.timer):
+                run.add(snap)
     return run.result(task)
+
+
+def run_batched(
+    task: GeoTask, plc: SimPlc, schedule: Schedule, dt: float, max_time: float, run: ChannelRun
+) -> None:
+    """`run_cycles` recorded by `run`, the quiet cycles in batches: after a cycle that leaves
+    the PLC nothing to answer (ACTIVE, no M function waiting), the next cycles run in one
+    call of the core (`batch.run_quiet`) with the inputs the PLC gives the first of them, up
+    to the next override or feed-hold step of the schedule, which the PLC would read."""
+    last: GeoSnapshot | None = None
+    k = 0
+    limit = round(max_time / dt)
+    timer = run.timer
+    clock = timer.clock
+    # the schedule's steps as `Schedule.override_at`/`hold_at` compare them
+    edges = sorted({e - 1e-12 for e in schedule_times(schedule)})
+    rows: list[float] = []
+    width = run.width
+    while k < limit:
+        k += 1
+        t = k * dt
+        inputs = plc.inputs(last, t, schedule)
+        n = 1
+        if last is not None and last.state is ACTIVE and last.m_pending < 0:
+            n = quiet_span(k, dt, limit, edges)
+        c0 = clock()
+        if n == 1:
+            snap = task.step(inputs, t)
+            timer.add(clock() - c0)
+        else:
+            snap = row.run_quiet(task, inputs, k, n, dt, rows)
+            ns = clock() - c0
+            m = len(rows) // width
+            timer.add_many(ns, m + 1)
+            if m:
+                run.add_rows(rows)
+                rows.clear()
+                k += m
+        run.add(snap)
+        last = snap
+        if snap.state in ENDED and task.runs and at_rest(snap):
+            return
+
+
+def schedule_times(schedule: Schedule) -> list[float]:
+    """The times at which the schedule's override or feed hold changes."""
+    times = [t for t, _ in schedule.override]
+    for t0, t1 in schedule.feed_hold:
+        times.append(t0)
+        times.append(t1)
+    return times
+
+
+def quiet_span(k: int, dt: float, limit: int, edges: list[float]) -> int:
+    """How many cycles from k (t = k·dt) see the schedule's values of cycle k: those before
+    the next step (with 1 ns to spare), at most BATCH and up to cycle `limit`; at least 1."""
+    n = min(BATCH, limit - k + 1)
+    i = bisect.bisect_right(edges, k * dt)
+    if i < len(edges):
+        before = edges[i] - 1e-9
+        j = k + n - 1
+        while j > k and j * dt >= before:
+            j -= 1
+        n = j - k + 1
+    return n
 
 
 def simulate_machine(

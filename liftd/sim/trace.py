@@ -8,15 +8,20 @@ the extra columns lift_phase, vz [mm/s], az [mm/s²], state, override_max.
 from __future__ import annotations
 
 from itertools import chain
-from typing import TextIO
+from typing import Final, TextIO
 
 import numpy as np
 
 from liftd.cnc.snapshot import GeoSnapshot
 
-MM = 1e3  # mm per m (the sim package's one factor for its user-facing mm)
-CHUNK = 4096
-TAILS_MAX = 4096  # distinct row tails cached (override steps, lift flags)
+# Final: C constants of the compiled module (a plain global is a dict lookup at each use)
+MM: Final = 1e3  # mm per m (the sim package's one factor for its user-facing mm)
+CHUNK: Final = 4096
+TAILS_MAX: Final = 4096  # distinct row tails cached (override steps, lift flags)
+# a row's columns as `TraceWriter.write` formats them: t, the line, a position or v_path
+T_TEXT: Final = "%.6f"
+LINE_TEXT: Final = ",%d,"
+MM_TEXT: Final = "%.9f,"
 
 
 def header(axis_names: tuple[str, ...]) -> list[str]:
@@ -53,7 +58,18 @@ class TraceWriter:
         # each (~1 µs of every row otherwise); bounded by the (override, flags, state) seen.
         # Zero overrides are not cached: 0.0 == -0.0 as keys, but they print differently.
         self.tails: dict[tuple[float, bool, bool, int, int, float], str] = {}
-        self.rows: list[str] = []
+        self.rows: list[str] = []  # the text since the last flush, in pieces
+        self.n_rows = 0  # rows in it
+        # `write_rows`: the last value of each axis and of v_path, and its text
+        self.last_values = [0.0] * (self.n_axes + 1)
+        self.last_texts = [""] * (self.n_axes + 1)
+        self.last_line = -1.0  # and of the line
+        self.line_text = ""
+        # the last row's tail, when it came from `tails` (`_row_tail`)
+        self.prev_cached = False
+        self.prev_ov = self.prev_ov_max = self.prev_active = self.prev_suppressed = 0.0
+        self.prev_phase = self.prev_state = 0.0
+        self.prev_tail = ""
 
     def write(self, s: GeoSnapshot) -> None:
         p = s.positions
@@ -73,8 +89,74 @@ class TraceWriter:
         else:
             tail = self._tail(s)
         self.rows.append(head + tail)
-        if len(self.rows) >= CHUNK:
+        self.n_rows += 1
+        if self.n_rows >= CHUNK:
             self.flush()
+
+    def write_rows(self, rows: list[float], axes_at: int, width: int) -> None:
+        """The rows of quiet cycles (liftd/cnc/batch.py: `width` floats a row, the axes from
+        column `axes_at`), the same text as `write` of their snapshots. A position or v_path
+        equal to the row before's (and not zero: -0.0 prints as itself) reuses its text, and
+        so does the tail of a row equal to the one before's while Z rests: in a block at
+        constant feed only t and the moving axes are formatted."""
+        n_axes = self.n_axes
+        last_v, last_s = self.last_values, self.last_texts
+        out = self.rows
+        for base in range(0, len(rows), width):
+            out.append(T_TEXT % rows[base])
+            line = rows[base + 1]
+            if line != self.last_line:
+                self.last_line = line
+                self.line_text = LINE_TEXT % line
+            out.append(self.line_text)
+            for i in range(n_axes + 1):  # the axes, then v_path
+                x = rows[base + axes_at + i] if i < n_axes else rows[base + 3]
+                if x != last_v[i] or x == 0.0:
+                    last_v[i] = x
+                    last_s[i] = MM_TEXT % (x * MM)
+                out.append(last_s[i])
+            out.append(self._row_tail(rows, base))
+            self.n_rows += 1
+            if self.n_rows >= CHUNK:
+                self.flush()
+
+    def _row_tail(self, r: list[float], base: int) -> str:
+        """A row's tail (from its override on) as `write` makes it: from the same cache while
+        Z rests; the row before's text when its cache key was the same."""
+        ov, ov_max = r[base + 4], r[base + 11]
+        vz, az = r[base + 8], r[base + 9]
+        active, suppressed, phase, state = r[base + 5], r[base + 6], r[base + 7], r[base + 10]
+        if vz == 0.0 and az == 0.0 and ov != 0.0 and ov_max != 0.0 and len(self.tails) < TAILS_MAX:
+            if (
+                self.prev_cached
+                and ov == self.prev_ov
+                and ov_max == self.prev_ov_max
+                and active == self.prev_active
+                and suppressed == self.prev_suppressed
+                and phase == self.prev_phase
+                and state == self.prev_state
+            ):
+                return self.prev_tail
+            key = (ov, active != 0.0, suppressed != 0.0, int(phase), int(state), ov_max)
+            tail = self.tails.get(key)
+            if tail is None:
+                tail = self.tails[key] = self._tail_of(key[:5], ov_max, vz, az)
+            self.prev_cached = True
+            self.prev_ov, self.prev_ov_max = ov, ov_max
+            self.prev_active, self.prev_suppressed = active, suppressed
+            self.prev_phase, self.prev_state = phase, state
+            self.prev_tail = tail
+            return tail
+        self.prev_cached = False
+        return self._tail_of(
+            (ov, active != 0.0, suppressed != 0.0, int(phase), int(state)), ov_max, vz, az
+        )
+
+    def _tail_of(
+        self, head: tuple[float, bool, bool, int, int], ov_max: float, vz: float, az: float
+    ) -> str:
+        ov, active, suppressed, phase, state = head
+        return self.tail % (ov, active, suppressed, phase, vz * MM, az * MM, state, ov_max)
 
     def _tail(self, s: GeoSnapshot) -> str:
         return self.tail % (
@@ -91,6 +173,7 @@ class TraceWriter:
     def flush(self) -> None:
         self.out.write("".join(self.rows))
         self.rows.clear()
+        self.n_rows = 0
 
 
 class LimitMonitor:
@@ -110,6 +193,9 @@ class LimitMonitor:
         # from the last chunk (max is idempotent)
         self.rows: list[tuple[float, ...]] = []
         self.segs: list[int] = []
+        # rows that came as arrays (`add_rows`) or were carried over, before `rows`, in order
+        self.blocks: list[tuple[np.ndarray, np.ndarray]] = []
+        self.pending = 0  # samples in blocks and rows
         self.keep = 0
         self.max_v = np.zeros(n_axes)
         self.max_a = np.zeros(n_axes)
@@ -123,8 +209,32 @@ class LimitMonitor:
         rows.append(positions)
         self.segs.append(segment)
         self.samples += 1
-        if len(rows) == CHUNK + 3:
+        self.pending += 1
+        if self.pending >= CHUNK + 3:
             self._reduce()
+
+    def add_rows(self, rows: list[float], axes_at: int, width: int) -> None:
+        """Samples given as flat rows of `width` floats (liftd/cnc/batch.py): the axes from
+        column `axes_at`, the segment in column 2."""
+        n = len(rows) // width
+        pos = np.empty((n, self.n_axes))
+        for i in range(self.n_axes):  # by column: the other columns are not converted
+            pos[:, i] = rows[axes_at + i :: width]
+        self._block_rows()
+        self.blocks.append((pos, np.array(rows[2::width])))
+        self.samples += n
+        self.pending += n
+        if self.pending >= CHUNK + 3:
+            self._reduce()
+
+    def _block_rows(self) -> None:
+        """The tuples of `add` so far as a block."""
+        if self.rows:
+            n = len(self.rows)
+            flat = np.fromiter(chain.from_iterable(self.rows), dtype=float, count=n * self.n_axes)
+            self.blocks.append((flat.reshape(n, self.n_axes), np.array(self.segs, dtype=float)))
+            self.rows = []
+            self.segs = []
 
     def _fold(self, row: int, diffs: np.ndarray, near: np.ndarray) -> None:
         """Fold |diffs| (one derivative) into the split maxima; `near`: each difference spans a
@@ -136,10 +246,14 @@ class LimitMonitor:
                            out=self.split[kind, row])  # fmt: skip
 
     def _reduce(self) -> None:
-        n = len(self.rows)
-        flat = np.fromiter(chain.from_iterable(self.rows), dtype=float, count=n * self.n_axes)
-        rows = flat.reshape(n, self.n_axes)
-        seg = np.array(self.segs)
+        self._block_rows()
+        blocks = self.blocks
+        if len(blocks) == 1:
+            rows, seg = blocks[0]
+        else:
+            rows = np.concatenate([b[0] for b in blocks])
+            seg = np.concatenate([b[1] for b in blocks])
+        n = rows.shape[0]
         dt = self.dt
         if n >= 2:
             cross = seg[1:] != seg[:-1]  # a block boundary lies between samples k and k + 1
@@ -156,12 +270,11 @@ class LimitMonitor:
                     np.maximum(self.max_j, np.abs(j).max(axis=0), out=self.max_j)
                     self._fold(2, j, near_a[1:] | near_a[:-1])
         tail = min(3, n)
-        self.rows = self.rows[n - tail :]
-        self.segs = self.segs[n - tail :]
-        self.keep = tail
+        self.blocks = [(rows[n - tail :].copy(), seg[n - tail :].copy())]
+        self.pending = self.keep = tail
 
     def result(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        if len(self.rows) > self.keep:
+        if self.pending > self.keep:
             self._reduce()
         return self.max_v, self.max_a, self.max_j
 

@@ -50,6 +50,25 @@ class _InputsPlc:
         return self.fn(t, last)
 
 
+def batch_row(s: GeoSnapshot) -> list[float]:
+    """A snapshot's row as `batch.run_quiet` lays out a quiet cycle (liftd/cnc/batch.py)."""
+    return [
+        s.t,
+        float(s.line),
+        float(s.segment),
+        s.v_path,
+        s.override,
+        float(s.lift_active),
+        float(s.lift_suppressed),
+        float(s.lift_phase),
+        s.lift_vz,
+        s.lift_az,
+        float(s.state),
+        s.override_max,
+        *s.positions,
+    ]
+
+
 def positions(snaps: list[GeoSnapshot]) -> np.ndarray:
     return np.array([s.positions for s in snaps])
 
