@@ -139,6 +139,12 @@ def build_parser() -> argparse.ArgumentParser:
         "OUT.lifting.csv",
     )
     sim.add_argument(
+        "--step-times",
+        action="store_true",
+        help="step every GEO cycle alone, so that step_cpu_us is each step's own time "
+        "(slower; the same run, trace and summary otherwise)",
+    )
+    sim.add_argument(
         "--max-time",
         type=float,
         default=3600.0,

@@ -131,7 +131,16 @@ def _simulate(
 
     ch = channel_for(settings.channel, args.method)
     delay = settings.config.plc.m_ack_delay_ms * 1e-3
-    result = simulate(ch, text, schedule, delay, trace, args.max_time, series=bool(args.plot))
+    result = simulate(
+        ch,
+        text,
+        schedule,
+        delay,
+        trace,
+        args.max_time,
+        series=bool(args.plot),
+        batch=not args.step_times,
+    )
     _report_run(program, result, args.max_time)
     summary = result.summary
     if args.plot:
@@ -230,7 +239,9 @@ def _compare(
 
     ch = settings.channel
     delay = settings.config.plc.m_ack_delay_ms * 1e-3
-    result = compare.compare(ch, text, schedule, delay, traces, args.max_time, program.name)
+    result = compare.compare(
+        ch, text, schedule, delay, traces, args.max_time, program.name, not args.step_times
+    )
     for method, run in result.results.items():
         _report_run(program, run, args.max_time, f" ({method} run)")
     summary = result.summary

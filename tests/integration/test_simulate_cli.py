@@ -12,7 +12,8 @@ from pathlib import Path
 import pytest
 
 from liftd import cli
-from liftd.sim import plot
+from liftd.sim import compare, plot
+from liftd.sim import simulate as sim_module
 from tests.support.paths import REPO
 
 pytestmark = pytest.mark.integration
@@ -138,6 +139,52 @@ def test_same_run_twice_gives_identical_trace(tmp_path: Path) -> None:
         )
         assert r.returncode == 0, r.stderr
     assert a.read_bytes() == b.read_bytes()
+
+
+@pytest.mark.parametrize("compare", [False, True])
+def test_step_times_runs_every_cycle_alone_and_changes_nothing_else(
+    tmp_path: Path, compare: bool
+) -> None:
+    """`--step-times` (each GEO step timed alone, issue 39 batches the quiet cycles otherwise):
+    the same trace bytes and the same summary but for `step_cpu_us`."""
+    runs: list[tuple[dict[str, object], list[bytes]]] = []
+    for flags in ([], ["--step-times"]):
+        trace = tmp_path / f"{len(runs)}.csv"
+        extra = ["--compare"] if compare else []
+        sched = ["--override", "0:100,3:150,6:70", "--feedhold", "2:0.5"]
+        r = simulate(DEMO, "--trace", str(trace), "--json", *sched, *extra, *flags)
+        assert r.returncode == 0, r.stderr
+        doc = json.loads(r.stdout)
+        for part in [doc, *(doc.get(m, {}) for m in ("advanced", "lifting"))]:
+            part.pop("step_cpu_us", None)
+        names = [trace.with_suffix(f".{m}.csv") for m in ("advanced", "lifting")]
+        runs.append((doc, [p.read_bytes() for p in (names if compare else [trace])]))
+    assert runs[0] == runs[1]
+
+
+def test_step_times_turns_the_batches_off(monkeypatch: pytest.MonkeyPatch) -> None:
+    seen: list[tuple[str, object]] = []
+    real_sim, real_cmp = sim_module.simulate, compare.compare
+
+    def spy_sim(*args: object, **kw: object) -> object:
+        seen.append(("simulate", kw.get("batch", True)))
+        return real_sim(*args, **kw)  # type: ignore[arg-type]
+
+    def spy_cmp(*args: object, **kw: object) -> object:
+        seen.append(("compare", args[7] if len(args) > 7 else kw.get("batch", True)))
+        return real_cmp(*args, **kw)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(sim_module, "simulate", spy_sim)
+    monkeypatch.setattr(compare, "compare", spy_cmp)
+    for extra in ([], ["--compare"]):
+        for flags in ([], ["--step-times"]):
+            assert cli.main(["simulate", DEMO, *extra, *flags]) == 0
+    assert seen == [
+        ("simulate", True),
+        ("simulate", False),
+        ("compare", True),
+        ("compare", False),
+    ]
 
 
 def test_program_error_exit_1_with_partial_trace(tmp_path: Path) -> None:
