@@ -112,6 +112,26 @@ def test_random_wide_run_keeps_every_promise(seed: int) -> None:
     )
 
 
+# path-based Lifting over issue 14's input space: 76, 399, 410 took the coupled Z to 1.08, 1.05,
+# 1.28 × its jerk limit inside a range (since issue 36): the path's target at a kink was the
+# velocity reachable within the distance plus 1 nm, ruckig ended 1 nm past the kink and the
+# tracker set the path back onto it; the 1 nm step, × dz/ds ≈ 39 while the path crawls
+# (path/targets.py `_pick_target`; tests/unit/cnc/path/test_tracker.py)
+WIDE_LIFTING_REGRESSIONS = [76, 399, 410]
+
+
+@pytest.mark.parametrize("seed", WIDE_LIFTING_REGRESSIONS)
+def test_random_wide_path_based_run_keeps_every_promise(seed: int) -> None:
+    sc = wide_scenario(seed, LiftMethod.LIFTING)
+    task, snaps = run_task(sc.channel, sc.text, sc.schedule, max_time=300)
+    bad = violations(sc, snaps, task.lift.records)
+    assert bad == [] and task.interp.plan_errors == 0, (
+        bad,
+        task.interp.last_plan_error,
+        describe(sc),
+    )
+
+
 def _nesting(wait: bool) -> str:
     text = nesting_program(12)
     # a dwell inside every range: the path waits, its nominal run does not
