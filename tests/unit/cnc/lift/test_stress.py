@@ -112,12 +112,12 @@ def test_random_wide_run_keeps_every_promise(seed: int) -> None:
     )
 
 
-# path-based Lifting over issue 14's input space: 76, 399, 410 took the coupled Z to 1.08, 1.05,
-# 1.28 × its jerk limit inside a range (since issue 36): the path's target at a kink was the
-# velocity reachable within the distance plus 1 nm, ruckig ended 1 nm past the kink and the
-# tracker set the path back onto it; the 1 nm step, × dz/ds ≈ 39 while the path crawls
-# (path/targets.py `_pick_target`; tests/unit/cnc/path/test_tracker.py)
-WIDE_LIFTING_REGRESSIONS = [76, 399, 410]
+# path-based Lifting over issue 14's input space: 76, 399, 410, 689, 811 took the coupled Z to
+# 1.08, 1.05, 1.28, 6.88, 1.03 × its jerk limit inside a range (since issue 36): the path's
+# target at a kink was the velocity reachable within the distance plus 1 nm, ruckig ended 1 nm
+# past the kink and the tracker set the path back onto it; the 1 nm step, × dz/ds ≈ 39 while
+# the path crawls (path/targets.py `_pick_target`; tests/unit/cnc/path/test_tracker.py)
+WIDE_LIFTING_REGRESSIONS = [76, 399, 410, 689, 811]
 
 
 @pytest.mark.parametrize("seed", WIDE_LIFTING_REGRESSIONS)
