@@ -234,6 +234,13 @@ def check_motion(
     interval_min = INF
     fresh = True  # the interval began with a restart or a stop: no entry velocity to keep
     braking_from = 0  # the segment the path was in when it last began to brake
+    # the earliest `braking_from` since the last boundary crossed: a brake the path ended just
+    # before a boundary (a little acceleration into it) decided the velocity there with the
+    # window as it stood when it began (wide seed 2: a brake begun in segment 105, window end
+    # 113, ended 0.15 mm before 107 and crept on into it at 129 mm/s; the core's cap there with
+    # that window 125.2 mm/s, the check's 124.9, but read with the window of segment 106 the
+    # check expected 142)
+    interval_from = 0
     brake_ends = -INF  # a hold's brake that its release cannot undo ends by then (at rest)
     last: Sample | None = None
     for smp in samples:
@@ -285,7 +292,7 @@ def check_motion(
             # stop the path had to be able to make, and a cap that came into view later may lie
             # below what the path can still brake to exactly (jerk-limited, braking to a low
             # velocity can take longer than braking to rest)
-            window = min(max(b, braking_from + path.look_ahead), b - 1 + path.look_ahead)
+            window = min(max(b, interval_from + path.look_ahead), b - 1 + path.look_ahead)
             backward = path.backward(b, smp, window)
             expect = min(path.target(b, smp.override), backward, forward)
             if v_b < expect * (1.0 - REL_TOL) - tol:
@@ -305,9 +312,12 @@ def check_motion(
             if path.gate[b] or v_b < forward:
                 anchor_s, anchor_v, anchor_seg = s_b, min(v_b, forward), b
             entry_v, interval_min, fresh = v_b, INF, False
+        if smp.seg != last.seg:
+            interval_from = braking_from
         if not held:
             interval_min = min(interval_min, smp.v) if smp.seg == last.seg else smp.v
         if smp.a >= 0.0 or smp.v == 0.0:
             braking_from = smp.seg
+        interval_from = min(interval_from, braking_from)
         last = smp
     return out
