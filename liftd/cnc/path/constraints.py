@@ -60,6 +60,8 @@ class Constraints:
         self.acked = acked if acked is not None else set()
         self._beyond_key: tuple[int, int, float] | None = None
         self._beyond_val = INF
+        self._floor_key = (-1, -1.0)  # (window end, override) of `_window_floor`'s last value
+        self._floor_val = 0.0
 
     def is_stop(self, b: int) -> bool:
         tb = self.tb
@@ -139,8 +141,33 @@ class Constraints:
                 cap = min(cap, self._beyond(b, cap, w))
             out.append((b, s_b, cap, gate))
             if gate:
+                if b == w and stop and not self.is_stop(b):
+                    floor = self._window_floor(w)
+                    if floor > 0.0:
+                        out.append((b, s_b, floor, True))
                 break
         return out
+
+    def _window_floor(self, w: int) -> float:
+        """The lowest cap the window's end w can have once the window moves on by a block: its
+        own entry cap, or what rest at the boundary after it leaves over block w (known
+        deviation 3 of docs/geo-core.md). The path keeps both rest and this velocity reachable
+        at w (a second candidate at w in `_collect`; `Tracker._window_end_lost`): with a jerk
+        limit, braking to a low velocity takes longer than braking to rest, so a path braking
+        to rest at w may no longer get down to w's cap exactly when the window moves on, and
+        brakes to near rest instead (wide seed 22: 0.2 mm blocks, look-ahead 3, boundaries of
+        7.3 mm/s passed at 0.005). 0 where the window is a single block (the path rests at its
+        end) or w is the program's end."""
+        tb = self.tb
+        if self.look_ahead < 2 or w >= tb.n:
+            return 0.0
+        if self._floor_key == (w, self.ov):  # asked every step while the profile aims at w
+            return self._floor_val
+        a_max, j_max = self._limits(w)
+        after = reach_velocity(0.0, max(tb.s[w + 1] - tb.s[w] - CHAIN_MARGIN, 0.0), a_max, j_max)
+        self._floor_key = (w, self.ov)
+        self._floor_val = min(tb.entry_cap(w, self.ov), after)
+        return self._floor_val
 
     def _target_cap(self, cands: list[tuple[int, float, float, bool]], i: int) -> float:
         """The velocity to plan for at candidate i (zero acceleration there): its cap, lowered

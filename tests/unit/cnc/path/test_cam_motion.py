@@ -83,3 +83,16 @@ def test_a_brake_ended_just_before_a_boundary_is_read_with_the_window_it_began_u
     assert hard == [] and errors == 0, (hard, describe(sc))
     assert slow == [], (slow, describe(sc))
 
+
+def test_the_window_end_is_left_at_its_cap_not_near_rest() -> None:
+    """Wide seed 74 (look-ahead 8): boundaries 18, 87, 237 and 306 were passed at 0–1 µm/s
+    where the check expected 29.9 mm/s (wide seed 22, look-ahead 3: 159, 182, 283 at
+    0.0002–0.011 for 7.3). The path braked to rest at the window's end, the time-optimal
+    motion for that stop; when the window moved on, the boundary's cap was no longer reachable
+    exactly (with a jerk limit, braking to a low velocity takes longer than braking to rest),
+    and the nearest velocity below it that was is near 0. The path now keeps that cap's lowest
+    value reachable at the window's end too while it can."""
+    sc = wide_scenario(74)
+    _, hard, slow, errors = check(sc)
+    assert hard == [] and errors == 0, (hard, describe(sc))
+    assert slow == [], (slow, describe(sc))
