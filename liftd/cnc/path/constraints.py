@@ -23,6 +23,7 @@ from liftd.cnc.path.velocity import (
     ramp_crossing,
     ramp_distance,
     reach_velocity,
+    reach_velocity_any_above,
 )
 
 INF = float("inf")
@@ -60,6 +61,7 @@ class Constraints:
         self.acked = acked if acked is not None else set()
         self._beyond_key: tuple[int, int, float] | None = None
         self._beyond_val = INF
+        self._beyond_open = False  # the last `_beyond` chain ended at the window's end or a cut
         self._floor_key = (-1, -1.0)  # (window end, override) of `_window_floor`'s last value
         self._floor_val = 0.0
 
@@ -173,11 +175,23 @@ class Constraints:
         """The velocity to plan for at candidate i (zero acceleration there): its cap, lowered
         so that the later candidates in the list stay reachable from it."""
         e = cands[-1][2]
+        last = cands[-1][0]
+        w = self.window_end
+        # a chain that ends at the window's end (or whose run boundary's does) is open: its end
+        # may rise as the window moves on (`_beyond`)
+        is_open = last == w
+        if not is_open and cands[-1][3] and not self.is_stop(last):
+            self._beyond(last, cands[-1][2], w)  # cached: `_collect` just asked for it
+            is_open = self._beyond_open
         for k in range(len(cands) - 2, i - 1, -1):
             _, sk, ck, _ = cands[k]
             bn, sn, _, _ = cands[k + 1]
             a_max, j_max = self._limits(bn - 1)
-            e = min(ck, reach_velocity(e, max(sn - sk - CHAIN_MARGIN, 0.0), a_max, j_max))
+            length = max(sn - sk - CHAIN_MARGIN, 0.0)
+            if is_open:
+                e = min(ck, reach_velocity_any_above(e, length, a_max, j_max))
+            else:
+                e = min(ck, reach_velocity(e, length, a_max, j_max))
         return e
 
     def _beyond(self, g: int, cap: float, w: int) -> float:
@@ -198,14 +212,26 @@ class Constraints:
             if stop or len(chain) == MAX_CANDIDATES:
                 chain[-1] = (tb.s[b], 0.0, b)
                 break
+        # open: the chain ends at the window's end or is cut, not at a stop of the program: its
+        # end may rise as the window moves on, and with a jerk limit a higher end velocity is
+        # not always reachable from where a lower one is (`reach_velocity_any_above`), so every
+        # link keeps every higher end reachable (wide seed 146: 162's cap fell from 261.9 to
+        # 259.8 mm/s as the window moved from 189 to 190; the path, planned for the first, went
+        # on above every cap after it and came to near rest at 189 for a corner it could no
+        # longer get down to)
+        is_open = bool(chain) and not self.is_stop(chain[-1][2])
         e = INF
         for i in range(len(chain) - 1, -1, -1):
             s_i, c_i, b_i = chain[i]
             e = min(c_i, e)
             s_prev = chain[i - 1][0] if i > 0 else s_g
             a_max, j_max = self._limits(b_i - 1)
-            e = reach_velocity(e, max(s_i - s_prev - CHAIN_MARGIN, 0.0), a_max, j_max)
-        self._beyond_key, self._beyond_val = key, e
+            length = max(s_i - s_prev - CHAIN_MARGIN, 0.0)
+            if is_open:
+                e = reach_velocity_any_above(e, length, a_max, j_max)
+            else:
+                e = reach_velocity(e, length, a_max, j_max)
+        self._beyond_key, self._beyond_val, self._beyond_open = key, e, is_open
         return e
 
     @staticmethod
