@@ -19,7 +19,8 @@ generator of their own: each seed's program is otherwise the same).
 With --wide (issue 14) the scenarios cover the whole input space: ranges of up to 400 short
 blocks (longer than every look-ahead), slightly bent polylines, ranges without path motion,
 ranges back to back, waits before and inside ranges, every look-ahead size, override steps of
-0–200 % at random moments and feed holds. Every run (not only --wide) also fails on any error
+0–200 % at random moments and feed holds. `program_time_s` sums the runs' program times (the
+last cycle's time): a change's cost in path time, A/B against a base tree. Every run (not only --wide) also fails on any error
 of the path tracker (a refused profile, a run boundary passed with acceleration).
 
 Run: .venv/bin/python bench/bench_lift_safety.py [--wide] [--stops] [--flush] [RUNS [FIRST_SEED [advanced|lifting]]]
@@ -63,6 +64,7 @@ def main() -> None:
     make = wide_scenario if wide else scenario
     failures: list[dict[str, object]] = []
     cycles = lifts = 0
+    program_time = 0.0  # the runs' summed program times (s): the path's cost of a change
     t0 = time.perf_counter()
     for seed in range(first, first + runs):
         sc = make(seed, method, args.flush)
@@ -77,6 +79,7 @@ def main() -> None:
             bad = [f"exception {type(exc).__name__}: {exc}"]
         else:
             cycles += len(snaps)
+            program_time += snaps[-1].t
             lifts += len(task.lift.records)
             bad = violations(sc, snaps, task.lift.records)
             if task.interp.plan_errors:
@@ -97,6 +100,7 @@ def main() -> None:
                 "runs": runs,
                 "first_seed": first,
                 "cycles": cycles,
+                "program_time_s": round(program_time, 6),
                 "lifts": lifts,
                 "failed_runs": len(failures),
                 "first_failures": failures[:5],

@@ -128,6 +128,35 @@ def reach(v_end: float, length: float, a_max: float, j_max: float, top: float) -
     return lo
 
 
+def reach_rising(v_end: float, length: float, a_max: float, j_max: float, top: float) -> float:
+    """The highest velocity ≤ top from which every velocity ≥ v_end is reachable within
+    `length`: the least `reach` over end velocities from v_end up. With a jerk limit `reach`
+    falls from rest to a low end velocity and rises after it (braking to a third of a velocity
+    takes longer than braking to rest), so a chain that ends at the window's end, whose rest
+    becomes a cap as the window moves on, holds only what every higher end allows (the core's
+    `reach_velocity_any_above`). A golden-section search where `reach` still falls at v_end."""
+    r0 = reach(v_end, length, a_max, j_max, top)
+    if r0 >= top or length <= 0.0:
+        return r0
+    step = max(v_end * 1e-4, 1e-9)
+    if reach(v_end + step, length, a_max, j_max, top) >= r0:
+        return r0
+    g = (math.sqrt(5.0) - 1.0) / 2.0
+    lo, hi = v_end, r0  # the least lies below r0: an end velocity is below its reach
+    x1, x2 = hi - g * (hi - lo), lo + g * (hi - lo)
+    f1, f2 = reach(x1, length, a_max, j_max, top), reach(x2, length, a_max, j_max, top)
+    for _ in range(40):
+        if f1 <= f2:
+            hi, x2, f2 = x2, x1, f1
+            x1 = hi - g * (hi - lo)
+            f1 = reach(x1, length, a_max, j_max, top)
+        else:
+            lo, x1, f1 = x1, x2, f2
+            x2 = lo + g * (hi - lo)
+            f2 = reach(x2, length, a_max, j_max, top)
+    return min(r0, f1, f2)
+
+
 class _Path:
     """The rules' inputs from the prepared program: ceilings, caps, stops, run boundaries
     (where the path acceleration is zero), limits."""
@@ -177,11 +206,13 @@ class _Path:
         s_b = self.bounds[b].s
         reach_d = 2.0 * change_distance(self.v_top, 0.0, self.a_low, self.j_low)
         nodes: list[tuple[int, float]] = []
+        is_open = False  # the pass ends at the window's end: its rest may become a cap
         for k in range(b + 1, w + 1):
             if self.bounds[k].s - s_b > reach_d:
                 break
             if k == w or self.is_stop(k, sample):
                 nodes.append((k, 0.0))
+                is_open = not self.is_stop(k, sample)
                 break
             cap = self.target(k, ov)
             if cap < self.ceiling(k - 1, ov) or self.gate[k]:
@@ -192,7 +223,10 @@ class _Path:
             prev = nodes[i - 1][0] if i > 0 else b
             a, j = self.limits(prev, k)
             length = self.bounds[k].s - self.bounds[prev].s - CHAIN_SLACK
-            e = reach(min(e, cap), length, a, j, self.v_top)
+            if is_open:
+                e = reach_rising(min(e, cap), length, a, j, self.v_top)
+            else:
+                e = reach(min(e, cap), length, a, j, self.v_top)
         return e
 
     def slack(self, b: int, dt: float) -> float:
@@ -234,6 +268,13 @@ def check_motion(
     interval_min = INF
     fresh = True  # the interval began with a restart or a stop: no entry velocity to keep
     braking_from = 0  # the segment the path was in when it last began to brake
+    # the earliest `braking_from` since the last boundary crossed: a brake the path ended just
+    # before a boundary (a little acceleration into it) decided the velocity there with the
+    # window as it stood when it began (wide seed 2: a brake begun in segment 105, window end
+    # 113, ended 0.15 mm before 107 and crept on into it at 129 mm/s; the core's cap there with
+    # that window 125.2 mm/s, the check's 124.9, but read with the window of segment 106 the
+    # check expected 142)
+    interval_from = 0
     brake_ends = -INF  # a hold's brake that its release cannot undo ends by then (at rest)
     last: Sample | None = None
     for smp in samples:
@@ -285,7 +326,7 @@ def check_motion(
             # stop the path had to be able to make, and a cap that came into view later may lie
             # below what the path can still brake to exactly (jerk-limited, braking to a low
             # velocity can take longer than braking to rest)
-            window = min(max(b, braking_from + path.look_ahead), b - 1 + path.look_ahead)
+            window = min(max(b, interval_from + path.look_ahead), b - 1 + path.look_ahead)
             backward = path.backward(b, smp, window)
             expect = min(path.target(b, smp.override), backward, forward)
             if v_b < expect * (1.0 - REL_TOL) - tol:
@@ -305,9 +346,12 @@ def check_motion(
             if path.gate[b] or v_b < forward:
                 anchor_s, anchor_v, anchor_seg = s_b, min(v_b, forward), b
             entry_v, interval_min, fresh = v_b, INF, False
+        if smp.seg != last.seg:
+            interval_from = braking_from
         if not held:
             interval_min = min(interval_min, smp.v) if smp.seg == last.seg else smp.v
         if smp.a >= 0.0 or smp.v == 0.0:
             braking_from = smp.seg
+        interval_from = min(interval_from, braking_from)
         last = smp
     return out

@@ -23,6 +23,7 @@ from liftd.cnc.path.velocity import (
     ramp_crossing,
     ramp_distance,
     reach_velocity,
+    reach_velocity_any_above,
 )
 
 INF = float("inf")
@@ -60,6 +61,9 @@ class Constraints:
         self.acked = acked if acked is not None else set()
         self._beyond_key: tuple[int, int, float] | None = None
         self._beyond_val = INF
+        self._beyond_open = False  # the last `_beyond` chain ended at the window's end or a cut
+        self._floor_key = (-1, -1.0)  # (window end, override) of `_window_floor`'s last value
+        self._floor_val = 0.0
 
     def is_stop(self, b: int) -> bool:
         tb = self.tb
@@ -139,18 +143,55 @@ class Constraints:
                 cap = min(cap, self._beyond(b, cap, w))
             out.append((b, s_b, cap, gate))
             if gate:
+                if b == w and stop and not self.is_stop(b):
+                    floor = self._window_floor(w)
+                    if floor > 0.0:
+                        out.append((b, s_b, floor, True))
                 break
         return out
+
+    def _window_floor(self, w: int) -> float:
+        """The lowest cap the window's end w can have once the window moves on by a block: its
+        own entry cap, or what rest at the boundary after it leaves over block w (known
+        deviation 3 of docs/geo-core.md). The path keeps both rest and this velocity reachable
+        at w (a second candidate at w in `_collect`; `Tracker._window_end_lost`): with a jerk
+        limit, braking to a low velocity takes longer than braking to rest, so a path braking
+        to rest at w may no longer get down to w's cap exactly when the window moves on, and
+        brakes to near rest instead (wide seed 22: 0.2 mm blocks, look-ahead 3, boundaries of
+        7.3 mm/s passed at 0.005). 0 where the window is a single block (the path rests at its
+        end) or w is the program's end."""
+        tb = self.tb
+        if self.look_ahead < 2 or w >= tb.n:
+            return 0.0
+        if self._floor_key == (w, self.ov):  # asked every step while the profile aims at w
+            return self._floor_val
+        a_max, j_max = self._limits(w)
+        after = reach_velocity(0.0, max(tb.s[w + 1] - tb.s[w] - CHAIN_MARGIN, 0.0), a_max, j_max)
+        self._floor_key = (w, self.ov)
+        self._floor_val = min(tb.entry_cap(w, self.ov), after)
+        return self._floor_val
 
     def _target_cap(self, cands: list[tuple[int, float, float, bool]], i: int) -> float:
         """The velocity to plan for at candidate i (zero acceleration there): its cap, lowered
         so that the later candidates in the list stay reachable from it."""
         e = cands[-1][2]
+        last = cands[-1][0]
+        w = self.window_end
+        # a chain that ends at the window's end (or whose run boundary's does) is open: its end
+        # may rise as the window moves on (`_beyond`)
+        is_open = last == w
+        if not is_open and cands[-1][3] and not self.is_stop(last):
+            self._beyond(last, cands[-1][2], w)  # cached: `_collect` just asked for it
+            is_open = self._beyond_open
         for k in range(len(cands) - 2, i - 1, -1):
             _, sk, ck, _ = cands[k]
             bn, sn, _, _ = cands[k + 1]
             a_max, j_max = self._limits(bn - 1)
-            e = min(ck, reach_velocity(e, max(sn - sk - CHAIN_MARGIN, 0.0), a_max, j_max))
+            length = max(sn - sk - CHAIN_MARGIN, 0.0)
+            if is_open:
+                e = min(ck, reach_velocity_any_above(e, length, a_max, j_max))
+            else:
+                e = min(ck, reach_velocity(e, length, a_max, j_max))
         return e
 
     def _beyond(self, g: int, cap: float, w: int) -> float:
@@ -171,14 +212,26 @@ class Constraints:
             if stop or len(chain) == MAX_CANDIDATES:
                 chain[-1] = (tb.s[b], 0.0, b)
                 break
+        # open: the chain ends at the window's end or is cut, not at a stop of the program: its
+        # end may rise as the window moves on, and with a jerk limit a higher end velocity is
+        # not always reachable from where a lower one is (`reach_velocity_any_above`), so every
+        # link keeps every higher end reachable (wide seed 146: 162's cap fell from 261.9 to
+        # 259.8 mm/s as the window moved from 189 to 190; the path, planned for the first, went
+        # on above every cap after it and came to near rest at 189 for a corner it could no
+        # longer get down to)
+        is_open = bool(chain) and not self.is_stop(chain[-1][2])
         e = INF
         for i in range(len(chain) - 1, -1, -1):
             s_i, c_i, b_i = chain[i]
             e = min(c_i, e)
             s_prev = chain[i - 1][0] if i > 0 else s_g
             a_max, j_max = self._limits(b_i - 1)
-            e = reach_velocity(e, max(s_i - s_prev - CHAIN_MARGIN, 0.0), a_max, j_max)
-        self._beyond_key, self._beyond_val = key, e
+            length = max(s_i - s_prev - CHAIN_MARGIN, 0.0)
+            if is_open:
+                e = reach_velocity_any_above(e, length, a_max, j_max)
+            else:
+                e = reach_velocity(e, length, a_max, j_max)
+        self._beyond_key, self._beyond_val, self._beyond_open = key, e, is_open
         return e
 
     @staticmethod

@@ -86,8 +86,13 @@ class Targets(Constraints):
         if v_p <= top:
             if ramp_distance(v, a, j_max) <= fits:
                 # a path never moves backwards: a projected velocity a rounding puts below 0
-                # (-1e-17 m/s) is rest (ruckig1 refuses a negative target)
-                return max(min(top, reach_from(v, a, fits, a_max, j_max)), 0.0)
+                # (-1e-17 m/s) is rest (ruckig1 refuses a negative target). The velocity
+                # reachable within d itself, not d + SLACK_TOL: ruckig accepts a goal 1 nm
+                # beyond its reach and ends 1 nm past the boundary, the tracker snaps the path
+                # back onto it, and that 1 nm step is 1 m/s³ of path jerk at a 1 ms cycle,
+                # × dz/ds for a coupled Z (path-based wide seeds 76, 399, 410: Z at up to
+                # 1.28 × j_max, crawling at 5 mm/s with dz/ds ≈ 39)
+                return max(min(top, reach_from(v, a, d, a_max, j_max)), 0.0)
             return min(top, max(v_p, 0.0))
         if brake_distance(v, a, top, a_max, j_max) <= fits:
             return top

@@ -17,7 +17,9 @@ profile is re-planned from the exact state.
 
 The look-ahead window ends `look_ahead` segments after the current one with a stop the path must
 be able to make; it moves with the path, so the path never actually stops there (except when
-the window is a single block).
+the window is a single block). While it can, the path also keeps the lowest cap the window's end
+can have once the window moves on reachable there (`Constraints._window_floor`), so that it is
+not braking to rest, too late to get down to that cap exactly, when it does.
 
 Hard constraints (transition caps, axis caps, stops, zero acceleration at run boundaries) are
 never violated; a feed ceiling (F × override) that a sudden override decrease makes unreachable
@@ -347,6 +349,8 @@ class Tracker(Targets):
                     violated = cut  # the step ends on a constraint it does not keep
                 if violated is None:
                     violated = self._violated(s1, v1, a1, seg1, dt, plan.serves, plan.soft_from)
+                if violated is None and plan.goal >= 0:
+                    violated = self._window_end_lost(plan, s1, v1, a1, seg1)
                 if violated is not None:
                     forced += 1
                     # the window end seen from the end state lies beyond the one seen now
@@ -360,6 +364,30 @@ class Tracker(Targets):
                 self.plan = None  # a goal reached between boundaries: plan the next one
         self._count("advance did not converge")
         return out
+
+    def _window_end_lost(
+        self, plan: Plan, s1: float, v1: float, a1: float, seg1: int
+    ) -> int | None:
+        """A profile to the window's end keeps the velocity it targets there (rest, or the
+        end's floor, `Constraints._window_floor`); the other one is kept while it can be: the
+        window's end if the step would lose it, having kept it at the step's start (a forced
+        re-plan then aims at the lower of the two slacks; one lost before the step is not
+        asked for again, so the two do not take turns)."""
+        g = plan.goal
+        if g != seg1 + self.look_ahead or g >= self.n or self.is_stop(g):
+            return None
+        floor = self._window_floor(g)
+        if floor <= 0.0:
+            return None
+        other = 0.0 if plan.v_end > 0.0 else floor
+        s_g = self.tb.s[g]
+        a_max, j_max = self._limits(self.seg)
+        if s_g - self.s - self._need(self.v, self.a, other, True, a_max, j_max) < SLACK_MARGIN:
+            return None  # lost before this step
+        a_max, j_max = self._limits(seg1)
+        if s_g - s1 - self._need(v1, a1, other, True, a_max, j_max) < SLACK_MARGIN:
+            return g
+        return None
 
     def _commit(
         self, t: float, s: float, v: float, a: float, seg: int, cut: int, plan: Plan,

@@ -66,6 +66,23 @@ def reach_velocity(v_end: float, length: float, a_max: float, j_max: float) -> f
     return b - 2.0 * const / (lin + math.sqrt(lin * lin - 4.0 * const))  # stable root form
 
 
+def reach_velocity_any_above(v_end: float, length: float, a_max: float, j_max: float) -> float:
+    """Largest v ≥ … from which every velocity ≥ v_end can be reached within `length` (zero
+    acceleration at both ends): the least reach_velocity(e, length) over e ≥ v_end. With a jerk
+    limit reach_velocity is not monotonic in its end velocity: it falls from e = 0 to a low e
+    and rises after it (from v, braking to v/3 takes longer than braking to rest; past the
+    acceleration limit the turn is at A²/2J), so the velocity from which rest is reachable may
+    not reach a cap a little above rest. Unimodal, with the turn at e* = (L·√J / 4√2)^(2/3)
+    (triangular: Δ = 2e*) or A²/2J (trapezoidal); checked against a scan of e for random
+    limits and lengths."""
+    if j_max == INF or length <= 0.0:
+        return reach_velocity(v_end, length, a_max, j_max)
+    turn = (length * math.sqrt(j_max) / (4.0 * math.sqrt(2.0))) ** (2.0 / 3.0)
+    if 2.0 * turn * j_max > a_max * a_max:
+        turn = 0.5 * a_max * a_max / j_max
+    return reach_velocity(max(v_end, turn), length, a_max, j_max)
+
+
 def lowest_reachable(v_start: float, length: float, a_max: float, j_max: float) -> float:
     """Smallest velocity reachable from v_start (zero acceleration) within `length`. Stopping
     counts as reachable when it needs at most length·(1 + 1e-6) (rounding of the closed forms);

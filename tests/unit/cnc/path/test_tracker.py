@@ -2,11 +2,15 @@
 
 from __future__ import annotations
 
+import numpy as np
+
 from liftd.cnc.geo_task import GeoTask
+from liftd.cnc.params import LiftMethod
 from liftd.cnc.path.tracker import Tracker
 from liftd.settings import load_settings
 from tests.support.paths import REPO
 from tests.support.programs import nesting_program
+from tests.support.scenarios import wide_scenario
 
 
 def test_a_brake_whose_projected_velocity_rounds_below_zero_targets_rest_without_a_refusal() -> (
@@ -30,3 +34,31 @@ def test_a_brake_whose_projected_velocity_rounds_below_zero_targets_rest_without
     plan = tracker.plan
     assert plan is not None and plan.goal == 258 and plan.v_end == 0.0  # rest at the boundary
     assert tracker.v >= 0.0
+
+
+def test_a_target_reached_from_a_kink_lands_on_the_next_one_without_a_position_step() -> None:
+    """Path-based wide seed 410: inside a lift range over 0.2 mm polyline blocks the path crawls
+    at ~5 mm/s, accelerating from kink to kink (each a run boundary, zero acceleration there).
+    The target velocity at the next kink was the one reachable within the distance plus the
+    slack tolerance (1 nm): ruckig accepted it and ended 1 nm past the kink, the tracker put
+    the path back on it, and that 1 nm step, 1 m/s³ of path jerk at a 1 ms cycle, took the
+    coupled Z (dz/ds ≈ 39) to 1.28 × its jerk limit. Every 4 cycles' finite-difference jerk of
+    s stays within the highest jerk limit of the segments they span."""
+    sc = wide_scenario(410, LiftMethod.LIFTING)
+    task = GeoTask(sc.channel, sc.text)
+    tb = task.interp.table
+    tracker = Tracker(tb, task.interp.prod.look_ahead)
+    tracker.set_inputs(1.0, False)
+    tracker.set_state(0.0, tb.s[300], 0.0, 0.0, 300, None)
+    dt = 0.001
+    s, seg = [tracker.s], [tracker.seg]
+    while tracker.seg < 330:
+        tracker.advance(len(s) * dt, dt)
+        s.append(tracker.s)
+        seg.append(tracker.seg)
+    assert tracker.errors == 0
+    jerk = np.diff(np.array(s), 3) / dt**3
+    limit = [
+        max(tb.run_j[tb.run[k]] for k in range(seg[n], seg[n + 3] + 1)) for n in range(len(jerk))
+    ]
+    assert float(np.max(np.abs(jerk) / np.array(limit))) <= 1.0 + 1e-6
