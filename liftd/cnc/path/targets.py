@@ -17,7 +17,7 @@ only when nothing else is accepted.
 from __future__ import annotations
 
 from liftd.cnc.path.constraints import SLACK_TOL, Constraints
-from liftd.cnc.path.plan import Plan
+from liftd.cnc.path.plan import BRAKE, Plan
 from liftd.cnc.path.table import PathTable
 from liftd.cnc.path.velocity import (
     brake_distance,
@@ -41,7 +41,11 @@ class Targets(Constraints):
     ) -> None:
         super().__init__(table, look_ahead, lift_stops, acked)
         self.calc = Ruckig1()
+        # the path state the profiles start from (`Tracker` moves it)
         self.t = 0.0
+        self.s = table.s[0] if table.s else 0.0
+        self.v = 0.0
+        self.a = 0.0
         self.plan: Plan | None = None
         self.errors = 0
         self.last_error = ""
@@ -146,4 +150,6 @@ class Targets(Constraints):
         self._brake(a_max, j_max, w)
 
     def _brake(self, a_max: float, j_max: float, w: int) -> None:
-        raise NotImplementedError  # Tracker: brake to rest
+        """Last resort: brake to rest from the path's state (never expected; counted)."""
+        traj = self.calc.velocity(self.s, self.v, self.a, 0.0, a_max, j_max)
+        self.plan = Plan(traj, self.t, BRAKE, w, None, 0.0)

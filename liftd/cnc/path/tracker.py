@@ -38,7 +38,7 @@ from liftd.cnc.path.constraints import (
     SLACK_TOL,
     V_ROUND,
 )
-from liftd.cnc.path.plan import BRAKE, CRUISE, EPS_S, Crossing, Plan
+from liftd.cnc.path.plan import CRUISE, EPS_S, Crossing, Plan
 from liftd.cnc.path.table import PathTable
 from liftd.cnc.path.targets import Targets
 from liftd.cnc.path.velocity import (
@@ -73,9 +73,6 @@ class Tracker(Targets):
         acked: set[int] | None = None,
     ) -> None:
         super().__init__(table, look_ahead, lift_stops, acked)
-        self.s = table.s[0] if table.s else 0.0
-        self.v = 0.0
-        self.a = 0.0
         self.stopped_at: int | None = 0  # resting at this boundary until `resume`
         self.parked = False  # at rest under a hold, not at a stop
         self._passed: Plan | None = None  # the target plan of the boundary just passed
@@ -280,11 +277,6 @@ class Tracker(Targets):
             self._brake(a_max, j_max, w)
             return
         self.plan = Plan(traj, self.t, CRUISE, w, None, ceiling)
-
-    def _brake(self, a_max: float, j_max: float, w: int) -> None:
-        """Last resort: brake to rest (never expected; counted)."""
-        traj = self.calc.velocity(self.s, self.v, self.a, 0.0, a_max, j_max)
-        self.plan = Plan(traj, self.t, BRAKE, w, None, 0.0)
 
     # -- motion ---------------------------------------------------------------------------------
     def advance(self, t_new: float, dt: float) -> list[Crossing]:
