@@ -7,6 +7,7 @@ the extra columns lift_phase, vz [mm/s], az [mm/s²], state, override_max.
 
 from __future__ import annotations
 
+import math
 from itertools import chain
 from typing import Final, TextIO
 
@@ -56,7 +57,8 @@ class TraceWriter:
         self.tail = ",".join(tail) + "\n"
         # The tail of a row while Z does not move (vz = az = 0) takes few values: formatted once
         # each (~1 µs of every row otherwise); bounded by the (override, flags, state) seen.
-        # Zero overrides are not cached: 0.0 == -0.0 as keys, but they print differently.
+        # Zero overrides and a vz or az of -0.0 are not cached: 0.0 == -0.0 as keys, but they
+        # print differently (each value prints as "%.9f" of itself, whatever came before).
         self.tails: dict[tuple[float, bool, bool, int, int, float], str] = {}
         self.rows: list[str] = []  # the text since the last flush, in pieces
         self.n_rows = 0  # rows in it
@@ -77,6 +79,8 @@ class TraceWriter:
         if (
             s.lift_vz == 0.0
             and s.lift_az == 0.0
+            and math.copysign(1.0, s.lift_vz) > 0.0  # -0.0 prints as itself: not from the cache
+            and math.copysign(1.0, s.lift_az) > 0.0
             and s.override != 0.0
             and s.override_max != 0.0
             and len(self.tails) < TAILS_MAX
@@ -126,7 +130,15 @@ class TraceWriter:
         ov, ov_max = r[base + 4], r[base + 11]
         vz, az = r[base + 8], r[base + 9]
         active, suppressed, phase, state = r[base + 5], r[base + 6], r[base + 7], r[base + 10]
-        if vz == 0.0 and az == 0.0 and ov != 0.0 and ov_max != 0.0 and len(self.tails) < TAILS_MAX:
+        if (
+            vz == 0.0
+            and az == 0.0
+            and math.copysign(1.0, vz) > 0.0  # -0.0 prints as itself, as in `write`
+            and math.copysign(1.0, az) > 0.0
+            and ov != 0.0
+            and ov_max != 0.0
+            and len(self.tails) < TAILS_MAX
+        ):
             if (
                 self.prev_cached
                 and ov == self.prev_ov

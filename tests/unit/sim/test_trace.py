@@ -75,7 +75,15 @@ def test_every_row_is_its_snapshot_formatted() -> None:
     snaps = run(ch, PROGRAM, schedule)
     # the same snapshots once more with the sign of a zero override flipped: the cache holds
     # "0.000000" by then and must not print it for -0.0
-    flipped = [s._replace(override=-0.0) if s.override == 0.0 else s for s in snaps]
+    # (and a resting Z's vz and az: -0.0 after 0.0 with the same key)
+    flipped = [
+        s._replace(
+            override=-0.0 if s.override == 0.0 else s.override,
+            lift_vz=-0.0 if s.lift_vz == 0.0 else s.lift_vz,
+            lift_az=-0.0 if s.lift_az == 0.0 else s.lift_az,
+        )
+        for s in snaps
+    ]
     assert any(s.override == 0.0 for s in snaps) and any(s.lift_vz != 0.0 for s in snaps)
     out = io.StringIO()
     writer = TraceWriter(out, ch.axis_names)
@@ -88,6 +96,7 @@ def test_every_row_is_its_snapshot_formatted() -> None:
     bad = [(i, r, e) for i, (r, e) in enumerate(zip(rows, expected, strict=True)) if r != e]
     assert bad == []
     assert any(",-0.000000," in r for r in rows)
+    assert any(",-0.000000000,-0.000000000," in r for r in rows)
 
 
 def test_limit_monitor_matches_numpy_over_chunk_borders() -> None:
@@ -119,6 +128,8 @@ def test_rows_of_quiet_cycles_print_as_their_snapshots() -> None:
             override=-0.0 if s.override == 0.0 and k % 2 else s.override,
             positions=tuple(-0.0 if k % 3 == 1 else x for x in s.positions),
             v_path=-0.0 if s.v_path == 0.0 and k % 2 else s.v_path,
+            lift_vz=-0.0 if s.lift_vz == 0.0 and k % 2 else s.lift_vz,
+            lift_az=-0.0 if s.lift_az == 0.0 and k % 4 < 2 else s.lift_az,
         )
         for k, s in enumerate(snaps)
     ]
