@@ -166,7 +166,9 @@ class Constraints:
         if self._floor_key == (w, self.ov):  # asked every step while the profile aims at w
             return self._floor_val
         a_max, j_max = self._limits(w)
-        after = reach_velocity(0.0, max(tb.s[w + 1] - tb.s[w] - CHAIN_MARGIN, 0.0), a_max, j_max)
+        after = reach_velocity_any_above(
+            0.0, max(tb.s[w + 1] - tb.s[w] - CHAIN_MARGIN, 0.0), a_max, j_max
+        )
         self._floor_key = (w, self.ov)
         self._floor_val = min(tb.entry_cap(w, self.ov), after)
         return self._floor_val
