@@ -47,3 +47,26 @@ def test_the_gain_is_full_jerk_then_full_acceleration() -> None:
     x1 = u * t1 + j * t1**3 / 6.0
     ends = _gain(u, np.array([x1 * (1 - 1e-9), x1 * (1 + 1e-9)]), a, j)
     assert ends[0] == pytest.approx(ends[1], rel=1e-6)
+
+
+@pytest.mark.parametrize("fill", [np.nan, -1.0, 1e300])
+def test_the_bound_reads_no_memory_it_did_not_write(
+    monkeypatch: pytest.MonkeyPatch, fill: float
+) -> None:
+    """Whatever an uninitialised array holds, the bound is the same (it was not: seed 2's
+    program end point was never written, and the bound came out 4.2896, 4.3027, 4.4932 s or
+    NaN from run to run)."""
+    sc = cam_scenario(2, steps=False)
+    ov = sc.schedule.override_at(0.0)
+    task = GeoTask(sc.channel, sc.text)
+    la = sc.channel.look_ahead_blocks
+    clean = lower_bound_time(task.prog.path, task.prog.table, la, ov)
+    real_empty = np.empty
+
+    def dirty(shape: int, *args: object, **kw: object) -> np.ndarray:
+        out = real_empty(shape, *args, **kw)  # type: ignore[call-overload]
+        out.fill(fill)
+        return out  # type: ignore[no-any-return]
+
+    monkeypatch.setattr(np, "empty", dirty)
+    assert lower_bound_time(task.prog.path, task.prog.table, la, ov) == clean
