@@ -222,22 +222,25 @@ SHADED = """() => {
 }"""
 
 
-def _one_cycle_trace(path: Path, row: int = 1500, rows: int = 3000) -> None:
-    """A trace of 3 s (1 ms rows) whose lift_active is TRUE in one row only."""
+def _one_cycle_trace(path: Path, length: int = 1, row: int = 1500, rows: int = 3000) -> None:
+    """A trace of 3 s (1 ms rows) whose lift_active is TRUE in `length` rows from `row`."""
     axes = ["x", "y", "z"]
     with path.open("w") as f:
         f.write(",".join(["t", "line", *axes, "v_path", "override", "lift_active"]))
         f.write(",lift_suppressed\n")
         for i in range(rows):
-            on = "1" if i == row else "0"
+            on = "1" if row <= i < row + length else "0"
             f.write(f"{i * 1e-3:.4f},12,{i * 0.01:.3f},0,1,100,1,{on},0\n")
 
 
-def test_a_lift_of_one_geo_cycle_is_painted_true_then_false(tmp_path: Path) -> None:
+@pytest.mark.parametrize("length", [1, 30])
+def test_a_lift_of_one_geo_cycle_is_painted_true_then_false(tmp_path: Path, length: int) -> None:
     """Review #7: the feed pulses a one-cycle range as TRUE and FALSE in one message; the page
-    paints the TRUE (for ~150 ms), then the FALSE, and shades the Z plot for it."""
+    paints the TRUE (for ~150 ms), then the FALSE, and shades the Z plot for it. A range of
+    30 ms always straddles two updates (50 Hz), its FALSE in a later message than its TRUE
+    (a one-row range does so now and then): the TRUE is held as long."""
     trace = tmp_path / "one.csv"
-    _one_cycle_trace(trace)
+    _one_cycle_trace(trace, length)
     config = str(REPO / "config" / "liftd.toml")
     with liftd_view(trace, config) as url, browser() as ctx:
         page: Any = ctx.new_page()

@@ -141,18 +141,18 @@
 
   // A lift flag's changes are shown one after another, each painted: a range of one GEO
   // cycle arrives as TRUE and FALSE in one message (the feed's pulse), and applied in one
-  // go the browser would never paint the TRUE. A value with another behind it stays HOLD_MS
-  // (TRUE) or GAP_MS (the FALSE between two ranges); a FALSE for a TRUE not yet painted
-  // waits for HOLD_MS after it. A flag that lasts longer than that is shown as it comes.
+  // go the browser would never paint the TRUE; a range of a few ms may as well straddle two
+  // messages, its FALSE 20 ms behind its TRUE. So a value stays on screen at least HOLD_MS
+  // (TRUE) or GAP_MS (a FALSE after a range) before the next one, whether that next one came
+  // in the same message or a later one. A flag that lasts longer than that is shown as it comes.
   const HOLD_MS = 150, GAP_MS = 50, QUEUED = 16;
-  const held = {};  // symbol → {queue, until, shownAt, frame, timer}
-  let frames = 0;  // animation frames run (a paint follows each)
+  const held = {};  // symbol → {queue, until, shownAt, timer}
   const isFlag = (sym) => sym.endsWith(".lift_active") || sym.endsWith(".lift_suppressed");
 
   function queueFlag(sym, v) {
-    const h = held[sym] || (held[sym] = { queue: [], until: 0, shownAt: 0, frame: -1, timer: null });
+    const h = held[sym] || (held[sym] = { queue: [], until: 0, shownAt: 0, timer: null });
     if (v) pulsed.add(sym.split(".")[1]);  // the Z plot shades it at the next sample
-    if (!v && values[sym] && !h.queue.length && h.frame === frames) h.until = Math.max(h.until, h.shownAt + HOLD_MS);
+    if (!h.queue.length && v !== values[sym]) h.until = Math.max(h.until, h.shownAt + (values[sym] ? HOLD_MS : GAP_MS));
     h.queue.push(v);
     if (h.queue.length > QUEUED) h.queue.splice(0, h.queue.length - QUEUED);
     drain(sym);
@@ -168,7 +168,7 @@
     if (!h.queue.length) return;
     const v = h.queue.shift();
     values[sym] = v; show(sym);
-    h.shownAt = now; h.frame = frames;
+    h.shownAt = now;
     h.until = h.queue.length ? now + (v ? HOLD_MS : GAP_MS) : 0;
     if (h.queue.length) drain(sym);
   }
@@ -390,7 +390,6 @@
 
   let drawn = 0;
   function frame(now) {
-    frames++;
     if (dirty && hello && now - drawn >= 100) {  // the figures at 10 Hz: the values stay at 50
       dirty = false;
       drawn = now;
