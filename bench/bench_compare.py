@@ -4,7 +4,8 @@ planning 10 000 path-based lift ranges in path preparation.
 
 Figures to reach: advanced mean clearance ≥ path-based on every lift; under 150 % override
 path-based Z exceeds its plan (z_a_max_ratio > 1) while Advanced stays ≤ 1.0; planning 10 000
-ranges well under 1 s.
+ranges well under 1 s; `simulate --compare --plot` of one lift of ~400 s in bounded memory
+(peak RSS of the process, against the same command on a lift of ~4 s).
 Run: .venv/bin/python bench/bench_compare.py   (one JSON line per figure, ~1 min)
 """
 
@@ -12,7 +13,9 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -177,12 +180,59 @@ def planning_cost(ch: ChannelParams) -> None:
     )
 
 
+def one_lift(seconds: float) -> str:
+    """One lift range of about `seconds` at F300 (a to-and-fro travel, within the limits)."""
+    out = ["G90 G01 X10 Y10 Z1 F6000\nZ[LIFT_START POS=20 POS_LIMIT=25]\n"]
+    leg = min(200.0, seconds * 5.0)  # mm, at 5 mm/s
+    legs = max(1, round(seconds * 5.0 / leg))
+    out += [
+        f"G01 X{10 + leg if i % 2 == 0 else 10} Y{10 + 0.1 * i:.1f} F300\n" for i in range(legs)
+    ]
+    out.append("Z[LIFT_END]\nG01 Z1 F6000\nM30\n")
+    return "".join(out)
+
+
+def long_lift_memory() -> None:
+    """Peak RSS of `liftd simulate --compare --plot` (a fresh process each) for one lift of
+    ~4 s and of ~400 s: the per-lift samples are bounded (compare.MAX_ROWS)."""
+    config = str(ROOT / "config" / "liftd.toml")
+    with tempfile.TemporaryDirectory() as tmp:
+        for seconds in (4.0, 400.0):
+            prog = Path(tmp) / f"lift{seconds:.0f}.nc"
+            prog.write_text(one_lift(seconds))
+            cmd = [sys.executable, "-c", PEAK_RSS, "simulate", str(prog), "-c", config,
+                   "--compare", "--json", "--plot", str(Path(tmp) / "p.png")]  # fmt: skip
+            out = subprocess.run(cmd, capture_output=True, text=True, check=True, cwd=ROOT)
+            summary, peak = out.stdout.rsplit("\n", 2)[:2]
+            duration = json.loads(summary)["totals"]["duration_s"]
+            print(
+                json.dumps(
+                    {
+                        "bench": "compare_plot_peak_rss",
+                        "lift_s_about": seconds,
+                        "duration_s": duration,
+                        "peak_rss_mib": round(int(peak) / 1024, 1),
+                    }
+                ),
+                flush=True,
+            )
+
+
+PEAK_RSS = """import resource, sys
+from liftd import cli
+sys.argv[0] = "liftd"
+code = cli.main(sys.argv[1:])
+print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)
+"""
+
+
 def main() -> None:
     parser(__doc__).parse_args()
     ch = load_settings(str(ROOT / "config" / "liftd.toml")).channel
     clearance(ch)
     override_step(ch)
     planning_cost(ch)
+    long_lift_memory()
 
 
 if __name__ == "__main__":

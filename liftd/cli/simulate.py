@@ -240,8 +240,9 @@ def _compare(
     ch = settings.channel
     delay = settings.config.plc.m_ack_delay_ms * 1e-3
     result = compare.compare(
-        ch, text, schedule, delay, traces, args.max_time, program.name, not args.step_times
-    )
+        ch, text, schedule, delay, traces, args.max_time, program.name, not args.step_times,
+        plot=bool(args.plot),
+    )  # fmt: skip
     for method, run in result.results.items():
         _report_run(program, run, args.max_time, f" ({method} run)")
     summary = result.summary

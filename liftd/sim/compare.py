@@ -4,8 +4,10 @@ Lifting and with path-based Lifting, paired lift by lift.
 The summary (ComparisonSummary, its JSON) holds both full summaries (docs/reference/design.md §3.3)
 and, per lift, both lift entries with the ratios advanced / lifting of mean clearance and peak. The
 figure (plot.plot_compare) overlays each lift's Z over time and over path distance, needing
-per-lift samples: `LiftSampler` keeps them for the first MAX_PLOTTED lifts only, so memory
-stays bounded on any program.
+per-lift samples: `LiftSampler` keeps them (only for a figure: `compare(plot=True)`) for the
+first MAX_PLOTTED lifts, each in at most 2·MAX_ROWS rows (a long lift decimated: each row kept
+is the one of largest |a_z| of the cycles it stands for, so the figure's over-limit marks stay),
+so memory stays bounded on any program: at most 2 · MAX_PLOTTED · 2·MAX_ROWS rows, ~16 MB.
 """
 
 from __future__ import annotations
@@ -27,18 +29,59 @@ from liftd.sim.summary import JsonObject, LiftSummary, SimSummary
 METHODS = ("advanced", "lifting")
 MAX_PLOTTED = 12
 MARGIN = 30  # cycles shown before and after each lift
+MAX_ROWS = 4096  # a lift's rows before they are halved (a figure is ~550 px wide)
+
+Row = tuple[float, float, float, float]
+
+
+def _peak(a: Row, b: Row) -> Row:
+    """Of two rows, the one of larger |a_z| (the earlier on a tie)."""
+    return b if abs(b[3]) > abs(a[3]) else a
 
 
 @dataclass
 class LiftSamples:
-    """One lift of one run: rows of (t, s, z, a_z) in SI units, s the path distance."""
+    """One lift of one run: rows of (t, s, z, a_z) in SI units, s the path distance. Past
+    2·MAX_ROWS rows they are halved (each pair to its `_peak`) and each later row stands for
+    `stride` cycles (the peak of them): a lift of any length keeps at most 2·MAX_ROWS."""
 
     start_line: int
-    rows: list[tuple[float, float, float, float]] = field(default_factory=list)
+    rows: list[Row] = field(default_factory=list)
     t_start: float = 0.0
     s_start: float = 0.0
     t_end: float = -1.0
     s_end: float = 0.0
+    stride: int = 1
+    pending: Row | None = None  # the peak of the cycles since the last row kept
+    count: int = 0  # how many cycles `pending` stands for
+
+    def push(self, row: Row) -> None:
+        if self.stride == 1:
+            self.rows.append(row)
+        else:
+            self.pending = row if self.pending is None else _peak(self.pending, row)
+            self.count += 1
+            if self.count < self.stride:
+                return
+            self.rows.append(self.pending)
+            self.pending, self.count = None, 0
+        if len(self.rows) >= 2 * MAX_ROWS:
+            rows = self.rows
+            self.rows = [_peak(rows[i], rows[i + 1]) for i in range(0, len(rows) - 1, 2)]
+            self.stride *= 2
+
+    def extend(self, rows: list[Row]) -> None:
+        if self.stride == 1 and len(self.rows) + len(rows) < 2 * MAX_ROWS:
+            self.rows.extend(rows)
+            return
+        for row in rows:
+            self.push(row)
+
+    def close(self) -> None:
+        """The cycles since the last row kept, as one more row (the lift's last cycles)."""
+        if self.pending is not None:
+            self.rows.append(self.pending)
+            self.pending, self.count = None, 0
 
 
 class LiftSampler:
@@ -84,10 +127,11 @@ class LiftSampler:
         self.recent.append(row)
         if self.open is None:
             return
-        self.open.rows.append(row)
+        self.open.push(row)
         if self.open.t_end >= 0.0:
             self.tail -= 1
             if self.tail <= 0:
+                self.open.close()
                 self.open = None
 
     def add_rows(self, rows: list[float], axes_at: int, width: int) -> None:
@@ -120,13 +164,19 @@ class LiftSampler:
         if self.open is None:
             return
         if self.open.t_end < 0.0:
-            self.open.rows.extend(new)
+            self.open.extend(new)
             return
         take = min(self.tail, m)
-        self.open.rows.extend(new[:take])
+        self.open.extend(new[:take])
         self.tail -= take
         if self.tail <= 0:
+            self.open.close()
             self.open = None
+
+    def close(self) -> None:
+        """The run ended: a lift still open keeps its last cycles."""
+        if self.open is not None:
+            self.open.close()
 
 
 T = TypeVar("T", int, float)
@@ -312,18 +362,27 @@ def compare(
     max_time: float = 3600.0,
     program: str = "",
     batch: bool = True,
+    plot: bool = True,
 ) -> Comparison:
-    """Both runs (`batch`: simulate's, the samplers take the quiet cycles' rows)."""
+    """Both runs (`batch`: simulate's, the samplers take the quiet cycles' rows). `plot`: keep
+    the per-lift samples a figure needs (`samples`; a study needs none: they cost a Python
+    call per cycle that is not batched). Neither run keeps simulate's plot series."""
     results: dict[str, SimResult] = {}
     samplers: dict[str, LiftSampler] = {}
     for method in METHODS:
         run_ch = channel_for(ch, method)
-        sampler = LiftSampler(run_ch.lift_axis_index, run_ch.cycle_time)
         trace = (traces or {}).get(method)
+        if not plot:
+            results[method] = simulate(
+                run_ch, text, schedule, m_ack_delay, trace, max_time, series=False, batch=batch
+            )
+            continue
+        sampler = LiftSampler(run_ch.lift_axis_index, run_ch.cycle_time)
         results[method] = simulate(
             run_ch, text, schedule, m_ack_delay, trace, max_time, sampler.add,
-            batch=batch, on_rows=sampler.add_rows,
+            series=False, batch=batch, on_rows=sampler.add_rows,
         )  # fmt: skip
+        sampler.close()
         samplers[method] = sampler
     summary = compare_summary(results["advanced"].summary, results["lifting"].summary, program)
     return Comparison(results, samplers, summary)
@@ -355,4 +414,5 @@ def describe(summary: ComparisonSummary) -> str:
 
 
 def as_arrays(lift: LiftSamples) -> np.ndarray:
-    return np.asarray(lift.rows, dtype=float).reshape(-1, 4)
+    rows = lift.rows if lift.pending is None else [*lift.rows, lift.pending]
+    return np.asarray(rows, dtype=float).reshape(-1, 4)

@@ -304,7 +304,8 @@ def run_text(run: RunSettings, program: str, text: str, files: NcSources) -> Pro
     (never raises for the program's sake: an exception in liftd becomes a FAILED row)."""
     try:
         ch = dataclasses.replace(run.channel, nc_sources=files)
-        cmp = compare(ch, text, Schedule(), run.m_ack_delay, None, run.max_time, Path(program).name)
+        name = Path(program).name
+        cmp = compare(ch, text, Schedule(), run.m_ack_delay, None, run.max_time, name, plot=False)
         return ProgramResult.of(program, cmp, run.max_time)
     except Exception as exc:  # a bug in liftd, reported with the program that shows it
         return ProgramResult(ProgramRow.failed(program, Status.FAILED, liftd_failed(exc)))

@@ -89,7 +89,7 @@ def test_a_batch_stops_before_the_schedules_next_step() -> None:
 
 @pytest.mark.parametrize("name", ["demo-schedule", "nesting-4-schedule", "nc-error", "wide-5"])
 def test_compare_with_batches_samples_every_cycle(name: str) -> None:
-    """`--compare` (the study's run) with batches: each method's summary and the per-lift
+    """`--compare --plot` with batches: each method's summary and the per-lift
     samples of its figure (t, path distance, Z, Z's second difference: sums over every
     cycle) as by single steps, bit for bit."""
     ch, text, schedule = CASES[name]
