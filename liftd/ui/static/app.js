@@ -140,19 +140,21 @@
   }
 
   // A lift flag's changes are shown one after another, each painted: a range of one GEO
-  // cycle arrives as TRUE and FALSE in one message (the feed's pulse), and applied in one
-  // go the browser would never paint the TRUE; a range of a few ms may as well straddle two
-  // messages, its FALSE 20 ms behind its TRUE. So a value stays on screen at least HOLD_MS
-  // (TRUE) or GAP_MS (a FALSE after a range) before the next one, whether that next one came
-  // in the same message or a later one. A flag that lasts longer than that is shown as it comes.
+  // cycle arrives as TRUE and FALSE in one update (the feed's pulse), and applied in one
+  // go the browser would never paint the TRUE. A value with another behind it stays HOLD_MS
+  // (TRUE) or GAP_MS (the FALSE between two ranges). A range shorter than two updates may
+  // also straddle one, its FALSE in the update after its TRUE's: such a FALSE waits for
+  // HOLD_MS after the TRUE too. A flag that lasts longer is shown as it comes.
   const HOLD_MS = 150, GAP_MS = 50, QUEUED = 16;
-  const held = {};  // symbol → {queue, until, shownAt, timer}
+  const held = {};  // symbol → {queue, until, shownAt, update, timer}
+  let updates = 0;  // the feed's updates applied (one per frame of a `frames` message)
   const isFlag = (sym) => sym.endsWith(".lift_active") || sym.endsWith(".lift_suppressed");
 
   function queueFlag(sym, v) {
-    const h = held[sym] || (held[sym] = { queue: [], until: 0, shownAt: 0, timer: null });
+    const h = held[sym] || (held[sym] = { queue: [], until: 0, shownAt: 0, update: -2, timer: null });
     if (v) pulsed.add(sym.split(".")[1]);  // the Z plot shades it at the next sample
-    if (!h.queue.length && v !== values[sym]) h.until = Math.max(h.until, h.shownAt + (values[sym] ? HOLD_MS : GAP_MS));
+    if (!v && values[sym] && !h.queue.length && updates - h.update <= 1) h.until = Math.max(h.until, h.shownAt + HOLD_MS);
+    if (v) h.update = updates;  // the update a range's TRUE came in
     h.queue.push(v);
     if (h.queue.length > QUEUED) h.queue.splice(0, h.queue.length - QUEUED);
     drain(sym);
@@ -175,6 +177,7 @@
 
   function applyFrames(list) {
     for (const f of list) {
+      updates++;
       const c = {};
       for (const sym in f.c) if (isFlag(sym)) queueFlag(sym, f.c[sym]); else c[sym] = f.c[sym];
       applyValues(c); applyExtras(f.x);
