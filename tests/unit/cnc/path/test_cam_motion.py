@@ -9,10 +9,14 @@ deviations; the bench counts them over thousands of runs."""
 
 from __future__ import annotations
 
+import math
+import re
+
 import pytest
 
-from tests.support.cam_cases import cam_scenario
-from tests.support.cam_runs import check
+from liftd.cnc.geo_task import GeoTask
+from tests.support.cam_cases import X_RANGE, Y_RANGE, cam_scenario
+from tests.support.cam_runs import check, core_time, time_limit
 from tests.support.scenarios import describe, scenario, wide_scenario
 
 # every 17th seed of the first 340: a spread over look-ahead sizes, cycle times and shapes
@@ -114,3 +118,48 @@ def test_a_chain_to_the_window_end_keeps_every_higher_end_reachable(seed: int) -
     _, hard, slow, errors = check(sc)
     assert hard == [] and errors == 0, (hard, describe(sc))
     assert slow == [], (slow, describe(sc))
+
+
+def _arc_points(text: str) -> list[tuple[float, float]]:
+    """Points every 0.5° along each arc of a program (mm), from its start, end and centre."""
+    points: list[tuple[float, float]] = []
+    x = y = 0.0
+    for line in text.splitlines():
+        words = dict(re.findall(r"([A-Z])(-?[\d.]+)", line.split("[")[0]))
+        if "X" not in words or "Y" not in words:
+            continue
+        x1, y1 = float(words["X"]), float(words["Y"])
+        if line.startswith(("G02", "G03")):
+            cx, cy = x + float(words["I"]), y + float(words["J"])
+            r = math.hypot(x - cx, y - cy)
+            a0, a1 = math.atan2(y - cy, x - cx), math.atan2(y1 - cy, x1 - cx)
+            sign = 1.0 if line.startswith("G03") else -1.0
+            sweep = ((a1 - a0) * sign) % (2.0 * math.pi)
+            steps = max(1, math.ceil(math.degrees(sweep) * 2.0))
+            for k in range(steps + 1):
+                a = a0 + sign * sweep * k / steps
+                points.append((cx + r * math.cos(a), cy + r * math.sin(a)))
+        x, y = x1, y1
+    return points
+
+
+def test_every_generated_arc_stays_inside_the_table() -> None:
+    """Seeds 342 and 364 (and 500, 941 by less) wrote arcs whose ends and centre lay inside
+    the table but which bulged beyond it, 342 and 364 beyond Y's software limit: liftd
+    rejected the programs with error 50042 and the bench counted two failed runs."""
+    for seed in range(1000):
+        for px, py in _arc_points(cam_scenario(seed).text):
+            assert X_RANGE[0] - 1e-3 <= px <= X_RANGE[1] + 1e-3, (seed, px)
+            assert Y_RANGE[0] - 1e-3 <= py <= Y_RANGE[1] + 1e-3, (seed, py)
+
+
+@pytest.mark.parametrize("seed", [260, 490, 642])
+def test_a_run_may_take_as_long_as_its_program_at_its_lowest_override(seed: int) -> None:
+    """Programs of 43–151 s at their feeds, at 10–37 % override for most of their length, ran
+    into the bench's fixed 300 s and ended ACTIVE (7 failed CAM runs). A run's time limit is
+    now above the core's own time for the program at the schedule's lowest override."""
+    sc = cam_scenario(seed)
+    task = GeoTask(sc.channel, sc.text)
+    lowest = min(f for _, f in sc.schedule.override)
+    needed, _ = core_time(task, lowest)
+    assert needed < time_limit(task.prog.table, sc)
