@@ -10,13 +10,16 @@ deviations; the bench counts them over thousands of runs."""
 from __future__ import annotations
 
 import math
+import random
 import re
 
 import pytest
 
 from liftd.cnc.geo_task import GeoTask
+from liftd.cnc.path.velocity import ramp_distance, reach_from
 from tests.support.cam_cases import X_RANGE, Y_RANGE, cam_scenario
 from tests.support.cam_runs import check, core_time, time_limit
+from tests.support.motion_check import reach_from as check_reach_from
 from tests.support.scenarios import describe, scenario, wide_scenario
 
 # every 17th seed of the first 340: a spread over look-ahead sizes, cycle times and shapes
@@ -163,3 +166,28 @@ def test_a_run_may_take_as_long_as_its_program_at_its_lowest_override(seed: int)
     lowest = min(f for _, f in sc.schedule.override)
     needed, _ = core_time(task, lowest)
     assert needed < time_limit(task.prog.table, sc)
+
+
+def test_a_cap_that_rises_with_the_window_is_expected_only_as_far_as_reachable() -> None:
+    """Wide seed 74 (0.2 mm blocks, a kink each, look-ahead 8), boundary 7: its cap is 60.97
+    mm/s while the window ends at 12 and 70.33 once it ends at 13, 0.4 mm before it. The path,
+    planned time-optimally toward the first, could reach 64.72 from its state when the window
+    moved and passed at 64.76; the check expected 69.66 (its cap under window 13). A path
+    that accelerates as hard as every window allows (bench/probe_window_rise.py, 2 µs steps)
+    reaches 65.27 there: no motion that keeps each window's stop reachable gets near 69.66."""
+    sc = wide_scenario(74)
+    _, hard, slow, errors = check(sc)
+    assert hard == [] and errors == 0, (hard, describe(sc))
+    assert slow == [], (slow, describe(sc))
+
+
+def test_the_checks_reach_from_a_state_matches_the_cores_closed_form() -> None:
+    """`motion_check.reach_from` (bisection on its own distance) against the core's
+    `velocity.reach_from` (closed forms) on random states where the ramp to 0 fits."""
+    rng = random.Random(36)
+    for _ in range(2000):
+        v, a, length = rng.uniform(0.0, 0.5), rng.uniform(-8.0, 8.0), 10 ** rng.uniform(-5, -1.5)
+        if v + a * abs(a) / 800.0 < 0.0 or ramp_distance(v, a, 400.0) > length:
+            continue
+        got = check_reach_from(v, a, length, 8.0, 400.0, 10.0)
+        assert got == pytest.approx(reach_from(v, a, length, 8.0, 400.0), rel=1e-9)
