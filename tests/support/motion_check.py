@@ -33,6 +33,7 @@ motion is measured against bench/reference_profile.py, not here.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from liftd.cnc.geo_task import GeoTask
@@ -118,12 +119,18 @@ def reach(v_end: float, length: float, a_max: float, j_max: float, top: float) -
     end's velocity above v_end)."""
     if length <= 0.0 or top <= v_end:
         return min(v_end, top)
-    if change_distance(v_end, top, a_max, j_max) <= length:
+    return _highest(lambda v1: change_distance(v_end, v1, a_max, j_max), length, v_end, top)
+
+
+def _highest(distance: Callable[[float], float], length: float, lo: float, top: float) -> float:
+    """The highest end velocity in [lo, top] whose `distance` (increasing) is within `length`
+    (lo's is), by 60 bisection steps."""
+    if distance(top) <= length:
         return top
-    lo, hi = v_end, top
+    hi = top
     for _ in range(60):
         mid = 0.5 * (lo + hi)
-        if change_distance(v_end, mid, a_max, j_max) <= length:
+        if distance(mid) <= length:
             lo = mid
         else:
             hi = mid
@@ -190,16 +197,7 @@ def reach_from(v: float, a: float, length: float, a_max: float, j_max: float, to
     v_p = v + a * abs(a) / (2.0 * j_max)
     if v_p >= top or _raise_distance(v, a, v_p, a_max, j_max) >= length:
         return min(v_p, top)
-    if _raise_distance(v, a, top, a_max, j_max) <= length:
-        return top
-    lo, hi = v_p, top
-    for _ in range(60):
-        mid = 0.5 * (lo + hi)
-        if _raise_distance(v, a, mid, a_max, j_max) <= length:
-            lo = mid
-        else:
-            hi = mid
-    return lo
+    return _highest(lambda v1: _raise_distance(v, a, v1, a_max, j_max), length, v_p, top)
 
 
 class _Path:
