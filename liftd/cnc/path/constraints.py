@@ -145,7 +145,7 @@ class Constraints:
             if len(out) == MAX_CANDIDATES - 1 and not gate:
                 # too many at once: b stands for itself and every constraint after it, with
                 # zero acceleration there (a run boundary ends the list as it is)
-                bound, self._cut_open = self._cut_bound(b, w, True)
+                bound, self._cut_open = self._cut_bound(b, w)
                 self._cut = b
                 out.append((b, s_b, min(cap, bound), True))
                 break
@@ -208,14 +208,13 @@ class Constraints:
                 e = min(ck, reach_velocity(e, length, a_max, j_max))
         return e
 
-    def _cut_bound(self, b: int, w: int, chained: bool) -> tuple[float, bool]:
+    def _cut_bound(self, b: int, w: int) -> tuple[float, bool]:
         """(velocity, open) at constraint b, with zero acceleration there, from which every
-        constraint after it is kept, in O(1) (plus one `_beyond` when `chained`): at most the
-        least ceiling and transition cap from b to the end of its run (the table's `feed_min`
-        and `hard_min`), and able to get down to that end's cap over the distance (the first of
-        the run's end, a stop for Z, the window's end). The end's cap: rest at a stop or the
-        window's end; at a run boundary its effective cap (`_beyond`) when `chained`, else rest
-        (from inside `_beyond`, whose chain it ends). Cruising at the least cap and then braking
+        constraint after it is kept, in O(1) plus one `_beyond`: at most the least ceiling and
+        transition cap from b to the end of its run (the table's `feed_min` and `hard_min`),
+        and able to get down to that end's cap over the distance (the first of the run's end,
+        a stop for Z, the window's end). The end's cap: rest at a stop or the window's end, the
+        effective cap (`_beyond`) at a run boundary. Cruising at the least cap and then braking
         to the end's passes every constraint between, so the bound is never above what they
         allow; it replaces a stop at b ("conservative", issue 36's known deviation 1: the path
         braked for a stop no rule makes and came back). `open`: the end's cap may rise, the
@@ -229,7 +228,7 @@ class Constraints:
         length = max(tb.s[end] - tb.s[b] - CHAIN_MARGIN, 0.0)
         e = 0.0
         is_open = end == w or not self.is_stop(end)
-        if chained and is_open and end != w:
+        if is_open and end != w:
             e = min(tb.entry_cap(end, self.ov), self._beyond(end, tb.entry_cap(end, self.ov), w))
             is_open = self._beyond_open
         if is_open:
@@ -242,8 +241,9 @@ class Constraints:
         """Velocity at run boundary g (zero acceleration) from which every constraint after it
         up to the window end stays reachable. Braking does not compose across run boundaries
         (each one wants zero acceleration), so far constraints matter through the chain: it is
-        followed up to MAX_CANDIDATES constraints, the last standing for every one after it
-        (`_cut_bound` with rest at the end of its run: below what they allow, not a stop).
+        followed up to MAX_CANDIDATES constraints, the last counting as rest (a lower cap at g,
+        not a stop: the path passes g before it reaches them; bounding it by `_cut_bound`
+        instead made wide seed 767 2 ms faster and its Z land late, not examined).
         Cached per (g, window end, override, stop set): a step within one segment asks again."""
         key = (g, w, self.ov)
         if self._beyond_key == key:
@@ -254,11 +254,8 @@ class Constraints:
         for b in self._ahead(g + 1, w):
             c, _, stop = self._cap(b, w)
             chain.append((tb.s[b], c, b))
-            if stop:
+            if stop or len(chain) == MAX_CANDIDATES:
                 chain[-1] = (tb.s[b], 0.0, b)
-                break
-            if len(chain) == MAX_CANDIDATES:
-                chain[-1] = (tb.s[b], min(c, self._cut_bound(b, w, False)[0]), b)
                 break
         # open: the chain ends at the window's end or is cut, not at a stop of the program: its
         # end may rise as the window moves on, and with a jerk limit a higher end velocity is
