@@ -1,12 +1,14 @@
-"""Every cycle of CAM-shaped programs (bench/cam_cases.py: overrides 10–200 %, override steps
-in half the runs) and of the random closed-loop lift runs (bench/stress_cases.py, --wide)
+"""Every cycle of CAM-shaped programs (tests/support/cam_cases.py: overrides 10–200 %, override
+steps in half the runs) and of the random closed-loop lift runs (tests/support/scenarios.py)
 through the independent check of tests/support/motion_check.py (issue 36, item 2), with the
 limits (segments within the axes' limits, transitions within the block-transition
 parameters) and the tracker's own errors.
 
-A run fails on a tracker error, a limit violation or a rest no rule explains (a stop); the
-slowdowns the check finds otherwise (a boundary passed slower than the rules allow, a dip
-between two boundaries) are counted apart: docs/architecture.md lists them as known
+A run fails on a tracker error, a limit violation, a rest no rule explains (a stop) or not
+ending within its time limit (tests/support/cam_runs.py `time_limit`: twice the program's time
+at its ceilings under the lowest override, at least 300 s); the slowdowns the check finds
+otherwise (a boundary passed slower than the rules allow, a dip between two boundaries) are
+counted apart: docs/architecture.md lists them as known
 deviations. One JSON line per kind of run with the counts and the first findings.
 
 Run: .venv/bin/python bench/bench_cam_motion.py [RUNS [FIRST_SEED]] [--kind cam|wide|narrow]

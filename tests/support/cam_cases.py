@@ -56,6 +56,23 @@ class _Writer:
     def _inside(self, x: float, y: float) -> bool:
         return X_RANGE[0] <= x <= X_RANGE[1] and Y_RANGE[0] <= y <= Y_RANGE[1]
 
+    def _arc_inside(self, cx: float, cy: float, r: float, phi0: float, sweep: float) -> bool:
+        """Whether the whole arc from angle phi0 through `sweep` (radians, signed) about
+        (cx, cy) lies inside the table: its end and every axis-extreme point (angle a multiple
+        of 90°) within the swept angle. Its ends and centre alone let an arc bulge beyond Y's
+        software limit (seeds 342, 364: error 50042)."""
+        end = phi0 + sweep
+        if not self._inside(cx + r * math.cos(end), cy + r * math.sin(end)):
+            return False
+        lo, hi = (phi0, end) if sweep >= 0.0 else (end, phi0)
+        k = math.ceil(lo / (math.pi / 2.0))
+        while k * math.pi / 2.0 <= hi:
+            a = k * math.pi / 2.0
+            if not self._inside(cx + r * math.cos(a), cy + r * math.sin(a)):
+                return False
+            k += 1
+        return True
+
     def turn(self, degrees: float) -> None:
         self.heading += math.radians(degrees) * self.rng.choice([1.0, -1.0])
 
@@ -83,11 +100,13 @@ class _Writer:
         sign = 1.0 if left else -1.0
         nx, ny = -math.sin(self.heading) * sign, math.cos(self.heading) * sign
         cx, cy = self.x + radius * nx, self.y + radius * ny
-        phi = math.atan2(self.y - cy, self.x - cx) + sign * math.radians(sweep_deg)
-        x, y = cx + radius * math.cos(phi), cy + radius * math.sin(phi)
-        if not self._inside(x, y) or not self._inside(cx, cy):
+        phi0 = math.atan2(self.y - cy, self.x - cx)
+        # the centre inside too, as before, so that only the programs whose arc bulged change
+        sweep = sign * math.radians(sweep_deg)
+        if not self._inside(cx, cy) or not self._arc_inside(cx, cy, radius, phi0, sweep):
             self.line(radius)
             return
+        x, y = cx + radius * math.cos(phi0 + sweep), cy + radius * math.sin(phi0 + sweep)
         word = "G03" if left else "G02"
         i, j = cx - self.x, cy - self.y
         self.lines.append(f"{word} X{x:.4f} Y{y:.4f} I{i:.4f} J{j:.4f}{self.feed_word()}")

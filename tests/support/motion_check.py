@@ -14,7 +14,9 @@ The rules (docs/architecture.md, "Which rule decides a slowdown"):
   override within the axes' and the lift's caps), the transition cap, what the constraints
   ahead within the look-ahead window allow (a backward pass: each reachable from the one before
   with the run's acceleration and jerk, the window's end a stop), and what the path can have
-  reached since the last point it was slower (a forward pass from there).
+  reached since the last point it was slower (a forward pass from there). Where the window's
+  last move raised the cap, the path is held to the cap under the window before and to the
+  higher one only as far as it can reach it from its state when the window moved.
 * **Between two boundaries** it never goes below the lower of its velocities at the two.
 
 After an input changes (override, feed hold, a stop for Z set or dropped, an acknowledge, a
@@ -31,6 +33,7 @@ motion is measured against bench/reference_profile.py, not here.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from liftd.cnc.geo_task import GeoTask
@@ -116,12 +119,18 @@ def reach(v_end: float, length: float, a_max: float, j_max: float, top: float) -
     end's velocity above v_end)."""
     if length <= 0.0 or top <= v_end:
         return min(v_end, top)
-    if change_distance(v_end, top, a_max, j_max) <= length:
+    return _highest(lambda v1: change_distance(v_end, v1, a_max, j_max), length, v_end, top)
+
+
+def _highest(distance: Callable[[float], float], length: float, lo: float, top: float) -> float:
+    """The highest end velocity in [lo, top] whose `distance` (increasing) is within `length`
+    (lo's is), by 60 bisection steps."""
+    if distance(top) <= length:
         return top
-    lo, hi = v_end, top
+    hi = top
     for _ in range(60):
         mid = 0.5 * (lo + hi)
-        if change_distance(v_end, mid, a_max, j_max) <= length:
+        if distance(mid) <= length:
             lo = mid
         else:
             hi = mid
@@ -155,6 +164,40 @@ def reach_rising(v_end: float, length: float, a_max: float, j_max: float, top: f
             x2 = lo + g * (hi - lo)
             f2 = reach(x2, length, a_max, j_max, top)
     return min(r0, f1, f2)
+
+
+def _raise_distance(v: float, a: float, v1: float, a_max: float, j_max: float) -> float:
+    """Distance from (v, a) to v1 ≥ v + a·|a|/2J with zero acceleration there, raising the
+    acceleration at full jerk (up to a_max, held) and ramping it out: the largest acceleration
+    at every velocity on the way, so the least distance (from a < 0 it ramps to 0 first)."""
+    d = 0.0
+    if a < 0.0:
+        t0 = -a / j_max
+        d = v * t0 + a * t0 * t0 / 2.0 + j_max * t0**3 / 6.0
+        return d + change_distance(v - a * a / (2.0 * j_max), v1, a_max, j_max)
+    peak = math.sqrt(j_max * (v1 - v) + a * a / 2.0)
+    hold = 0.0
+    if peak > a_max:
+        peak = a_max
+        hold = (v1 - v - (2.0 * a_max * a_max - a * a) / (2.0 * j_max)) / a_max
+    t1, t3 = (peak - a) / j_max, peak / j_max
+    d = v * t1 + a * t1 * t1 / 2.0 + j_max * t1**3 / 6.0
+    u = v + a * t1 + j_max * t1 * t1 / 2.0
+    d += u * hold + peak * hold * hold / 2.0
+    u += peak * hold
+    return d + u * t3 + peak * t3 * t3 / 2.0 - j_max * t3**3 / 6.0
+
+
+def reach_from(v: float, a: float, length: float, a_max: float, j_max: float, top: float) -> float:
+    """The highest velocity ≤ top the path can have with zero acceleration `length` ahead of
+    (v, a) (bisection on `_raise_distance`, increasing in the end velocity); where ramping the
+    acceleration out alone needs more, the velocity it ramps out to."""
+    if j_max == INF:
+        return reach(max(v, 0.0), length, a_max, j_max, top)
+    v_p = v + a * abs(a) / (2.0 * j_max)
+    if v_p >= top or _raise_distance(v, a, v_p, a_max, j_max) >= length:
+        return min(v_p, top)
+    return _highest(lambda v1: _raise_distance(v, a, v1, a_max, j_max), length, v_p, top)
 
 
 class _Path:
@@ -276,6 +319,9 @@ def check_motion(
     # check expected 142)
     interval_from = 0
     brake_ends = -INF  # a hold's brake that its release cannot undo ends by then (at rest)
+    # the last sample before the path entered segment k (since the last event): its state when
+    # the window moved to k + look_ahead
+    entered: dict[int, Sample] = {}
     last: Sample | None = None
     for smp in samples:
         if last is None:
@@ -299,6 +345,7 @@ def check_motion(
                     brake_ends = smp.t + abs(smp.a) / j + 2.0 * dt
             anchor_s, anchor_v, anchor_seg = smp.s, max(smp.v, last.v), smp.seg
             interval_min, fresh = INF, True
+            entered.clear()
             last = smp
             continue
         held = smp.hold or smp.override <= 0.0 or smp.parked or last.parked
@@ -328,6 +375,17 @@ def check_motion(
             # velocity can take longer than braking to rest)
             window = min(max(b, interval_from + path.look_ahead), b - 1 + path.look_ahead)
             backward = path.backward(b, smp, window)
+            before = entered.get(window - path.look_ahead)
+            if before is not None and window - 1 > b:
+                # a cap that rose as the window moved to `window`: the path's state then came
+                # from planning under the window before, whose cap it had to keep reachable;
+                # it is held to that cap, and to the higher one only as far as it could still
+                # reach it from that state (wide seed 74, boundary 7: 60.97 mm/s under the
+                # window before, 69.66 under this one, 64.72 reachable from the state)
+                a, j = path.limits(before.seg, b)
+                gain = reach_from(before.v, before.a, s_b - before.s, a, j, path.v_top)
+                if gain < backward:
+                    backward = min(backward, max(gain, path.backward(b, smp, window - 1)))
             expect = min(path.target(b, smp.override), backward, forward)
             if v_b < expect * (1.0 - REL_TOL) - tol:
                 out.append(
@@ -348,6 +406,8 @@ def check_motion(
             entry_v, interval_min, fresh = v_b, INF, False
         if smp.seg != last.seg:
             interval_from = braking_from
+            for k in range(last.seg + 1, smp.seg + 1):
+                entered[k] = last
         if not held:
             interval_min = min(interval_min, smp.v) if smp.seg == last.seg else smp.v
         if smp.a >= 0.0 or smp.v == 0.0:

@@ -9,10 +9,17 @@ deviations; the bench counts them over thousands of runs."""
 
 from __future__ import annotations
 
+import math
+import random
+import re
+
 import pytest
 
-from tests.support.cam_cases import cam_scenario
-from tests.support.cam_runs import check
+from liftd.cnc.geo_task import GeoTask
+from liftd.cnc.path.velocity import ramp_distance, reach_from
+from tests.support.cam_cases import X_RANGE, Y_RANGE, cam_scenario
+from tests.support.cam_runs import check, core_time, time_limit
+from tests.support.motion_check import reach_from as check_reach_from
 from tests.support.scenarios import describe, scenario, wide_scenario
 
 # every 17th seed of the first 340: a spread over look-ahead sizes, cycle times and shapes
@@ -114,3 +121,73 @@ def test_a_chain_to_the_window_end_keeps_every_higher_end_reachable(seed: int) -
     _, hard, slow, errors = check(sc)
     assert hard == [] and errors == 0, (hard, describe(sc))
     assert slow == [], (slow, describe(sc))
+
+
+def _arc_points(text: str) -> list[tuple[float, float]]:
+    """Points every 0.5° along each arc of a program (mm), from its start, end and centre."""
+    points: list[tuple[float, float]] = []
+    x = y = 0.0
+    for line in text.splitlines():
+        words = dict(re.findall(r"([A-Z])(-?[\d.]+)", line.split("[")[0]))
+        if "X" not in words or "Y" not in words:
+            continue
+        x1, y1 = float(words["X"]), float(words["Y"])
+        if line.startswith(("G02", "G03")):
+            cx, cy = x + float(words["I"]), y + float(words["J"])
+            r = math.hypot(x - cx, y - cy)
+            a0, a1 = math.atan2(y - cy, x - cx), math.atan2(y1 - cy, x1 - cx)
+            sign = 1.0 if line.startswith("G03") else -1.0
+            sweep = ((a1 - a0) * sign) % (2.0 * math.pi)
+            steps = max(1, math.ceil(math.degrees(sweep) * 2.0))
+            for k in range(steps + 1):
+                a = a0 + sign * sweep * k / steps
+                points.append((cx + r * math.cos(a), cy + r * math.sin(a)))
+        x, y = x1, y1
+    return points
+
+
+def test_every_generated_arc_stays_inside_the_table() -> None:
+    """Seeds 342 and 364 (and 500, 941 by less) wrote arcs whose ends and centre lay inside
+    the table but which bulged beyond it, 342 and 364 beyond Y's software limit: liftd
+    rejected the programs with error 50042 and the bench counted two failed runs."""
+    for seed in range(1000):
+        for px, py in _arc_points(cam_scenario(seed).text):
+            assert X_RANGE[0] - 1e-3 <= px <= X_RANGE[1] + 1e-3, (seed, px)
+            assert Y_RANGE[0] - 1e-3 <= py <= Y_RANGE[1] + 1e-3, (seed, py)
+
+
+@pytest.mark.parametrize("seed", [260, 490, 642])
+def test_a_run_may_take_as_long_as_its_program_at_its_lowest_override(seed: int) -> None:
+    """Programs of 43–151 s at their feeds, at 10–37 % override for most of their length, ran
+    into the bench's fixed 300 s and ended ACTIVE (7 failed CAM runs). A run's time limit is
+    now above the core's own time for the program at the schedule's lowest override."""
+    sc = cam_scenario(seed)
+    task = GeoTask(sc.channel, sc.text)
+    lowest = min(f for _, f in sc.schedule.override)
+    needed, _ = core_time(task, lowest)
+    assert needed < time_limit(task.prog.table, sc)
+
+
+def test_a_cap_that_rises_with_the_window_is_expected_only_as_far_as_reachable() -> None:
+    """Wide seed 74 (0.2 mm blocks, a kink each, look-ahead 8), boundary 7: its cap is 60.97
+    mm/s while the window ends at 12 and 70.33 once it ends at 13, 0.4 mm before it. The path,
+    planned time-optimally toward the first, could reach 64.72 from its state when the window
+    moved and passed at 64.76; the check expected 69.66 (its cap under window 13). A path
+    that accelerates as hard as every window allows (bench/probe_window_rise.py, 2 µs steps)
+    reaches 65.27 there: no motion that keeps each window's stop reachable gets near 69.66."""
+    sc = wide_scenario(74)
+    _, hard, slow, errors = check(sc)
+    assert hard == [] and errors == 0, (hard, describe(sc))
+    assert slow == [], (slow, describe(sc))
+
+
+def test_the_checks_reach_from_a_state_matches_the_cores_closed_form() -> None:
+    """`motion_check.reach_from` (bisection on its own distance) against the core's
+    `velocity.reach_from` (closed forms) on random states where the ramp to 0 fits."""
+    rng = random.Random(36)
+    for _ in range(2000):
+        v, a, length = rng.uniform(0.0, 0.5), rng.uniform(-8.0, 8.0), 10 ** rng.uniform(-5, -1.5)
+        if v + a * abs(a) / 800.0 < 0.0 or ramp_distance(v, a, 400.0) > length:
+            continue
+        got = check_reach_from(v, a, length, 8.0, 400.0, 10.0)
+        assert got == pytest.approx(reach_from(v, a, length, 8.0, 400.0), rel=1e-9)
