@@ -276,6 +276,7 @@ def check_motion(
     # check expected 142)
     interval_from = 0
     brake_ends = -INF  # a hold's brake that its release cannot undo ends by then (at rest)
+    ramp_ends = -INF  # path position where an event's deceleration is ramped out
     last: Sample | None = None
     for smp in samples:
         if last is None:
@@ -298,6 +299,17 @@ def check_motion(
                 if j != INF and smp.v + smp.a * abs(smp.a) / (2.0 * j) <= ABS_TOL:
                     brake_ends = smp.t + abs(smp.a) / j + 2.0 * dt
             anchor_s, anchor_v, anchor_seg = smp.s, max(smp.v, last.v), smp.seg
+            _, j = path.limits(smp.seg, smp.seg + 1)
+            if smp.a < 0.0 and j != INF:
+                # the new plan starts braking (a hold's brake, released): whatever it does, the
+                # jerk limit takes the velocity down to v + a·|a|/2J while the deceleration is
+                # ramped out, over that ramp's distance (wide seed 119: released at 42.2 mm/s
+                # and −5.93 m/s², 0.0098 mm/s at the ramp's end), and the fastest motion from
+                # there starts at the ramp's end at that velocity
+                t_r = -smp.a / j
+                ramp_s = smp.s + t_r * (smp.v + t_r * (smp.a / 2.0 + t_r * j / 6.0))
+                anchor_s, anchor_v = ramp_s, max(smp.v + smp.a * t_r / 2.0, 0.0)
+            ramp_ends = anchor_s
             interval_min, fresh = INF, True
             last = smp
             continue
@@ -314,6 +326,8 @@ def check_motion(
         # boundaries crossed in this cycle
         for b in range(last.seg + 1, min(smp.seg, path.n - 1) + 1):
             s_b = path.bounds[b].s
+            if s_b < ramp_ends:  # still ramping out an event's deceleration: the ramp's own
+                continue
             if held or path.is_stop(b, smp):
                 anchor_s, anchor_v, anchor_seg = s_b, 0.0, b
                 interval_min, fresh = INF, True
@@ -348,7 +362,7 @@ def check_motion(
             entry_v, interval_min, fresh = v_b, INF, False
         if smp.seg != last.seg:
             interval_from = braking_from
-        if not held:
+        if not held and smp.s > ramp_ends:
             interval_min = min(interval_min, smp.v) if smp.seg == last.seg else smp.v
         if smp.a >= 0.0 or smp.v == 0.0:
             braking_from = smp.seg
