@@ -326,13 +326,18 @@ def check_motion(
         # boundaries crossed in this cycle
         for b in range(last.seg + 1, min(smp.seg, path.n - 1) + 1):
             s_b = path.bounds[b].s
-            if s_b < ramp_ends:  # still ramping out an event's deceleration: the ramp's own
-                continue
             if held or path.is_stop(b, smp):
                 anchor_s, anchor_v, anchor_seg = s_b, 0.0, b
                 interval_min, fresh = INF, True
                 continue
             v_b = _at(last, smp, s_b)
+            if s_b < ramp_ends:
+                # still ramping out an event's deceleration: the velocity here is the ramp's,
+                # or lower where the path brakes harder for a constraint (CAM seed 687: to a
+                # corner's 0.28 mm/s inside the ramp), from where the forward pass starts again
+                if v_b < anchor_v:
+                    anchor_s, anchor_v, anchor_seg = s_b, v_b, b
+                continue
             tol = path.slack(b, dt)
             a, j = path.limits(anchor_seg, b)
             forward = reach(anchor_v, s_b - anchor_s, a, j, path.v_top)

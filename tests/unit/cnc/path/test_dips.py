@@ -8,6 +8,7 @@ import pytest
 
 from liftd.cnc.path.targets import lowest_velocity
 from liftd.cnc.ruckig1 import Phases, Ruckig1
+from tests.support.cam_cases import cam_scenario
 from tests.support.cam_runs import check
 from tests.support.scenarios import describe, wide_scenario
 
@@ -53,6 +54,17 @@ def test_an_event_planned_while_decelerating_ramps_the_deceleration_out_first(se
     both events' forward pass from the velocity at the event, as if the path could hold it
     (expected 42.6 and 98.0 mm/s); it now starts where the deceleration is ramped out."""
     sc = wide_scenario(seed)
+    _, hard, slow, errors = check(sc)
+    assert hard == [] and errors == 0, (hard, describe(sc))
+    assert slow == [], (slow, describe(sc))
+
+
+def test_a_brake_for_a_corner_inside_an_event_ramp_starts_the_forward_pass_again() -> None:
+    """CAM seed 687 (look-ahead 8): override 196 → 78 % at 135 mm/s and −6.44 m/s², whose
+    ramp alone ends at 72.9 mm/s 2.2 mm on; the path brakes harder, to a corner's 0.28 mm/s
+    1.49 mm on, and reaches boundary 5 at 48.7 mm/s, all it can from the corner. Read from the
+    ramp's end, the check expected the ceiling, 59.0."""
+    sc = cam_scenario(687)
     _, hard, slow, errors = check(sc)
     assert hard == [] and errors == 0, (hard, describe(sc))
     assert slow == [], (slow, describe(sc))
