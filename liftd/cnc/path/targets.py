@@ -29,8 +29,6 @@ from liftd.cnc.path.velocity import (
 from liftd.cnc.ruckig1 import Evaluator, Phases, ProfileError, Ruckig1
 
 DIP_TOL = 1e-4  # relative: a profile this much below the lower of its ends' velocities dips
-# relative steps down from a target whose profile dips (`Targets._undip`): each one ruckig call
-UNDIP_STEPS = (1e-6, 1e-4, 1e-3, 1e-2)
 
 
 def lowest_velocity(ph: Phases) -> float:
@@ -149,7 +147,7 @@ class Targets(Constraints):
         the boundary it just passed; a brake (an error)."""
         if self._try_target(s, v, a, s_c, target, v_max, a_max, j_max, b, w):
             if target < 0.5 * max(v, v_p) and self._dips(min(v, v_p, target)):
-                self._undip(s, v, a, s_c, target, v_max, a_max, j_max, b, w, (passed, held))
+                self._undip(target, b, w, (passed, held))
             return
         if v_p <= max(hard, target) and self._try_target(
             s, v, a, s_c, v_p, max(v_max, v_p), a_max, j_max, b, w
@@ -187,19 +185,16 @@ class Targets(Constraints):
         plan.ev = Evaluator(plan.traj, ph)
         return lowest_velocity(ph) < floor * (1.0 - DIP_TOL) - V_ROUND
 
-    def _undip(
-        self, s: float, v: float, a: float, s_c: float, target: float, v_max: float,
-        a_max: float, j_max: float, b: int, w: int, kept: tuple[Plan | None, Plan | None],
-    ) -> None:  # fmt: skip
+    def _undip(self, target: float, b: int, w: int, kept: tuple[Plan | None, Plan | None]) -> None:
         """Ruckig's time-optimal profile to a low target brakes below it and comes back where
         the exact brake fits only just (from inside a brake that has no slack left, a re-plan
         for a window that moved on finds it a few 10 nm too long: issue 36, wide seed 35,
-        33 → 1.94 mm/s went down to 0.90; known deviation 2). The CNC does not dip. In this
-        order: the profile in hand or the one that brought the path to the boundary it just
-        passed, if it ends at b with the same velocity (it is the exact brake, planned with
-        slack); else the same target a little lower, where the brake fits with room (the
-        brake distance to a low velocity rises with it: lower is nearer); else the dip."""
-        dipping = self.plan
+        33 → 1.94 mm/s went down to 0.90; known deviation 2). The CNC does not dip: the
+        profile in hand, or the one that brought the path to the boundary it just passed, is
+        kept if it ends at b with the same velocity (it is the exact brake, planned with
+        slack). Else the dip stays (after an event no such profile is at hand). A lower target
+        where the brake fits with room was tried: after an override drop it reached LIFT_END
+        1.2 ms sooner than the dip, and Z, descending, landed 0.2 ms late (wide seed 767)."""
         for plan in kept:
             if (
                 plan is not None
@@ -210,13 +205,6 @@ class Targets(Constraints):
                 plan.window = w
                 self.plan = plan
                 return
-        for cut in UNDIP_STEPS:
-            tgt = target * (1.0 - cut)
-            if self._try_target(s, v, a, s_c, tgt, v_max, a_max, j_max, b, w) and not self._dips(
-                min(v, tgt)
-            ):
-                return
-        self.plan = dipping
 
     def _brake(self, a_max: float, j_max: float, w: int) -> None:
         """Last resort: brake to rest from the path's state (never expected; counted)."""

@@ -68,3 +68,14 @@ def test_a_brake_for_a_corner_inside_an_event_ramp_starts_the_forward_pass_again
     _, hard, slow, errors = check(sc)
     assert hard == [] and errors == 0, (hard, describe(sc))
     assert slow == [], (slow, describe(sc))
+
+
+def test_after_an_override_drop_the_dip_stays_where_no_brake_is_in_hand() -> None:
+    """Wide seed 767 (Advanced Lifting): the override drop 200 → 120 % at 1.900 s, 7.6 ms
+    before LIFT_END, is planned from a brake to 0.49 mm/s there; ruckig's profile dips to
+    0.36 and arrives 1.2 ms later than the brake before the drop. A lower target that did not
+    dip (tried) arrived at the earlier time, and Z, descending, landed 0.2 ms after the path
+    passed LIFT_END (6.9e-18 m from POS, still moving): no profile is kept after an event."""
+    sc = wide_scenario(767)
+    _, hard, _, errors = check(sc)
+    assert hard == [] and errors == 0, (hard, describe(sc))
