@@ -11,7 +11,8 @@ otherwise (a boundary passed slower than the rules allow, a dip between two boun
 counted apart: docs/architecture.md lists them as known
 deviations. One JSON line per kind of run with the counts and the first findings.
 
-Run: .venv/bin/python bench/bench_cam_motion.py [RUNS [FIRST_SEED]] [--kind cam|wide|narrow]
+Run: .venv/bin/python bench/bench_cam_motion.py [RUNS [FIRST_SEED]] [--kind cam|wide|narrow] [--all]
+(--all: a line for each run with findings, all of them, before the summary)
 """
 
 from __future__ import annotations
@@ -36,6 +37,7 @@ def main() -> None:
     ap.add_argument("runs", nargs="?", type=int, default=1000)
     ap.add_argument("first_seed", nargs="?", type=int, default=0)
     ap.add_argument("--kind", choices=sorted(KINDS), default="cam")
+    ap.add_argument("--all", action="store_true", help="a JSON line for every run with findings")
     args = ap.parse_args()
     make = KINDS[args.kind]
     cycles = failed = slowed = findings = 0
@@ -53,6 +55,9 @@ def main() -> None:
             failed += 1
             if len(first) < 5:
                 first.append({"seed": seed, "problems": hard[:3]})
+        if slow and args.all:
+            print(json.dumps({"seed": seed, "look_ahead": sc.channel.look_ahead_blocks,
+                              "findings": slow, "problems": hard}), flush=True)  # fmt: skip
         if slow:
             slowed += 1
             findings += len(slow)

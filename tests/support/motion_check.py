@@ -322,6 +322,7 @@ def check_motion(
     # the last sample before the path entered segment k (since the last event): its state when
     # the window moved to k + look_ahead
     entered: dict[int, Sample] = {}
+    ramp_ends = -INF  # path position where an event's deceleration is ramped out
     last: Sample | None = None
     for smp in samples:
         if last is None:
@@ -344,6 +345,17 @@ def check_motion(
                 if j != INF and smp.v + smp.a * abs(smp.a) / (2.0 * j) <= ABS_TOL:
                     brake_ends = smp.t + abs(smp.a) / j + 2.0 * dt
             anchor_s, anchor_v, anchor_seg = smp.s, max(smp.v, last.v), smp.seg
+            _, j = path.limits(smp.seg, smp.seg + 1)
+            if smp.a < 0.0 and j != INF:
+                # the new plan starts braking (a hold's brake, released): whatever it does, the
+                # jerk limit takes the velocity down to v + a·|a|/2J while the deceleration is
+                # ramped out, over that ramp's distance (wide seed 119: released at 42.2 mm/s
+                # and −5.93 m/s², 0.0098 mm/s at the ramp's end), and the fastest motion from
+                # there starts at the ramp's end at that velocity
+                t_r = -smp.a / j
+                ramp_s = smp.s + t_r * (smp.v + t_r * (smp.a / 2.0 + t_r * j / 6.0))
+                anchor_s, anchor_v = ramp_s, max(smp.v + smp.a * t_r / 2.0, 0.0)
+            ramp_ends = anchor_s
             interval_min, fresh = INF, True
             entered.clear()
             last = smp
@@ -366,6 +378,13 @@ def check_motion(
                 interval_min, fresh = INF, True
                 continue
             v_b = _at(last, smp, s_b)
+            if s_b < ramp_ends:
+                # still ramping out an event's deceleration: the velocity here is the ramp's,
+                # or lower where the path brakes harder for a constraint (CAM seed 687: to a
+                # corner's 0.28 mm/s inside the ramp), from where the forward pass starts again
+                if v_b < anchor_v:
+                    anchor_s, anchor_v, anchor_seg = s_b, v_b, b
+                continue
             tol = path.slack(b, dt)
             a, j = path.limits(anchor_seg, b)
             forward = reach(anchor_v, s_b - anchor_s, a, j, path.v_top)
@@ -408,7 +427,7 @@ def check_motion(
             interval_from = braking_from
             for k in range(last.seg + 1, smp.seg + 1):
                 entered[k] = last
-        if not held:
+        if not held and smp.s > ramp_ends:
             interval_min = min(interval_min, smp.v) if smp.seg == last.seg else smp.v
         if smp.a >= 0.0 or smp.v == 0.0:
             braking_from = smp.seg

@@ -144,6 +144,8 @@ class Tracker(Targets):
     def _replan(self, dt: float, force: int | None = None) -> None:
         self._clear_s = -INF
         passed, self._passed = self._passed, None
+        # the profile in hand, where only the window moved on (`Targets._undip`)
+        held = self.plan if force is None else None
         tb = self.tb
         s, v, a, seg = self.s, self.v, self.a, self.seg
         a_max, j_max = self._limits(seg)
@@ -249,7 +251,7 @@ class Tracker(Targets):
             target = min(target, top)
             v_max = max(min(v_max, top), target, v, v_p)
         self._settle(s, v, a, v_p, s_c, target, cap, v_max, a_max, j_max, b, w, self._hard(b, w),
-                     passed)  # fmt: skip
+                     passed, held)  # fmt: skip
 
     def _rests_before(
         self, cands: list[tuple[int, float, float, bool]], s: float, v: float, a: float,
