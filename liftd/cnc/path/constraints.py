@@ -8,9 +8,7 @@ the motion and the planning.
 Effective caps come from a backward pass over the constraints up to the next run boundary (and,
 for that boundary, beyond it as far as they can matter): a cap that a later constraint makes
 unreachable is lowered, so arriving at a constraint with zero acceleration below its effective
-cap leaves every later one reachable. The work is bounded by MAX_CANDIDATES constraints at once:
-beyond them a constraint gets a bound from the table's per-run minima (`_cut_bound`), never
-above what the constraints it stands for allow, and never a stop they do not make.
+cap leaves every later one reachable. The work is bounded by MAX_CANDIDATES constraints at once.
 """
 
 from __future__ import annotations
@@ -29,7 +27,7 @@ from liftd.cnc.path.velocity import (
 )
 
 INF = float("inf")
-MAX_CANDIDATES = 24  # constraints considered at once; the last one bounds the rest (`_cut_bound`)
+MAX_CANDIDATES = 24  # constraints considered at once; beyond, the last one counts as a stop
 SLACK_TOL = 1e-9  # m
 # A step is kept only if every constraint keeps this much slack: the profile toward it from the
 # step's start is then comfortably feasible for ruckig (at the very edge it may refuse by
@@ -66,8 +64,6 @@ class Constraints:
         self._beyond_open = False  # the last `_beyond` chain ended at the window's end or a cut
         self._floor_key = (-1, -1.0)  # (window end, override) of `_window_floor`'s last value
         self._floor_val = 0.0
-        self._cut = -1  # the candidate `_collect` last cut its list at (`_cut_bound`), if any
-        self._cut_open = False
 
     def is_stop(self, b: int) -> bool:
         tb = self.tb
@@ -132,7 +128,6 @@ class Constraints:
         tb = self.tb
         n = tb.n
         out: list[tuple[int, float, float, bool]] = []
-        self._cut = -1
         if seg >= n:
             return out
         w = min(seg + self.look_ahead, n)
@@ -142,13 +137,8 @@ class Constraints:
             if s_b > limit:
                 break
             cap, gate, stop = self._cap(b, w)
-            if len(out) == MAX_CANDIDATES - 1 and not gate:
-                # too many at once: b stands for itself and every constraint after it, with
-                # zero acceleration there (a run boundary ends the list as it is)
-                bound, self._cut_open = self._cut_bound(b, w)
-                self._cut = b
-                out.append((b, s_b, min(cap, bound), True))
-                break
+            if len(out) == MAX_CANDIDATES - 1:  # too many at once: the last counts as a stop
+                cap, gate, stop = 0.0, True, True
             if gate and not stop and cap > 0.0:
                 cap = min(cap, self._beyond(b, cap, w))
             out.append((b, s_b, cap, gate))
@@ -192,9 +182,7 @@ class Constraints:
         # a chain that ends at the window's end (or whose run boundary's does) is open: its end
         # may rise as the window moves on (`_beyond`)
         is_open = last == w
-        if last == self._cut:
-            is_open = self._cut_open
-        elif not is_open and cands[-1][3] and not self.is_stop(last):
+        if not is_open and cands[-1][3] and not self.is_stop(last):
             self._beyond(last, cands[-1][2], w)  # cached: `_collect` just asked for it
             is_open = self._beyond_open
         for k in range(len(cands) - 2, i - 1, -1):
@@ -208,42 +196,11 @@ class Constraints:
                 e = min(ck, reach_velocity(e, length, a_max, j_max))
         return e
 
-    def _cut_bound(self, b: int, w: int) -> tuple[float, bool]:
-        """(velocity, open) at constraint b, with zero acceleration there, from which every
-        constraint after it is kept, in O(1) plus one `_beyond`: at most the least ceiling and
-        transition cap from b to the end of its run (the table's `feed_min` and `hard_min`),
-        and able to get down to that end's cap over the distance (the first of the run's end,
-        a stop for Z, the window's end). The end's cap: rest at a stop or the window's end, the
-        effective cap (`_beyond`) at a run boundary. Cruising at the least cap and then braking
-        to the end's passes every constraint between, so the bound is never above what they
-        allow; it replaces a stop at b ("conservative", issue 36's known deviation 1: the path
-        braked for a stop no rule makes and came back). `open`: the end's cap may rise, the
-        chain keeps every higher one reachable (`reach_velocity_any_above`)."""
-        tb = self.tb
-        end = min(tb.run_end[b], w)
-        for k in self.lift_stops:
-            if b < k < end:
-                end = k
-        a_max, j_max = self._limits(b)
-        length = max(tb.s[end] - tb.s[b] - CHAIN_MARGIN, 0.0)
-        e = 0.0
-        is_open = end == w or not self.is_stop(end)
-        if is_open and end != w:
-            e = min(tb.entry_cap(end, self.ov), self._beyond(end, tb.entry_cap(end, self.ov), w))
-            is_open = self._beyond_open
-        if is_open:
-            reach = reach_velocity_any_above(e, length, a_max, j_max)
-        else:
-            reach = reach_velocity(e, length, a_max, j_max)
-        return min(self.ov * tb.feed_min[b], tb.hard_min[b], reach), is_open
-
     def _beyond(self, g: int, cap: float, w: int) -> float:
         """Velocity at run boundary g (zero acceleration) from which every constraint after it
         up to the window end stays reachable. Braking does not compose across run boundaries
         (each one wants zero acceleration), so far constraints matter through the chain: it is
-        followed up to MAX_CANDIDATES constraints, the last counting as rest (a lower cap at g,
-        not a stop: the path passes g before it reaches them; bounding it by `_cut_bound`
-        instead made wide seed 767 2 ms faster and its Z land late, not examined).
+        followed up to MAX_CANDIDATES constraints, the last counting as a stop (conservative).
         Cached per (g, window end, override, stop set): a step within one segment asks again."""
         key = (g, w, self.ov)
         if self._beyond_key == key:

@@ -67,11 +67,6 @@ class PathTable:
     next_constraint: tuple[int, ...]  # first constraint boundary ≥ b (n + 1 boundaries)
     sum_l_f: tuple[float, ...]  # Σ_{j<b} L_j / F_j
     sum_l_c: tuple[float, ...]  # Σ_{j<b} L_j / C_j
-    # per segment k, over the segments and boundaries from k to the end of k's run (the next
-    # run boundary; `constraints.Constraints._cut_bound`)
-    feed_min: tuple[float, ...]  # least F_j of segments j ≥ k in the run
-    hard_min: tuple[float, ...]  # least C_j and transition cap at boundaries k ≤ b < run end
-    run_end: tuple[int, ...]  # the run boundary that ends k's run (n at the program end)
     # per run
     run_a: tuple[float, ...]
     run_j: tuple[float, ...]
@@ -173,16 +168,6 @@ def build_table(path: PathProgram) -> PathTable:
         sum_c[k + 1] = sum_c[k] + (seg.length / cap[k] if cap[k] > 0.0 else INF)
         if not k & EVERY:
             pause()
-    feed_min = [INF] * n
-    hard_min = [INF] * n
-    run_end = [n] * n
-    for k in range(n - 1, -1, -1):
-        last = k + 1 == n or gate[k + 1]
-        feed_min[k] = feed[k] if last else min(feed[k], feed_min[k + 1])
-        hard_min[k] = min(cap[k], point_cap[k], INF if last else hard_min[k + 1])
-        run_end[k] = k + 1 if last else run_end[k + 1]
-        if not k & EVERY:
-            pause()
     return PathTable(
         s0=_frozen(s0),
         feed=_frozen(feed),
@@ -199,9 +184,6 @@ def build_table(path: PathProgram) -> PathTable:
         next_constraint=_frozen(next_con),
         sum_l_f=_frozen(sum_f),
         sum_l_c=_frozen(sum_c),
-        feed_min=_frozen(feed_min),
-        hard_min=_frozen(hard_min),
-        run_end=_frozen(run_end),
         run_a=_frozen(run_a),
         run_j=_frozen(run_j),
     )

@@ -1,0 +1,35 @@
+"""Issue 36, known deviation 6 of docs/geo-core.md: a run boundary's feed cap in the jerk gap.
+
+With a jerk limit the end velocities the path can have at a run boundary (zero acceleration
+there) within a distance are [0, x1] ∪ [x2, v_p]. An override drop can put the boundary's new
+feed cap between x1 and x2; the path took x1, a near-stop where the CNC only slows down. It now
+passes the cap at x2, as slowly as it can above it, as the rule for an override drop says,
+within the boundary's hard cap and what the candidates after it allow."""
+
+from __future__ import annotations
+
+import pytest
+
+from tests.support.cam_cases import cam_scenario
+from tests.support.cam_runs import check
+from tests.support.scenarios import describe, wide_scenario
+
+
+def test_an_override_drop_before_a_rounding_kink_slows_the_path_and_does_not_stop_it() -> None:
+    """Wide seed 641 (look-ahead 120, a polyline of 2 mm blocks with rounding kinks at F12000):
+    override 120 → 50 % at 2.160 s at 230 mm/s; boundary 318's new cap of 100 mm/s lay in the
+    gap, x1 = 0.03 mm/s: the path passed it at 0.0278 mm/s and came back to 100."""
+    sc = wide_scenario(641)
+    _, hard, slow, errors = check(sc)
+    assert hard == [] and errors == 0, (hard, describe(sc))
+    assert slow == [], (slow, describe(sc))
+
+
+@pytest.mark.parametrize("seed", [74, 465, 629])
+def test_cam_programs_pass_a_cap_in_the_gap_above_it(seed: int) -> None:
+    """CAM seeds whose override change left a run boundary's feed cap in the gap (seed 465:
+    18.8 mm/s for 43.4, x1 below the cap)."""
+    sc = cam_scenario(seed)
+    _, hard, slow, errors = check(sc)
+    assert hard == [] and errors == 0, (hard, describe(sc))
+    assert slow == [], (slow, describe(sc))
