@@ -155,9 +155,10 @@ class Tracker(Targets):
         top = min(cap, ceiling)
         if target >= top * (1.0 - CAP_TOL) or cands[i][2] > top * (1.0 + CAP_TOL):
             return target
-        if projected_velocity(v, a, j_max) <= top or brake_distance(
-            v, a, top, a_max, j_max
-        ) <= d + SLACK_TOL:
+        if (
+            projected_velocity(v, a, j_max) <= top
+            or brake_distance(v, a, top, a_max, j_max) <= d + SLACK_TOL
+        ):
             return target  # no brake through the gap: the target is what d allows (or the cap)
         b, s_c = cands[i][0], cands[i][1]
         hard = self._hard(b, w)
