@@ -100,13 +100,20 @@ class Targets(Constraints):
 
     def _pick_target(
         self, v: float, a: float, v_p: float, d: float, cap: float, ceiling: float,
-        a_max: float, j_max: float, hard: float,
+        a_max: float, j_max: float, hard: float, over: float = 0.0,
     ) -> float:  # fmt: skip
         """The highest velocity ≤ cap the path can have, with zero acceleration, at distance d:
         after accelerating as far as d allows (`reach_from`), or the cap after a brake. Where
         the cap cannot be reached exactly: the nearest velocity that can, below it where the
         path can still get below it, else above it up to `hard` (the boundary's own axis and
-        transition cap). Under a hold the lowest reachable one."""
+        transition cap). Under a hold the lowest reachable one.
+
+        `over` > the cap: the path may pass this cap above it up to `over` (a run boundary's own
+        feed cap; `Tracker._gap_over`). With a jerk limit the end velocities the path can have
+        at d are [0, x1] ∪ [x2, v_p]; where a brake puts the cap between x1 and x2, as after an
+        override drop (wide seed 641: 230 mm/s toward a cap of 100 at a 0.001° kink, x1 = 0.03
+        mm/s, a near-stop), it takes x2, as slowly as it can above the cap, where x2 is within
+        `over` and nearer the cap than x1."""
         if self.hold:
             return min(cap, lowest_reachable_from(v, a, d, a_max, j_max))
         top = min(cap, ceiling)  # the ceiling holds up to there
@@ -129,7 +136,12 @@ class Targets(Constraints):
         # after a sudden override drop, as slowly as it can above it, but within the
         # boundary's own hard cap (`top` may be lower, for the candidates after it)
         if brake_distance(v, a, 0.0, a_max, j_max) <= fits:
-            return nearest_reachable(v, a, fits, top, a_max, j_max, False)
+            below = nearest_reachable(v, a, fits, top, a_max, j_max, False)
+            if over <= top:
+                return below
+            up = nearest_reachable(v, a, fits, top, a_max, j_max, True)
+            ok = up <= over and brake_distance(v, a, up, a_max, j_max) <= fits
+            return up if ok and up - top < top - below else below
         up = nearest_reachable(v, a, fits, top, a_max, j_max, True)
         if up <= hard or brake_distance(v, a, hard, a_max, j_max) > fits:
             return up

@@ -43,7 +43,6 @@ from liftd.cnc.path.table import PathTable
 from liftd.cnc.path.targets import Targets
 from liftd.cnc.path.velocity import (
     brake_distance,
-    nearest_reachable,
     projected_velocity,
     ramp_distance,
     reach_velocity,
@@ -142,38 +141,24 @@ class Tracker(Targets):
         self.last_error = primed.last_error
 
     # -- planning -------------------------------------------------------------------------------
-    def _over_gap(
-        self, cands: list[tuple[int, float, float, bool]], i: int, v: float, a: float,
-        d: float, target: float, cap: float, ceiling: float, a_max: float, j_max: float, w: int,
-    ) -> float:  # fmt: skip
-        """A run boundary's feed cap in the jerk gap (the end velocities the path can have there
-        with zero acceleration are [0, x1] ∪ [x2, v_p], the cap between x1 and x2, as after an
-        override drop: wide seed 641, 230 mm/s toward a cap of 100 at a 0.001° kink, x1 = 0.03):
-        the path passes it at x2, as slowly as it can above it, where x2 is nearer the cap than
-        x1, within the boundary's own hard cap and what the later candidates allow, and the cap
-        is the boundary's own (not lowered for a later one). Else the target stands."""
-        top = min(cap, ceiling)
-        if target >= top * (1.0 - CAP_TOL) or cands[i][2] > top * (1.0 + CAP_TOL):
-            return target
-        if (
-            projected_velocity(v, a, j_max) <= top
-            or brake_distance(v, a, top, a_max, j_max) <= d + SLACK_TOL
-        ):
-            return target  # no brake through the gap: the target is what d allows (or the cap)
+    def _gap_over(
+        self, cands: list[tuple[int, float, float, bool]], i: int, top: float, w: int
+    ) -> float:
+        """How far above its cap candidate i (a run boundary) may be passed where its cap falls
+        in the jerk gap (`Targets._pick_target`): where the cap is its own (not lowered for a
+        later one), within its hard cap and what the later candidates allow; else 0."""
+        if cands[i][2] > top * (1.0 + CAP_TOL):
+            return 0.0
         b, s_c = cands[i][0], cands[i][1]
-        hard = self._hard(b, w)
+        over = self._hard(b, w)
         if i + 1 < len(cands):
             nb, ns = cands[i + 1][0], cands[i + 1][1]
             la, lj = self._limits(nb - 1)
             later = reach_velocity(
                 self._target_cap(cands, i + 1), max(ns - s_c - CHAIN_MARGIN, 0.0), la, lj
             )
-            hard = min(hard, later)
-        up = nearest_reachable(v, a, d + SLACK_TOL, top, a_max, j_max, True)
-        fits = brake_distance(v, a, up, a_max, j_max) <= d + SLACK_TOL
-        if fits and up <= hard and up - top < top - target:
-            return up
-        return target
+            over = min(over, later)
+        return over
 
     def _replan(self, dt: float, force: int | None = None) -> None:
         self._clear_s = -INF
@@ -225,9 +210,8 @@ class Tracker(Targets):
             return
         cap = self._target_cap(cands, best_i)
         d = s_c - s
-        target = self._pick_target(v, a, v_p, d, cap, ceiling, a_max, j_max, self._hard(b, w))
-        if gate and not self.hold:
-            target = self._over_gap(cands, best_i, v, a, d, target, cap, ceiling, a_max, j_max, w)
+        over = self._gap_over(cands, best_i, min(cap, ceiling), w) if gate else 0.0
+        target = self._pick_target(v, a, v_p, d, cap, ceiling, a_max, j_max, self._hard(b, w), over)
         soft_from = b
         shifted = False
         # Zero acceleration at a boundary that does not need it, below a feed cap the path can
