@@ -119,12 +119,30 @@ class Constraints:
             return 0.0, True, True
         return self.tb.entry_cap(b, self.ov), self.tb.gate[b], False
 
-    def _collect(self, s: float, seg: int, reach: float) -> list[tuple[int, float, float, bool]]:
-        """Constraints within `reach` of (s, seg), up to and including the first run boundary or
-        stop: (boundary, position, cap, zero acceleration required). The run boundary's cap is
-        lowered so that everything after it stays reachable (`_beyond`): the constraints after
-        it are not in the list. The others keep their own caps: every later one up to the run
-        boundary is in the list and checked by itself."""
+    def _collect(
+        self, s: float, seg: int, reach: float, soft: tuple[int, int] = (0, 0), keep: int = -1,
+        first: int = -1, every: bool = False,
+    ) -> list[tuple[int, float, float, bool]]:  # fmt: skip
+        """Constraints within `reach` of (s, seg), from boundary `first` on (the next one by
+        default), up to and including the first run boundary or stop: (boundary, position,
+        cap, zero acceleration required). The run boundary's cap is lowered so that everything
+        after it stays reachable (`_beyond`): the constraints after it are not in the list. The
+        others keep their own caps, and every one up to the run boundary that can bind is in
+        the list and checked by itself.
+
+        One that cannot bind is left out: a constraint without zero acceleration (a feed drop,
+        a transition cap inside a run) whose cap is at least that of one before it in the
+        list. Its slack is at least that one's (it is farther, and the need to get below a
+        higher cap is shorter, `_need`), so it is never the first one lost, and a path that
+        keeps that one keeps it by not accelerating between them; the chain of `_target_cap`
+        leaves it reachable for the same reason. Without this, 0.2 mm blocks with a feed drop
+        at every second one put 24 constraints within 9.6 mm and the 24th counted as a stop
+        (known deviation 1 of docs/geo-core.md: 314 for 500 mm/s). The caps compared are the
+        ones the check uses: a plan passes the feed caps of boundaries soft[0] … soft[1] − 1
+        above them (`Plan.soft_from`), keeping only their hard caps. `keep` is never left out
+        (a forced re-plan's constraint, found from the step's end, where the one that would
+        keep it is behind). `every`: none left out and no cut (at most the look-ahead window's
+        constraints; `Tracker._replan` reads each one's own tail with `_tail_caps`)."""
         tb = self.tb
         n = tb.n
         out: list[tuple[int, float, float, bool]] = []
@@ -132,12 +150,18 @@ class Constraints:
             return out
         w = min(seg + self.look_ahead, n)
         limit = s + reach
-        for b in self._ahead(seg + 1, w):
+        low = INF  # the lowest cap (as checked) in the list so far
+        for b in self._ahead(seg + 1 if first < 0 else first, w):
             s_b = tb.s[b]
             if s_b > limit:
                 break
             cap, gate, stop = self._cap(b, w)
-            if len(out) == MAX_CANDIDATES - 1:  # too many at once: the last counts as a stop
+            if not gate and not every:
+                used = min(tb.point_cap[b], tb.cap[b]) if soft[0] <= b < soft[1] else cap
+                if used >= low and b != keep:
+                    continue  # kept by one before it
+                low = used
+            if len(out) == MAX_CANDIDATES - 1 and not every:  # the last counts as a stop
                 cap, gate, stop = 0.0, True, True
             if gate and not stop and cap > 0.0:
                 cap = min(cap, self._beyond(b, cap, w))
@@ -173,28 +197,67 @@ class Constraints:
         self._floor_val = min(tb.entry_cap(w, self.ov), after)
         return self._floor_val
 
+    def _chain_open(self, cands: list[tuple[int, float, float, bool]]) -> bool:
+        """Whether the chain of `cands` ends at the window's end (or its run boundary's chain
+        does): its end may rise as the window moves on (`_beyond`)."""
+        last = cands[-1][0]
+        w = self.window_end
+        if last == w:
+            return True
+        if cands[-1][3] and not self.is_stop(last):
+            self._beyond(last, cands[-1][2], w)  # cached: `_collect` just asked for it
+            return self._beyond_open
+        return False
+
+    def _link(self, e: float, s_from: float, b: int, s_b: float, is_open: bool) -> float:
+        """The highest velocity at s_from (zero acceleration) from which e at boundary b (at
+        s_b) stays reachable: every higher end too where the chain is open."""
+        a_max, j_max = self._limits(b - 1)
+        length = max(s_b - s_from - CHAIN_MARGIN, 0.0)
+        if is_open:
+            return reach_velocity_any_above(e, length, a_max, j_max)
+        return reach_velocity(e, length, a_max, j_max)
+
     def _target_cap(self, cands: list[tuple[int, float, float, bool]], i: int) -> float:
         """The velocity to plan for at candidate i (zero acceleration there): its cap, lowered
         so that the later candidates in the list stay reachable from it."""
         e = cands[-1][2]
-        last = cands[-1][0]
-        w = self.window_end
-        # a chain that ends at the window's end (or whose run boundary's does) is open: its end
-        # may rise as the window moves on (`_beyond`)
-        is_open = last == w
-        if not is_open and cands[-1][3] and not self.is_stop(last):
-            self._beyond(last, cands[-1][2], w)  # cached: `_collect` just asked for it
-            is_open = self._beyond_open
+        is_open = self._chain_open(cands)
         for k in range(len(cands) - 2, i - 1, -1):
             _, sk, ck, _ = cands[k]
             bn, sn, _, _ = cands[k + 1]
-            a_max, j_max = self._limits(bn - 1)
-            length = max(sn - sk - CHAIN_MARGIN, 0.0)
-            if is_open:
-                e = min(ck, reach_velocity_any_above(e, length, a_max, j_max))
-            else:
-                e = min(ck, reach_velocity(e, length, a_max, j_max))
+            e = min(ck, self._link(e, sk, bn, sn, is_open))
         return e
+
+    def _tail_caps(self, cands: list[tuple[int, float, float, bool]]) -> list[float]:
+        """`_target_cap` of each candidate of a list with none left out (`_collect` `every`),
+        as if the list began there (the ones after it that a lower cap does not keep): each
+        one's chain runs through the next lower cap after it (a monotonic stack), the list's
+        end (its run boundary or stop, and the window end's floor) by itself. Linear in the
+        list's length, where the lists themselves would be quadratic."""
+        m = len(cands)
+        caps = [0.0] * m
+        if m == 0:
+            return caps
+        is_open = self._chain_open(cands)
+        end = m - 1
+        while end > 0 and cands[end - 1][3]:
+            end -= 1  # the entries with zero acceleration at the end (two at the window's end)
+        caps[m - 1] = cands[m - 1][2]
+        for k in range(m - 2, -1, -1):
+            _, sk, ck, gate = cands[k]
+            if gate or k >= end:
+                bn, sn, _, _ = cands[k + 1]
+                caps[k] = min(ck, self._link(caps[k + 1], sk, bn, sn, is_open))
+        lower = [end]  # candidates whose caps are below every one after them up to the end
+        for k in range(end - 1, -1, -1):
+            _, sk, ck, _ = cands[k]
+            while len(lower) > 1 and cands[lower[-1]][2] >= ck:
+                lower.pop()
+            j = lower[-1]
+            caps[k] = min(ck, self._link(caps[j], sk, cands[j][0], cands[j][1], is_open))
+            lower.append(k)
+        return caps
 
     def _beyond(self, g: int, cap: float, w: int) -> float:
         """Velocity at run boundary g (zero acceleration) from which every constraint after it
@@ -293,7 +356,7 @@ class Constraints:
         a_max, j_max = self._limits(seg)
         if v == 0.0 and a <= 0.0:
             return None
-        cands = self._collect(s, seg, self._horizon(v, a, a_max, j_max, dt))
+        cands = self._collect(s, seg, self._horizon(v, a, a_max, j_max, dt), (soft_from, goal))
         if not cands:
             self._clear(s, projected_velocity(v, max(a, 0.0), j_max), seg, a_max, j_max, dt)
             return None
