@@ -3,8 +3,10 @@ tracker considers at once. The 24th counted as a stop, so 0.2 mm blocks with a f
 every second one ran at 314 mm/s where the feed allows 500. A feed drop whose cap is at least
 that of one before it cannot bind, and is no longer counted (`Constraints._collect`); after an
 override drop, where the path passes feed caps above them, the tracker reads each one's own
-tail (`Constraints._tail_caps`). Each run goes through the per-cycle check
-(tests/support/motion_check.py) and the cycle checker (limits, tracker errors)."""
+tail (`Constraints._tail_caps`). The chain of run boundaries behind the first one is followed
+farther where its 24th link lowers the cap (`Constraints._beyond`). Each run goes through the
+per-cycle check (tests/support/motion_check.py) and the cycle checker (limits, tracker
+errors)."""
 
 from __future__ import annotations
 
@@ -16,8 +18,9 @@ import pytest
 from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.path.tracker import Tracker
 from liftd.cnc.plc import Schedule, parse_override_spec
+from tests.support.cam_cases import cam_scenario
 from tests.support.cam_runs import check
-from tests.support.scenarios import Scenario
+from tests.support.scenarios import Scenario, describe
 from tests.unit.cnc.path.test_no_invented_stops import lowest_between, run, shipped
 
 
@@ -110,3 +113,15 @@ def test_each_candidate_s_own_tail_is_the_list_that_begins_there() -> None:
     tr.set_inputs(1.0, False)
     tr.set_state(0.0, tb.s[0], 0.3, 0.0, 0, None)
     assert len(tr._collect(tb.s[0], 0, 1.0)) < len(tr._collect(tb.s[0], 0, 1.0, every=True)) / 4
+
+
+@pytest.mark.parametrize("seed", [0, 30, 38, 162])
+def test_a_polyline_s_rounding_kinks_beyond_the_24th_are_not_a_stop(seed: int) -> None:
+    """CAM seeds whose polylines of 0.2 mm blocks have a rounding kink (a run boundary, known
+    deviation 0) at every block: braking to rest through them takes ~17 mm from 100 mm/s, so
+    a stop at the 24th (4.8 mm on) held the path below its caps (seed 162: 61.9 for 103.7
+    mm/s at boundary 3; seed 0: 85.1 for 91.9)."""
+    sc = cam_scenario(seed)
+    _, hard, slow, errors = check(sc)
+    assert hard == [] and errors == 0, (hard, describe(sc))
+    assert slow == [], (slow, describe(sc))
