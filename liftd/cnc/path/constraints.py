@@ -64,6 +64,7 @@ class Constraints:
         self._beyond_open = False  # the last `_beyond` chain ended at the window's end or a cut
         self._floor_key = (-1, -1.0)  # (window end, override) of `_window_floor`'s last value
         self._floor_val = 0.0
+        self._low = INF  # the lowest cap `_collect` kept so far (`_ahead` leaps below it)
 
     def is_stop(self, b: int) -> bool:
         tb = self.tb
@@ -93,8 +94,13 @@ class Constraints:
             stop = brake_reach(v, a, a_max, j_max)
         return stop + 2.0 * dt * (v + a_max * dt) + 1e-9
 
-    def _ahead(self, b: int, w: int) -> Iterator[int]:
-        """Constraint boundaries from b on (static ones, lift stops, the window end w)."""
+    def _ahead(self, b: int, w: int, leap: bool = False, keep: int = -1) -> Iterator[int]:
+        """Constraint boundaries from b on (static ones, lift stops, the window end w). With
+        `leap`, after a boundary without zero acceleration only those whose cap is below
+        `self._low` (the lowest the caller kept, which it sets before asking for the next), the
+        run boundaries, lift stops, `keep` and w: the first constraint below a cap lies on the
+        chain of lower feeds or of lower hard caps from the last one kept (`PathTable`
+        `lower_feed`, `lower_hard`), so a run of feed drops that cannot bind costs nothing."""
         tb = self.tb
         n = tb.n
         lifts = sorted(k for k in self.lift_stops if b <= k <= w) if self.lift_stops else []
@@ -110,8 +116,25 @@ class Constraints:
             yield k
             if i < len(lifts) and lifts[i] == k:
                 i += 1
-            if nxt == k:
-                nxt = tb.next_constraint[k + 1] if k + 1 <= n else n + 1
+            if nxt != k:
+                continue
+            if k + 1 > n:
+                nxt = n + 1
+            elif leap and not tb.gate[k]:
+                low = self._low
+                ov = self.ov
+                nxt = tb.next_gate[k + 1]
+                f = k
+                while f < nxt and tb.feed[f] * ov >= low:
+                    f = tb.lower_feed[f]
+                h = k
+                while h < nxt and min(tb.point_cap[h], tb.cap[h]) >= low:
+                    h = tb.lower_hard[h]
+                nxt = min(nxt, f, h)
+                if k < keep < nxt:
+                    nxt = keep
+            else:
+                nxt = tb.next_constraint[k + 1]
 
     def _cap(self, b: int, w: int) -> tuple[float, bool, bool]:
         """(cap, zero acceleration required, stop) of constraint boundary b."""
@@ -151,7 +174,9 @@ class Constraints:
         w = min(seg + self.look_ahead, n)
         limit = s + reach
         low = INF  # the lowest cap (as checked) in the list so far
-        for b in self._ahead(seg + 1 if first < 0 else first, w):
+        leap = not every and soft[0] >= soft[1]
+        self._low = INF
+        for b in self._ahead(seg + 1 if first < 0 else first, w, leap, keep):
             s_b = tb.s[b]
             if s_b > limit:
                 break
@@ -160,7 +185,8 @@ class Constraints:
                 used = min(tb.point_cap[b], tb.cap[b]) if soft[0] <= b < soft[1] else cap
                 if used >= low and b != keep:
                     continue  # kept by one before it
-                low = used
+                low = min(low, used)
+                self._low = low
             if len(out) == MAX_CANDIDATES - 1 and not every:  # the last counts as a stop
                 cap, gate, stop = 0.0, True, True
             if gate and not stop and cap > 0.0:

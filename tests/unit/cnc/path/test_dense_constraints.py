@@ -16,6 +16,8 @@ import random
 import pytest
 
 from liftd.cnc.geo_task import GeoTask
+from liftd.cnc.path.constraints import MAX_CANDIDATES
+from liftd.cnc.path.table import build_table
 from liftd.cnc.path.tracker import Tracker
 from liftd.cnc.plc import Schedule, parse_override_spec
 from tests.support.cam_cases import cam_scenario
@@ -25,12 +27,18 @@ from tests.unit.cnc.path.test_no_invented_stops import lowest_between, run, ship
 
 
 def program(blocks: int, step_mm: float, feeds: tuple[int, ...], m00_after: int = -1,
-            corners: tuple[int, ...] = ()) -> str:  # fmt: skip
-    """Collinear blocks of `step_mm` through `feeds` in turn (a Y block at each of `corners`),
-    an M00 after block `m00_after`."""
+            corners: tuple[int, ...] = (), arcs: tuple[int, ...] = ()) -> str:  # fmt: skip
+    """Collinear blocks of `step_mm` through `feeds` in turn (a Y block at each of `corners`,
+    a tangent S-curve of two quarter circles of 5 blocks' radius at each of `arcs`), an M00
+    after block `m00_after`."""
     lines = ["G01 X0 Y0 F600"]
     x = y = 0.0
     for i in range(blocks):
+        if i in arcs:
+            r = 5.0 * step_mm
+            lines.append(f"G03 X{x + r:.4f} Y{y + r:.4f} I0 J{r:.4f}")
+            lines.append(f"G02 X{x + 2 * r:.4f} Y{y + 2 * r:.4f} I{r:.4f} J0")
+            x, y = x + 2 * r, y + 2 * r
         if i in corners:
             y += step_mm
             lines.append(f"G01 Y{y:.4f} F{feeds[i % len(feeds)]}")
@@ -125,3 +133,60 @@ def test_a_polyline_s_rounding_kinks_beyond_the_24th_are_not_a_stop(seed: int) -
     _, hard, slow, errors = check(sc)
     assert hard == [] and errors == 0, (hard, describe(sc))
     assert slow == [], (slow, describe(sc))
+
+
+def _dominated(every: list[tuple[int, float, float, bool]], keep: int) -> list[int]:
+    """The boundaries `_collect` keeps of a list with none left out: a candidate without zero
+    acceleration only where its cap is below every one kept before it (or it is `keep`),
+    the 24th counting as a stop."""
+    kept: list[int] = []
+    low = float("inf")
+    for b, _, cap, gate in every:
+        if not gate:
+            if cap >= low and b != keep:
+                continue
+            low = min(low, cap)
+        kept.append(b)
+        if gate or len(kept) == MAX_CANDIDATES:
+            break
+    return kept
+
+
+def test_the_leaps_over_caps_that_cannot_bind_find_every_one_that_can() -> None:
+    """`_collect` leaps along the chains of lower feeds and lower hard caps (`PathTable`); it
+    keeps the same constraints as a scan of all of them would, with lift stops, a forced one
+    and overrides in play."""
+    rng = random.Random(361)
+    compared = 0
+    for _ in range(6):
+        feeds = tuple(
+            rng.choice((60000, 45000, 36000, 24000, 30000, 12000, 6000)) for _ in range(7)
+        )
+        corners = tuple(rng.sample(range(300), 4))
+        arcs = tuple(rng.sample(range(300), 6))
+        path = GeoTask(shipped(), program(300, rng.choice((0.1, 0.3)), feeds, 150, corners, arcs))
+        # hard caps that fall inside a run too (an Advanced lift range's cap on some blocks)
+        segs = tuple(
+            sg.limited(sg.v_lift_ov, sg.a_max, sg.j_max, rng.choice((0.05, 0.1, 0.2, 0.4)))
+            if rng.random() < 0.3 else sg
+            for sg in path.prog.path.segments
+        )  # fmt: skip
+        tb = build_table(dataclasses.replace(path.prog.path, segments=segs))
+        assert any(
+            tb.constraint[b] and not tb.gate[b] and tb.cap[b] < tb.cap[b - 1]
+            for b in range(1, tb.n)
+        )
+        for ov in (0.3, 1.0, 1.7):
+            tr = Tracker(tb, rng.choice((30, 120, 200)), lift_stops={rng.randrange(1, 300)})
+            tr.set_inputs(ov, False)
+            for _ in range(20):
+                seg = rng.randrange(0, tb.n - 1)
+                tr.set_state(0.0, tb.s[seg], 0.3, 0.0, seg, None)
+                every = tr._collect(tb.s[seg], seg, 1.0, every=True)
+                # a forced re-plan's constraint is one of them
+                keep = rng.choice([-1, *(c[0] for c in every if not c[3])])
+                got = [c[0] for c in tr._collect(tb.s[seg], seg, 1.0, keep=keep)]
+                want = _dominated(every, keep)
+                assert got[: len(want)] == want, (seg, keep, ov)
+                compared += 1
+    assert compared == 360
