@@ -165,7 +165,7 @@ class Constraints:
         above them (`Plan.soft_from`), keeping only their hard caps. `keep` is never left out
         (a forced re-plan's constraint, found from the step's end, where the one that would
         keep it is behind). `every`: none left out and no cut (at most the look-ahead window's
-        constraints; `Tracker._replan` reads each one's own tail with `_tail_caps`)."""
+        constraints: what the leaps of `_ahead` are checked against)."""
         tb = self.tb
         n = tb.n
         out: list[tuple[int, float, float, bool]] = []
@@ -255,36 +255,6 @@ class Constraints:
             e = min(ck, self._link(e, sk, bn, sn, is_open))
         return e
 
-    def _tail_caps(self, cands: list[tuple[int, float, float, bool]]) -> list[float]:
-        """`_target_cap` of each candidate of a list with none left out (`_collect` `every`),
-        as if the list began there (the ones after it that a lower cap does not keep): each
-        one's chain runs through the next lower cap after it (a monotonic stack), the list's
-        end (its run boundary or stop, and the window end's floor) by itself. Linear in the
-        list's length, where the lists themselves would be quadratic."""
-        m = len(cands)
-        caps = [0.0] * m
-        if m == 0:
-            return caps
-        is_open = self._chain_open(cands)
-        end = m - 1
-        while end > 0 and cands[end - 1][3]:
-            end -= 1  # the entries with zero acceleration at the end (two at the window's end)
-        caps[m - 1] = cands[m - 1][2]
-        for k in range(m - 2, -1, -1):
-            _, sk, ck, gate = cands[k]
-            if gate or k >= end:
-                bn, sn, _, _ = cands[k + 1]
-                caps[k] = min(ck, self._link(caps[k + 1], sk, bn, sn, is_open))
-        lower = [end]  # candidates whose caps are below every one after them up to the end
-        for k in range(end - 1, -1, -1):
-            _, sk, ck, _ = cands[k]
-            while len(lower) > 1 and cands[lower[-1]][2] >= ck:
-                lower.pop()
-            j = lower[-1]
-            caps[k] = min(ck, self._link(caps[j], sk, cands[j][0], cands[j][1], is_open))
-            lower.append(k)
-        return caps
-
     def _beyond(self, g: int, cap: float, w: int) -> float:
         """Velocity at run boundary g (zero acceleration) from which every constraint after it
         up to the window end stays reachable. Braking does not compose across run boundaries
@@ -317,15 +287,13 @@ class Constraints:
         tb = self.tb
         s_g = tb.s[g]
         chain: list[tuple[float, float, int]] = []
-        low = cap
+        low = self._low = cap
         cut = False
-        for b in self._ahead(g + 1, w):
+        for b in self._ahead(g + 1, w, True):  # leaping over those it keeps
             c, gate, stop = self._cap(b, w)
-            if not gate:
-                if c >= low:
-                    continue
-                low = c
-            low = min(low, c)
+            if not gate and c >= low:
+                continue
+            low = self._low = min(low, c)
             chain.append((tb.s[b], c, b))
             if stop or len(chain) == limit:
                 cut = not stop

@@ -214,7 +214,7 @@ class Tracker(Targets):
         target = self._pick_target(v, a, v_p, d, cap, ceiling, a_max, j_max, self._hard(b, w), over)
         soft_from = b
         shifted = False
-        tails: list[float] = []
+        horizon = max(self._horizon(v, a, a_max, j_max, dt), d)
         # Zero acceleration at a boundary that does not need it, below a feed cap the path can
         # no longer get down to (an override drop), is at a velocity from which the next
         # candidate may be lost too, although the path could still keep it by braking through
@@ -233,20 +233,18 @@ class Tracker(Targets):
                 or self._need(v, a, hard, False, a_max, j_max) > max(d - SLACK_MARGIN, 0.0)
             ):
                 break  # its target is reachable, or its hard cap binds (kept as it is)
-            if not shifted:
-                # the candidates after b, each with its own tail: one that the list left out
-                # for a cap before it may bind once that one is passed above its cap
-                cands = self._collect(s, seg, reach, first=b + 1, every=True)
-                tails = self._tail_caps(cands)
-                best_i = -1
-            if best_i + 1 >= len(cands):
+            # the constraints after b as a list of their own: one that the list left out for
+            # a cap before b may bind once b is passed above its cap (its first is the next
+            # constraint; within the braking horizon, also for a forced re-plan)
+            tail = self._collect(s, seg, horizon, first=b + 1)
+            if not tail:
                 break
-            nb, ns, _, ngate = cands[best_i + 1]
-            ncap = tails[best_i + 1]
+            nb, ns, _, ngate = tail[0]
+            ncap = self._target_cap(tail, 0)
             e = reach_velocity(ncap, max(ns - s_c - CHAIN_MARGIN, 0.0), a_max, j_max)
             if self._need(v, a, e, False, a_max, j_max) <= d + SLACK_TOL:
                 break  # zero acceleration at b, at most e there, loses nothing after it
-            best_i += 1
+            cands, best_i = tail, 0
             b, s_c, gate, cap = nb, ns, ngate, ncap
             d = s_c - s
             target = self._pick_target(v, a, v_p, d, cap, ceiling, a_max, j_max,

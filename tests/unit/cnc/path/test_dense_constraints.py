@@ -2,8 +2,8 @@
 tracker considers at once. The 24th counted as a stop, so 0.2 mm blocks with a feed drop at
 every second one ran at 314 mm/s where the feed allows 500. A feed drop whose cap is at least
 that of one before it cannot bind, and is no longer counted (`Constraints._collect`); after an
-override drop, where the path passes feed caps above them, the tracker reads each one's own
-tail (`Constraints._tail_caps`). The chain of run boundaries behind the first one is followed
+override drop, where the path passes feed caps above them, the tracker reads the list that
+begins after each one it passes. The chain of run boundaries behind the first one is followed
 farther where its 24th link lowers the cap (`Constraints._beyond`). Each run goes through the
 per-cycle check (tests/support/motion_check.py) and the cycle checker (limits, tracker
 errors)."""
@@ -90,37 +90,6 @@ def test_an_override_drop_on_dense_feed_drops_keeps_every_stop_and_limit(
     _, hard, slow, errors = check(Scenario(0, ch, text, sched))
     assert errors == 0 and hard == [], hard
     assert slow == []
-
-
-def test_each_candidate_s_own_tail_is_the_list_that_begins_there() -> None:
-    """`_tail_caps` over a list with none left out equals `_target_cap` of the list `_collect`
-    makes from each candidate on (what the shift after an override drop plans with)."""
-    rng = random.Random(36)
-    feeds = (60000, 45000, 36000, 24000, 30000, 12000)
-    text = program(300, 0.1, tuple(rng.choice(feeds) for _ in range(9)), m00_after=120)
-    task = GeoTask(shipped(), text)
-    tr = Tracker(task.prog.table, 200)
-    tb = task.prog.table
-    compared = 0
-    for ov in (0.4, 1.0, 2.0):
-        tr.set_inputs(ov, False)
-        for seg in (0, 37, 90, 115):
-            tr.set_state(0.0, tb.s[seg], 0.3, 0.0, seg, None)
-            every = tr._collect(tb.s[seg], seg, 1.0, every=True)
-            tails = tr._tail_caps(every)
-            assert every[-1][3], "the list ends at the M00 or the window's end"
-            for i, (b, s_b, _, gate) in enumerate(every):
-                if gate:
-                    continue
-                own = tr._collect(tb.s[seg], seg, 1.0, first=b)
-                assert own[0][0] == b and own[0][1] == s_b
-                assert tails[i] == pytest.approx(tr._target_cap(own, 0), rel=1e-12, abs=1e-15)
-                compared += 1
-    assert compared > 100
-    # and the list left out what cannot bind: fewer candidates than constraints
-    tr.set_inputs(1.0, False)
-    tr.set_state(0.0, tb.s[0], 0.3, 0.0, 0, None)
-    assert len(tr._collect(tb.s[0], 0, 1.0)) < len(tr._collect(tb.s[0], 0, 1.0, every=True)) / 4
 
 
 @pytest.mark.parametrize("seed", [0, 30, 38, 162])
