@@ -74,6 +74,13 @@ def _schedule(duration: float) -> Schedule:
     return Schedule(override=override, feed_hold=holds)
 
 
+def _feed_drops(blocks: int, step_mm: float) -> str:
+    """`blocks` collinear blocks of `step_mm` at F30000 and F60000 in turn (issue 36)."""
+    lines = ["G90 G17 G94", "G01 X0 Y0 F6000"]
+    lines += [f"G01 X{(k + 1) * step_mm:.4f} F{60000 if k % 2 else 30000}" for k in range(blocks)]
+    return "\n".join([*lines, "M30"]) + "\n"
+
+
 def _range(blocks: int, step_mm: float, feed: int = 12000) -> str:
     """One lift range over `blocks` collinear blocks of `step_mm`."""
     lines = [
@@ -101,6 +108,8 @@ def programs() -> dict[str, tuple[str, Callable[[float], Schedule]]]:
         "nesting-500": (nest, lambda _: Schedule()),
         "nesting-500 override+hold": (nest, _schedule),
         "range-2000-blocks": (_range(2000, 0.5), lambda _: Schedule()),
+        # a feed drop at every second block: every constraint within the brake is scanned
+        "feed-drops-0.2mm override+hold": (_feed_drops(2000, 0.2), _schedule),
         # the issue's bad input
         "range-10000-blocks": (_range(10000, 0.1), lambda _: Schedule()),
         "blocks-0.001mm": (_range(5000, 0.001), lambda _: Schedule()),

@@ -64,6 +64,7 @@ class Constraints:
         self._beyond_open = False  # the last `_beyond` chain ended at the window's end or a cut
         self._floor_key = (-1, -1.0)  # (window end, override) of `_window_floor`'s last value
         self._floor_val = 0.0
+        self._low = INF  # the lowest cap `_collect` kept so far (`_ahead` leaps below it)
 
     def is_stop(self, b: int) -> bool:
         tb = self.tb
@@ -93,8 +94,13 @@ class Constraints:
             stop = brake_reach(v, a, a_max, j_max)
         return stop + 2.0 * dt * (v + a_max * dt) + 1e-9
 
-    def _ahead(self, b: int, w: int) -> Iterator[int]:
-        """Constraint boundaries from b on (static ones, lift stops, the window end w)."""
+    def _ahead(self, b: int, w: int, leap: bool = False, keep: int = -1) -> Iterator[int]:
+        """Constraint boundaries from b on (static ones, lift stops, the window end w). With
+        `leap`, after a boundary without zero acceleration only those whose cap is below
+        `self._low` (the lowest the caller kept, which it sets before asking for the next), the
+        run boundaries, lift stops, `keep` and w: the first constraint below a cap lies on the
+        chain of lower feeds or of lower hard caps from the last one kept (`PathTable`
+        `lower_feed`, `lower_hard`), so a run of feed drops that cannot bind costs nothing."""
         tb = self.tb
         n = tb.n
         lifts = sorted(k for k in self.lift_stops if b <= k <= w) if self.lift_stops else []
@@ -110,8 +116,25 @@ class Constraints:
             yield k
             if i < len(lifts) and lifts[i] == k:
                 i += 1
-            if nxt == k:
-                nxt = tb.next_constraint[k + 1] if k + 1 <= n else n + 1
+            if nxt != k:
+                continue
+            if k + 1 > n:
+                nxt = n + 1
+            elif leap and not tb.gate[k]:
+                low = self._low
+                ov = self.ov
+                nxt = tb.next_gate[k + 1]
+                f = k
+                while f < nxt and tb.feed[f] * ov >= low:
+                    f = tb.lower_feed[f]
+                h = k
+                while h < nxt and min(tb.point_cap[h], tb.cap[h]) >= low:
+                    h = tb.lower_hard[h]
+                nxt = min(nxt, f, h)
+                if k < keep < nxt:
+                    nxt = keep
+            else:
+                nxt = tb.next_constraint[k + 1]
 
     def _cap(self, b: int, w: int) -> tuple[float, bool, bool]:
         """(cap, zero acceleration required, stop) of constraint boundary b."""
@@ -119,12 +142,30 @@ class Constraints:
             return 0.0, True, True
         return self.tb.entry_cap(b, self.ov), self.tb.gate[b], False
 
-    def _collect(self, s: float, seg: int, reach: float) -> list[tuple[int, float, float, bool]]:
-        """Constraints within `reach` of (s, seg), up to and including the first run boundary or
-        stop: (boundary, position, cap, zero acceleration required). The run boundary's cap is
-        lowered so that everything after it stays reachable (`_beyond`): the constraints after
-        it are not in the list. The others keep their own caps: every later one up to the run
-        boundary is in the list and checked by itself."""
+    def _collect(
+        self, s: float, seg: int, reach: float, soft: tuple[int, int] = (0, 0), keep: int = -1,
+        first: int = -1, every: bool = False,
+    ) -> list[tuple[int, float, float, bool]]:  # fmt: skip
+        """Constraints within `reach` of (s, seg), from boundary `first` on (the next one by
+        default), up to and including the first run boundary or stop: (boundary, position,
+        cap, zero acceleration required). The run boundary's cap is lowered so that everything
+        after it stays reachable (`_beyond`): the constraints after it are not in the list. The
+        others keep their own caps, and every one up to the run boundary that can bind is in
+        the list and checked by itself.
+
+        One that cannot bind is left out: a constraint without zero acceleration (a feed drop,
+        a transition cap inside a run) whose cap is at least that of one before it in the
+        list. Its slack is at least that one's (it is farther, and the need to get below a
+        higher cap is shorter, `_need`), so it is never the first one lost, and a path that
+        keeps that one keeps it by not accelerating between them; the chain of `_target_cap`
+        leaves it reachable for the same reason. Without this, 0.2 mm blocks with a feed drop
+        at every second one put 24 constraints within 9.6 mm and the 24th counted as a stop
+        (known deviation 1 of docs/geo-core.md: 314 for 500 mm/s). The caps compared are the
+        ones the check uses: a plan passes the feed caps of boundaries soft[0] … soft[1] − 1
+        above them (`Plan.soft_from`), keeping only their hard caps. `keep` is never left out
+        (a forced re-plan's constraint, found from the step's end, where the one that would
+        keep it is behind). `every`: none left out and no cut (at most the look-ahead window's
+        constraints: what the leaps of `_ahead` are checked against)."""
         tb = self.tb
         n = tb.n
         out: list[tuple[int, float, float, bool]] = []
@@ -132,12 +173,21 @@ class Constraints:
             return out
         w = min(seg + self.look_ahead, n)
         limit = s + reach
-        for b in self._ahead(seg + 1, w):
+        low = INF  # the lowest cap (as checked) in the list so far
+        leap = not every and soft[0] >= soft[1]
+        self._low = INF
+        for b in self._ahead(seg + 1 if first < 0 else first, w, leap, keep):
             s_b = tb.s[b]
             if s_b > limit:
                 break
             cap, gate, stop = self._cap(b, w)
-            if len(out) == MAX_CANDIDATES - 1:  # too many at once: the last counts as a stop
+            if not gate and not every:
+                used = min(tb.point_cap[b], tb.cap[b]) if soft[0] <= b < soft[1] else cap
+                if used >= low and b != keep:
+                    continue  # kept by one before it
+                low = min(low, used)
+                self._low = low
+            if len(out) == MAX_CANDIDATES - 1 and not every:  # the last counts as a stop
                 cap, gate, stop = 0.0, True, True
             if gate and not stop and cap > 0.0:
                 cap = min(cap, self._beyond(b, cap, w))
@@ -173,45 +223,80 @@ class Constraints:
         self._floor_val = min(tb.entry_cap(w, self.ov), after)
         return self._floor_val
 
+    def _chain_open(self, cands: list[tuple[int, float, float, bool]]) -> bool:
+        """Whether the chain of `cands` ends at the window's end (or its run boundary's chain
+        does): its end may rise as the window moves on (`_beyond`)."""
+        last = cands[-1][0]
+        w = self.window_end
+        if last == w:
+            return True
+        if cands[-1][3] and not self.is_stop(last):
+            self._beyond(last, cands[-1][2], w)  # cached: `_collect` just asked for it
+            return self._beyond_open
+        return False
+
+    def _link(self, e: float, s_from: float, b: int, s_b: float, is_open: bool) -> float:
+        """The highest velocity at s_from (zero acceleration) from which e at boundary b (at
+        s_b) stays reachable: every higher end too where the chain is open."""
+        a_max, j_max = self._limits(b - 1)
+        length = max(s_b - s_from - CHAIN_MARGIN, 0.0)
+        if is_open:
+            return reach_velocity_any_above(e, length, a_max, j_max)
+        return reach_velocity(e, length, a_max, j_max)
+
     def _target_cap(self, cands: list[tuple[int, float, float, bool]], i: int) -> float:
         """The velocity to plan for at candidate i (zero acceleration there): its cap, lowered
         so that the later candidates in the list stay reachable from it."""
         e = cands[-1][2]
-        last = cands[-1][0]
-        w = self.window_end
-        # a chain that ends at the window's end (or whose run boundary's does) is open: its end
-        # may rise as the window moves on (`_beyond`)
-        is_open = last == w
-        if not is_open and cands[-1][3] and not self.is_stop(last):
-            self._beyond(last, cands[-1][2], w)  # cached: `_collect` just asked for it
-            is_open = self._beyond_open
+        is_open = self._chain_open(cands)
         for k in range(len(cands) - 2, i - 1, -1):
             _, sk, ck, _ = cands[k]
             bn, sn, _, _ = cands[k + 1]
-            a_max, j_max = self._limits(bn - 1)
-            length = max(sn - sk - CHAIN_MARGIN, 0.0)
-            if is_open:
-                e = min(ck, reach_velocity_any_above(e, length, a_max, j_max))
-            else:
-                e = min(ck, reach_velocity(e, length, a_max, j_max))
+            e = min(ck, self._link(e, sk, bn, sn, is_open))
         return e
 
     def _beyond(self, g: int, cap: float, w: int) -> float:
         """Velocity at run boundary g (zero acceleration) from which every constraint after it
         up to the window end stays reachable. Braking does not compose across run boundaries
-        (each one wants zero acceleration), so far constraints matter through the chain: it is
-        followed up to MAX_CANDIDATES constraints, the last counting as a stop (conservative).
+        (each one wants zero acceleration), so far constraints matter through the chain of
+        links after g (`_chain`). It is followed up to MAX_CANDIDATES links, the last counting
+        as a stop; where that stop lowers g's cap, four times as far, then to the window's
+        end. (A CAM polyline's rounding kinks are run boundaries, known deviation 0: 0.2 mm
+        apart, braking to rest through them takes ~17 mm from 100 mm/s, and the stop at the
+        24th link held CAM seeds 0, 30, 38 and 162 5–40 % below their caps.)
         Cached per (g, window end, override, stop set): a step within one segment asks again."""
         key = (g, w, self.ov)
         if self._beyond_key == key:
             return self._beyond_val
+        limit = MAX_CANDIDATES
+        while True:
+            e, is_open, cut = self._chain(g, cap, w, limit)
+            # a cut counts as a stop, the lowest end the links can have (every higher end kept
+            # reachable, `reach_velocity_any_above`): where g keeps its cap with it, it keeps it
+            # with whatever lies beyond the cut
+            if not cut or e >= cap or limit > self.look_ahead:
+                break
+            limit *= 4
+        self._beyond_key, self._beyond_val, self._beyond_open = key, e, is_open
+        return e
+
+    def _chain(self, g: int, cap: float, w: int, limit: int) -> tuple[float, bool, bool]:
+        """(`_beyond`'s velocity at g, whether the chain is open, whether it was cut) over at
+        most `limit` links after g, the last counting as a stop. A constraint without zero
+        acceleration that a lower cap before it keeps (g's own cap first) is not a link."""
         tb = self.tb
         s_g = tb.s[g]
         chain: list[tuple[float, float, int]] = []
-        for b in self._ahead(g + 1, w):
-            c, _, stop = self._cap(b, w)
+        low = self._low = cap
+        cut = False
+        for b in self._ahead(g + 1, w, True):  # leaping over those it keeps
+            c, gate, stop = self._cap(b, w)
+            if not gate and c >= low:
+                continue
+            low = self._low = min(low, c)
             chain.append((tb.s[b], c, b))
-            if stop or len(chain) == MAX_CANDIDATES:
+            if stop or len(chain) == limit:
+                cut = not stop
                 chain[-1] = (tb.s[b], 0.0, b)
                 break
         # open: the chain ends at the window's end or is cut, not at a stop of the program: its
@@ -233,8 +318,7 @@ class Constraints:
                 e = reach_velocity_any_above(e, length, a_max, j_max)
             else:
                 e = reach_velocity(e, length, a_max, j_max)
-        self._beyond_key, self._beyond_val, self._beyond_open = key, e, is_open
-        return e
+        return e, is_open, cut
 
     @staticmethod
     def _need(v: float, a: float, cap: float, gate: bool, a_max: float, j_max: float) -> float:
@@ -293,7 +377,7 @@ class Constraints:
         a_max, j_max = self._limits(seg)
         if v == 0.0 and a <= 0.0:
             return None
-        cands = self._collect(s, seg, self._horizon(v, a, a_max, j_max, dt))
+        cands = self._collect(s, seg, self._horizon(v, a, a_max, j_max, dt), (soft_from, goal))
         if not cands:
             self._clear(s, projected_velocity(v, max(a, 0.0), j_max), seg, a_max, j_max, dt)
             return None

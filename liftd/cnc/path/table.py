@@ -65,6 +65,11 @@ class PathTable:
     replan: tuple[bool, ...]  # the tracker re-plans when it reaches b (ceiling or run changes)
     needs_time: tuple[bool, ...]  # b has actions: its exact passing time is reported
     next_constraint: tuple[int, ...]  # first constraint boundary ≥ b (n + 1 boundaries)
+    next_gate: tuple[int, ...]  # first run boundary (or stop) ≥ b
+    # per constraint boundary b: the next constraint after it with a lower feed, a lower hard
+    # cap (min of the transition and axis caps); n + 1 where none (`Constraints._collect`)
+    lower_feed: tuple[int, ...]
+    lower_hard: tuple[int, ...]
     sum_l_f: tuple[float, ...]  # Σ_{j<b} L_j / F_j
     sum_l_c: tuple[float, ...]  # Σ_{j<b} L_j / C_j
     # per run
@@ -161,6 +166,17 @@ def build_table(path: PathProgram) -> PathTable:
         next_con[b] = following
         if not b & EVERY:
             pause()
+    next_gate = [n] * (n + 1)
+    following = n
+    for b in range(n, -1, -1):
+        if gate[b] or stop[b] or conditional[b]:
+            following = b
+        next_gate[b] = following
+        if not b & EVERY:
+            pause()
+    lower_feed = _next_lower(feed, constraint, n)
+    hard = [min(point_cap[k], cap[k]) for k in range(n)]
+    lower_hard = _next_lower(hard, constraint, n)
     sum_f = [0.0] * (n + 1)
     sum_c = [0.0] * (n + 1)
     for k, seg in enumerate(segs):
@@ -182,11 +198,32 @@ def build_table(path: PathProgram) -> PathTable:
         replan=_frozen(replan),
         needs_time=_frozen(needs_time),
         next_constraint=_frozen(next_con),
+        next_gate=_frozen(next_gate),
+        lower_feed=_frozen(lower_feed),
+        lower_hard=_frozen(lower_hard),
         sum_l_f=_frozen(sum_f),
         sum_l_c=_frozen(sum_c),
         run_a=_frozen(run_a),
         run_j=_frozen(run_j),
     )
+
+
+def _next_lower(values: list[float], constraint: list[bool], n: int) -> list[int]:
+    """For each constraint boundary b in 1 … n − 1: the next constraint boundary after it whose
+    segment's value is lower (a monotonic stack, one pass), n + 1 where none; n + 1 elsewhere.
+    The first constraint after b below any x ≤ values[b] lies on this chain from b."""
+    out = [n + 1] * (n + 1)
+    stack: list[int] = []
+    for b in range(n - 1, 0, -1):
+        if constraint[b]:
+            x = values[b]
+            while stack and values[stack[-1]] >= x:
+                stack.pop()
+            out[b] = stack[-1] if stack else n + 1
+            stack.append(b)
+        if not b & EVERY:
+            pause()
+    return out
 
 
 T = TypeVar("T")
