@@ -173,36 +173,64 @@ class PathRules:
         return a, j
 
     def backward(self, b: int, sample: Sample, window_end: int) -> float:
-        """What the boundaries after b up to `window_end` allow at b: a backward pass over
-        those that can bind (a stop, the window's end, a target below the ceiling before it, a
-        run boundary) within the distance the path needs to stop from the program's highest
-        velocity."""
+        """What the boundaries after b up to `window_end` allow at b. Inside a run the path
+        acceleration is continuous and one brake passes any number of caps; it is zero only at
+        the run's end (a run boundary, a stop, the window's end). So b is held to the least,
+        over the caps k of its run, of the velocity from which k's cap is reachable over
+        s_k − s_b, and to the one from which the run's end is reachable with the value of its
+        own chain (the same rule from there on; rest at a stop or the window's end). The caps
+        that can bind are a stop, the window's end, a target below the ceiling before it and
+        a run boundary, within the distance the path needs to stop from the program's highest
+        velocity. Where the chain ends at the window's end, whose rest becomes a cap as the
+        window moves, the run ends hold only what every higher end velocity allows
+        (`reach_rising`); the caps inside a run do not depend on it."""
         ov = sample.override
         w = min(window_end, self.n)
         if w <= b:
             return 0.0
         s_b = self.bounds[b].s
         reach_d = 2.0 * change_distance(self.v_top, 0.0, self.a_low, self.j_low)
-        nodes: list[tuple[int, float]] = []
-        is_open = False  # the pass ends at the window's end: its rest may become a cap
+        nodes: list[tuple[int, float, bool]] = []  # (boundary, cap, ends a run)
+        is_open = False  # the chain ends at the window's end: its rest may become a cap
         for k in range(b + 1, w + 1):
             if self.bounds[k].s - s_b > reach_d:
                 break
             if k == w or self.is_stop(k, sample):
-                nodes.append((k, 0.0))
+                nodes.append((k, 0.0, True))
                 is_open = not self.is_stop(k, sample)
                 break
             cap = self.target(k, ov)
-            if cap < self.ceiling(k - 1, ov) or self.gate[k]:
-                nodes.append((k, cap))
+            if self.gate[k] or cap < self.ceiling(k - 1, ov):
+                nodes.append((k, cap, self.gate[k]))
+        end: tuple[int, float] | None = None  # the next run end after the nodes walked: (k, e)
+        inside: list[tuple[int, float]] = []  # the caps between the start and that run end
+        for i in range(len(nodes) - 1, -2, -1):
+            if i >= 0 and not nodes[i][2]:
+                inside.append(nodes[i][:2])
+                continue
+            start = nodes[i][0] if i >= 0 else b
+            e = self._run(start, inside, end, is_open)
+            if i < 0:
+                return e
+            end, inside = (start, min(e, nodes[i][1])), []
+        return INF  # not reached: the loop returns at i = −1
+
+    def _run(
+        self, start: int, inside: list[tuple[int, float]], end: tuple[int, float] | None,
+        is_open: bool,
+    ) -> float:  # fmt: skip
+        """The highest velocity at boundary `start` (zero acceleration) from which each cap
+        `inside` its run and the run's `end` value are reachable, each by a brake of its own."""
+        s0 = self.bounds[start].s
         e = INF
-        for i in range(len(nodes) - 1, -1, -1):
-            k, cap = nodes[i]
-            prev = nodes[i - 1][0] if i > 0 else b
-            a, j = self.limits(prev, k)
-            length = self.bounds[k].s - self.bounds[prev].s - CHAIN_SLACK
-            if is_open:
-                e = reach_rising(min(e, cap), length, a, j, self.v_top)
-            else:
-                e = reach(min(e, cap), length, a, j, self.v_top)
+        for k, cap in inside:
+            a, j = self.limits(start, k)
+            length = self.bounds[k].s - s0 - CHAIN_SLACK
+            e = min(e, reach(cap, length, a, j, self.v_top))
+        if end is not None:
+            k, cap = end
+            a, j = self.limits(start, k)
+            length = self.bounds[k].s - s0 - CHAIN_SLACK
+            rule = reach_rising if is_open else reach
+            e = min(e, rule(cap, length, a, j, self.v_top))
         return e
