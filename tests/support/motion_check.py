@@ -12,9 +12,10 @@ The rules (docs/architecture.md, "Which rule decides a slowdown"):
   beyond it is known).
 * **At a block boundary** the velocity reaches the lowest of: the two blocks' ceilings (F ×
   override within the axes' and the lift's caps), the transition cap, what the constraints
-  ahead within the look-ahead window allow (a backward pass: each reachable from the one before
-  with the run's acceleration and jerk, the window's end a stop), and what the path can have
-  reached since the last point it was slower (a forward pass from there). Where the window's
+  ahead within the look-ahead window allow (a backward pass: one brake through the caps of a
+  run, zero acceleration at its end, the window's end a stop), and what the path can have
+  reached since a rule last held it lower (a forward pass from there, from a run boundary, or
+  from where it was found too slow). Where the window's
   last move raised the cap, the path is held to the cap under the window before and to the
   higher one only as far as it can reach it from its state when the window moved.
 * **Between two boundaries** it never goes below the lower of its velocities at the two.
@@ -34,6 +35,7 @@ motion is measured against bench/reference_profile.py, not here.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.path.program import PathProgram
@@ -42,7 +44,7 @@ from liftd.cnc.snapshot import ChannelState, GeoSnapshot
 from tests.support.motion_rules import INF, PathRules, Sample, reach, reach_from
 
 # Sample and reach_from are the tests' too (the samples' type; the check's arithmetic)
-__all__ = ["Recorder", "Sample", "check_motion", "reach_from"]
+__all__ = ["Expected", "Recorder", "Sample", "check_motion", "reach_from"]
 
 REL_TOL = 0.05  # a velocity this much below its expected value is still at it (slightly
 # lower: the bounded cycle keeps µm margins and plans a limited number of constraints at once)
@@ -109,11 +111,24 @@ def _at(last: Sample, smp: Sample, s_b: float) -> float:
     return max(last.v + tau * (last.a + tau * j / 2.0), 0.0)
 
 
+class Expected(NamedTuple):
+    """What the check expected at a boundary the path crossed (m/s): the path's velocity,
+    the caps' rules (the boundary's target and what the constraints ahead allow), the forward
+    pass and, inside an event's deceleration ramp, the ramp's velocity there (else inf)."""
+
+    b: int
+    v: float
+    held_by: float
+    forward: float
+    ramp: float
+
+
 def check_motion(
-    prog: PathProgram, table: PathTable, look_ahead: int, dt: float, samples: list[Sample]
-) -> list[str]:
+    prog: PathProgram, table: PathTable, look_ahead: int, dt: float, samples: list[Sample],
+    trace: list[Expected] | None = None,
+) -> list[str]:  # fmt: skip
     """Every slowdown of the path in `samples` (one per cycle of `dt`) that no rule explains,
-    as text (empty: none)."""
+    as text (empty: none); with `trace`, what it expected at each boundary checked."""
     path = PathRules(prog, table, look_ahead)
     out: list[str] = []
     # the forward pass: from where the path was last slower than it could have been (or the
@@ -217,8 +232,12 @@ def check_motion(
                 gain = reach_from(before.v, before.a, s_b - before.s, a, j, path.v_top)
                 if gain < backward:
                     backward = min(backward, max(gain, path.backward(b, smp, window - 1)))
-            expect = min(path.target(b, smp.override), backward, forward)
-            if v_b < expect * (1.0 - REL_TOL) - tol:
+            held_by = min(path.target(b, smp.override), backward)  # the caps' rules
+            expect = min(held_by, forward)
+            slow = v_b < expect * (1.0 - REL_TOL) - tol
+            if trace is not None:
+                trace.append(Expected(b, v_b, held_by, forward, INF))
+            if slow:
                 out.append(
                     f"boundary {b} (line {path.bounds[b].line}) at {v_b * 1e3:.4f} mm/s, "
                     f"expected {expect * 1e3:.4f} (t={smp.t:.4f} s)"
@@ -230,9 +249,13 @@ def check_motion(
                     f"{path.bounds[b].line}) between {entry_v * 1e3:.4f} and {v_b * 1e3:.4f} "
                     f"(t={smp.t:.4f} s)"
                 )
-            # the forward pass starts again where the acceleration is zero (a run boundary) and
-            # where the path was slower than it could have been
-            if path.gate[b] or v_b < forward:
+            # the forward pass starts again where the acceleration is zero (a run boundary),
+            # where a cap held the path below it, and where the path was slower than the rules
+            # allow (found above). Not where it is only a little below it, within REL_TOL:
+            # restarted there with zero acceleration, the pass followed a path held at any
+            # velocity below the rules' (a cruise at 314 mm/s where they allow 500 went
+            # unseen after its first boundary)
+            if path.gate[b] or (v_b < forward and (slow or held_by < forward)):
                 anchor_s, anchor_v, anchor_seg = s_b, min(v_b, forward), b
             entry_v, interval_min, fresh = v_b, INF, False
         if smp.seg != last.seg:
