@@ -123,6 +123,21 @@ class Expected(NamedTuple):
     ramp: float
 
 
+def _ramp_at(ramp: tuple[float, float, float, float], s_b: float) -> float:
+    """The velocity where an event's deceleration ramp (from s, v, a < 0, ramped out at the
+    jerk j) passes s_b, before its end: the time found by bisection."""
+    s0, v0, a0, j = ramp
+    lo, hi = 0.0, -a0 / j
+    for _ in range(50):
+        tau = 0.5 * (lo + hi)
+        if s0 + tau * (v0 + tau * (a0 / 2.0 + tau * j / 6.0)) < s_b:
+            lo = tau
+        else:
+            hi = tau
+    tau = 0.5 * (lo + hi)
+    return max(v0 + tau * (a0 + tau * j / 2.0), 0.0)
+
+
 def check_motion(
     prog: PathProgram, table: PathTable, look_ahead: int, dt: float, samples: list[Sample],
     trace: list[Expected] | None = None,
@@ -150,6 +165,7 @@ def check_motion(
     # the window moved to k + look_ahead
     entered: dict[int, Sample] = {}
     ramp_ends = -INF  # path position where an event's deceleration is ramped out
+    ramp = (0.0, 0.0, 0.0, 0.0)  # that ramp: the state (s, v, a) it starts from, the jerk
     last: Sample | None = None
     for smp in samples:
         if last is None:
@@ -182,6 +198,7 @@ def check_motion(
                 t_r = -smp.a / j
                 ramp_s = smp.s + t_r * (smp.v + t_r * (smp.a / 2.0 + t_r * j / 6.0))
                 anchor_s, anchor_v = ramp_s, max(smp.v + smp.a * t_r / 2.0, 0.0)
+                ramp = (smp.s, smp.v, smp.a, j)
             ramp_ends = anchor_s
             interval_min, fresh = INF, True
             entered.clear()
@@ -205,16 +222,7 @@ def check_motion(
                 interval_min, fresh = INF, True
                 continue
             v_b = _at(last, smp, s_b)
-            if s_b < ramp_ends:
-                # still ramping out an event's deceleration: the velocity here is the ramp's,
-                # or lower where the path brakes harder for a constraint (CAM seed 687: to a
-                # corner's 0.28 mm/s inside the ramp), from where the forward pass starts again
-                if v_b < anchor_v:
-                    anchor_s, anchor_v, anchor_seg = s_b, v_b, b
-                continue
             tol = _slack(path, b, dt)
-            a, j = path.limits(anchor_seg, b)
-            forward = reach(anchor_v, s_b - anchor_s, a, j, path.v_top)
             # the look-ahead window as it was when the path began braking toward b: its end was a
             # stop the path had to be able to make, and a cap that came into view later may lie
             # below what the path can still brake to exactly (jerk-limited, braking to a low
@@ -233,6 +241,25 @@ def check_motion(
                 if gain < backward:
                     backward = min(backward, max(gain, path.backward(b, smp, window - 1)))
             held_by = min(path.target(b, smp.override), backward)  # the caps' rules
+            if s_b < ramp_ends:
+                # still ramping out an event's deceleration: the velocity here is the ramp's
+                # (its highest), or lower where a cap needs it (CAM seed 687: to a corner's
+                # 0.28 mm/s inside the ramp), from where the forward pass starts again. Not
+                # checked before (every boundary inside the ramp passed)
+                on_ramp = _ramp_at(ramp, s_b)
+                if trace is not None:
+                    trace.append(Expected(b, v_b, held_by, INF, on_ramp))
+                expect = min(on_ramp, held_by)
+                if v_b < expect * (1.0 - REL_TOL) - tol:
+                    out.append(
+                        f"boundary {b} (line {path.bounds[b].line}) at {v_b * 1e3:.4f} mm/s, "
+                        f"expected {expect * 1e3:.4f} in an event's ramp (t={smp.t:.4f} s)"
+                    )
+                if v_b < anchor_v:
+                    anchor_s, anchor_v, anchor_seg = s_b, v_b, b
+                continue
+            a, j = path.limits(anchor_seg, b)
+            forward = reach(anchor_v, s_b - anchor_s, a, j, path.v_top)
             expect = min(held_by, forward)
             slow = v_b < expect * (1.0 - REL_TOL) - tol
             if trace is not None:

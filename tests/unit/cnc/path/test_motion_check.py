@@ -6,10 +6,12 @@ without a rule: a check that expects too little hides exactly those slowdowns.""
 from __future__ import annotations
 
 import dataclasses
+import math
+from collections.abc import Callable
 
 from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.params import ChannelParams
-from tests.support.motion_check import check_motion
+from tests.support.motion_check import Expected, check_motion
 from tests.support.motion_rules import PathRules, Sample
 from tests.unit.cnc.path.test_no_invented_stops import shipped
 
@@ -52,17 +54,25 @@ def test_one_brake_passes_every_feed_drop_inside_a_run() -> None:
         assert rules.backward(b, smp, b - 1 + ch.look_ahead_blocks) >= 0.95 * 500 * MM, b
 
 
-def cruise(task: GeoTask, v: float, dt: float, t_end: float) -> list[Sample]:
-    """Samples of a path that runs at v from its start (no motion that a core makes: the
-    check's input, to see what it finds)."""
+def drive(
+    task: GeoTask, v: float, dt: float, cycles: int,
+    accel: Callable[[int], float] = lambda i: 0.0, override: Callable[[int], float] = lambda i: 1.0,
+) -> list[Sample]:  # fmt: skip
+    """Samples of a made-up path from the program's start at v, with the acceleration
+    `accel(i)` and the override `override(i)` in cycle i (not a motion that a core makes:
+    the check's input, to see what it finds)."""
     bounds = task.interp.program.boundaries
     out: list[Sample] = []
     seg = 0
-    for i in range(round(t_end / dt) + 1):
-        s = v * i * dt
+    s = 0.0
+    for i in range(cycles + 1):
+        a = accel(i)
+        if i:
+            s += v * dt + a * dt * dt / 2.0
+            v += a * dt
         while seg + 1 < len(bounds) - 1 and bounds[seg + 1].s <= s:
             seg += 1
-        out.append(at(s, v, seg, t=i * dt))
+        out.append(at(s, v, seg, t=i * dt, a=a, ov=override(i)))
     return out
 
 
@@ -75,9 +85,29 @@ def test_a_path_held_below_the_rules_is_found_along_the_whole_stretch() -> None:
     path, or where the check found it too slow: a path cruising at 300 mm/s on the 0.2 mm
     blocks at F30000 / F60000 is found again in every 10 mm (every 4 mm)."""
     ch, task = many_drops()
-    samples = cruise(task, 0.3, ch.cycle_time, 0.15)  # 45 mm
+    samples = drive(task, 0.3, ch.cycle_time, 150)  # 45 mm
     found = check_motion(task.interp.program, task.interp.table, 200, ch.cycle_time, samples)
     boundaries = [int(f.split()[1]) for f in found if f.startswith("boundary")]
     for start_mm in range(5, 40, 10):  # every 10 mm stretch after the first block
         lo, hi = start_mm / 0.2, (start_mm + 10) / 0.2
         assert any(lo <= b < hi for b in boundaries), (start_mm, found)
+
+
+def test_a_boundary_inside_an_event_s_ramp_is_checked_against_the_ramp() -> None:
+    """After an event planned while the path decelerates, its deceleration is ramped out at
+    full jerk first: the ramp's velocity is the highest the path can have there. Boundaries
+    inside the ramp were skipped, so a path that went on braking there for no cap passed.
+    Made up: 0.2 mm blocks at F12000 (200 mm/s), override 100 → 120 % while the path
+    brakes at −4 m/s² (the X axis's 500 m/s³: a ramp of 8 ms to 184 mm/s, 1.5 mm), and it
+    keeps braking at −4 m/s² through the ramp to 168 mm/s and cruises on there."""
+    ch = dataclasses.replace(shipped(), cycle_time=1e-3)
+    text = "G01 X0 Y0 F600\n" + "".join(f"G01 X{(i + 1) * 0.2:.1f} F12000\n" for i in range(150))
+    task = GeoTask(ch, text + "M30\n")
+    samples = drive(task, 0.2, ch.cycle_time, 150, lambda i: -4.0 if 40 <= i < 48 else 0.0,
+                    lambda i: 1.0 if i < 40 else 1.2)  # fmt: skip
+    trace: list[Expected] = []
+    found = check_motion(task.interp.program, task.interp.table, 30, ch.cycle_time, samples, trace)
+    in_ramp = [e for e in trace if e.ramp < math.inf]
+    assert len(in_ramp) >= 5
+    assert all(e.ramp > e.v for e in in_ramp)  # the made-up path below the ramp
+    assert any(f.startswith("boundary") and "in an event's ramp" in f for f in found), found
