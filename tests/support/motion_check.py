@@ -21,8 +21,11 @@ The rules (docs/architecture.md, "Which rule decides a slowdown"):
 * **Between two boundaries** it never goes below the lower of its velocities at the two.
 
 After an input changes (override, feed hold, a stop for Z set or dropped, an acknowledge, a
-resume) the path follows a new plan: the forward pass starts again from the state at that
-cycle, and the interval it is in is not checked against its entry velocity.
+resume) the path follows a new plan: where it decelerates, that deceleration is ramped out at
+full jerk first (a boundary inside that ramp is expected at the ramp's velocity there, or
+lower where a cap needs it); the forward pass starts again where the ramp ends (or at the
+event's state), and the interval goes on from there: no dip below the lower of the ramp's end
+and the next boundary.
 
 What the rules allow is tests/support/motion_rules.py, in the checker's own arithmetic (a
 jerk-limited velocity change with zero acceleration at both ends, inverted by bisection), not
@@ -114,9 +117,11 @@ def _at(last: Sample, smp: Sample, s_b: float) -> float:
 class Expected(NamedTuple):
     """What the check expected at a boundary the path crossed (m/s): the path's velocity,
     the caps' rules (the boundary's target and what the constraints ahead allow), the forward
-    pass and, inside an event's deceleration ramp, the ramp's velocity there (else inf)."""
+    pass and, inside an event's deceleration ramp, the ramp's velocity there (else inf); the
+    look-ahead window's end it read the constraints up to."""
 
     b: int
+    window: int
     v: float
     held_by: float
     forward: float
@@ -200,7 +205,10 @@ def check_motion(
                 anchor_s, anchor_v = ramp_s, max(smp.v + smp.a * t_r / 2.0, 0.0)
                 ramp = (smp.s, smp.v, smp.a, j)
             ramp_ends = anchor_s
-            interval_min, fresh = INF, True
+            # the interval goes on from the event, or from its ramp's end (its lowest point):
+            # the path does not dip below the lower of that and the next boundary either (it
+            # was not checked: a dip planned at an event passed unseen)
+            entry_v, interval_min, fresh = min(smp.v, anchor_v), INF, False
             entered.clear()
             last = smp
             continue
@@ -248,7 +256,7 @@ def check_motion(
                 # checked before (every boundary inside the ramp passed)
                 on_ramp = _ramp_at(ramp, s_b)
                 if trace is not None:
-                    trace.append(Expected(b, v_b, held_by, INF, on_ramp))
+                    trace.append(Expected(b, window, v_b, held_by, INF, on_ramp))
                 expect = min(on_ramp, held_by)
                 if v_b < expect * (1.0 - REL_TOL) - tol:
                     out.append(
@@ -257,13 +265,14 @@ def check_motion(
                     )
                 if v_b < anchor_v:
                     anchor_s, anchor_v, anchor_seg = s_b, v_b, b
+                entry_v, interval_min = anchor_v, INF  # the ramp's end, or lower for a cap
                 continue
             a, j = path.limits(anchor_seg, b)
             forward = reach(anchor_v, s_b - anchor_s, a, j, path.v_top)
             expect = min(held_by, forward)
             slow = v_b < expect * (1.0 - REL_TOL) - tol
             if trace is not None:
-                trace.append(Expected(b, v_b, held_by, forward, INF))
+                trace.append(Expected(b, window, v_b, held_by, forward, INF))
             if slow:
                 out.append(
                     f"boundary {b} (line {path.bounds[b].line}) at {v_b * 1e3:.4f} mm/s, "
