@@ -234,8 +234,10 @@ def check_motion(
             # the look-ahead window as it was when the path began braking toward b: its end was a
             # stop the path had to be able to make, and a cap that came into view later may lie
             # below what the path can still brake to exactly (jerk-limited, braking to a low
-            # velocity can take longer than braking to rest)
-            window = min(max(b, interval_from + path.look_ahead), b - 1 + path.look_ahead)
+            # velocity can take longer than braking to rest); at least the window that ended a
+            # block after b: one that ended at b (a brake begun more than the window's length
+            # before) made the check expect 0, and every boundary of a long brake passed
+            window = min(max(b + 1, interval_from + path.look_ahead), b - 1 + path.look_ahead)
             backward = path.backward(b, smp, window)
             before = entered.get(window - path.look_ahead)
             if before is not None and window - 1 > b:

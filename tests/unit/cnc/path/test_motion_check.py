@@ -130,3 +130,19 @@ def test_a_dip_after_an_event_is_found() -> None:
     assert found == [
         "dip to 100.0000 mm/s before boundary 1 (line 2) between 200.0000 and 160.0000 (t=0.1200 s)"
     ]
+
+
+def test_a_brake_longer_than_the_window_is_checked() -> None:
+    """The check reads the window as it stood when the brake toward a boundary began; where
+    the path had braked since more than the window's length before, that window ended at or
+    before the boundary, and the check expected 0 there: every boundary of a long brake
+    passed. Now such a boundary is read with at least the window that ended a block after
+    it. Made up: 1 mm blocks at F6000 (100 mm/s, which the path can stop from within 1.4 mm),
+    look-ahead 3, and a brake at −1 m/s² from 100 to 20 mm/s over 4.8 mm for nothing."""
+    ch = dataclasses.replace(shipped(), cycle_time=1e-3)
+    text = "G01 X0 Y0 F600\n" + "".join(f"G01 X{i + 1} F6000\n" for i in range(40)) + "M30\n"
+    task = GeoTask(ch, text)
+    samples = drive(task, 0.1, ch.cycle_time, 200, lambda i: -1.0 if 100 <= i < 180 else 0.0)
+    found = check_motion(task.interp.program, task.interp.table, 3, ch.cycle_time, samples)
+    braking = [f for f in found if 0.1 < float(f.split("t=")[1].split(" s")[0]) <= 0.18]
+    assert braking, found
