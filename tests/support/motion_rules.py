@@ -1,0 +1,236 @@
+"""What the rules of the CNC allow the path velocity to be (issue 36, item 2): the inputs of
+the rules from the prepared program (ceilings, transition caps, stops, run boundaries, limits)
+and what the constraints ahead allow at a boundary, in the check's own arithmetic (a
+jerk-limited velocity change with zero acceleration at both ends, inverted by bisection), not
+the tracker's closed forms: the check must not share the core's mistakes.
+tests/support/motion_check.py walks a run's samples against them."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from liftd.cnc.path.program import PathProgram
+from liftd.cnc.path.table import PathTable
+
+CHAIN_SLACK = 5e-6  # m of path given up per link of a chain (the tracker keeps µm margins)
+INF = math.inf
+
+
+@dataclass(frozen=True, slots=True)
+class Sample:
+    """The path's state after one cycle and the inputs in effect in it."""
+
+    t: float
+    s: float
+    v: float
+    a: float
+    seg: int
+    stopped_at: int | None
+    parked: bool
+    override: float
+    hold: bool
+    lift_stops: frozenset[int]
+    acked: frozenset[int]
+    running: bool  # ACTIVE (not READY, HOLD after a PLC STOP, ERROR)
+
+
+# -- a jerk-limited velocity change with zero acceleration at both ends ---------------------------
+def change_distance(v0: float, v1: float, a_max: float, j_max: float) -> float:
+    dv = abs(v1 - v0)
+    if j_max == INF:
+        t = dv / a_max
+    elif dv * j_max <= a_max * a_max:
+        t = 2.0 * math.sqrt(dv / j_max)
+    else:
+        t = dv / a_max + a_max / j_max
+    return 0.5 * (v0 + v1) * t
+
+
+def reach(v_end: float, length: float, a_max: float, j_max: float, top: float) -> float:
+    """The highest velocity ≤ top from which v_end is reachable within `length` (equally: the
+    highest reachable from v_end), by bisection on change_distance (increasing in the other
+    end's velocity above v_end)."""
+    if length <= 0.0 or top <= v_end:
+        return min(v_end, top)
+    return _highest(lambda v1: change_distance(v_end, v1, a_max, j_max), length, v_end, top)
+
+
+def _highest(distance: Callable[[float], float], length: float, lo: float, top: float) -> float:
+    """The highest end velocity in [lo, top] whose `distance` (increasing) is within `length`
+    (lo's is), by 60 bisection steps."""
+    if distance(top) <= length:
+        return top
+    hi = top
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        if distance(mid) <= length:
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+def reach_rising(v_end: float, length: float, a_max: float, j_max: float, top: float) -> float:
+    """The highest velocity ≤ top from which every velocity ≥ v_end is reachable within
+    `length`: the least `reach` over end velocities from v_end up. With a jerk limit `reach`
+    falls from rest to a low end velocity and rises after it (braking to a third of a velocity
+    takes longer than braking to rest), so a chain that ends at the window's end, whose rest
+    becomes a cap as the window moves on, holds only what every higher end allows (the core's
+    `reach_velocity_any_above`). A golden-section search where `reach` still falls at v_end."""
+    r0 = reach(v_end, length, a_max, j_max, top)
+    if r0 >= top or length <= 0.0:
+        return r0
+    step = max(v_end * 1e-4, 1e-9)
+    if reach(v_end + step, length, a_max, j_max, top) >= r0:
+        return r0
+    g = (math.sqrt(5.0) - 1.0) / 2.0
+    lo, hi = v_end, r0  # the least lies below r0: an end velocity is below its reach
+    x1, x2 = hi - g * (hi - lo), lo + g * (hi - lo)
+    f1, f2 = reach(x1, length, a_max, j_max, top), reach(x2, length, a_max, j_max, top)
+    for _ in range(40):
+        if f1 <= f2:
+            hi, x2, f2 = x2, x1, f1
+            x1 = hi - g * (hi - lo)
+            f1 = reach(x1, length, a_max, j_max, top)
+        else:
+            lo, x1, f1 = x1, x2, f2
+            x2 = lo + g * (hi - lo)
+            f2 = reach(x2, length, a_max, j_max, top)
+    return min(r0, f1, f2)
+
+
+def _raise_distance(v: float, a: float, v1: float, a_max: float, j_max: float) -> float:
+    """Distance from (v, a) to v1 ≥ v + a·|a|/2J with zero acceleration there, raising the
+    acceleration at full jerk (up to a_max, held) and ramping it out: the largest acceleration
+    at every velocity on the way, so the least distance (from a < 0 it ramps to 0 first)."""
+    d = 0.0
+    if a < 0.0:
+        t0 = -a / j_max
+        d = v * t0 + a * t0 * t0 / 2.0 + j_max * t0**3 / 6.0
+        return d + change_distance(v - a * a / (2.0 * j_max), v1, a_max, j_max)
+    peak = math.sqrt(j_max * (v1 - v) + a * a / 2.0)
+    hold = 0.0
+    if peak > a_max:
+        peak = a_max
+        hold = (v1 - v - (2.0 * a_max * a_max - a * a) / (2.0 * j_max)) / a_max
+    t1, t3 = (peak - a) / j_max, peak / j_max
+    d = v * t1 + a * t1 * t1 / 2.0 + j_max * t1**3 / 6.0
+    u = v + a * t1 + j_max * t1 * t1 / 2.0
+    d += u * hold + peak * hold * hold / 2.0
+    u += peak * hold
+    return d + u * t3 + peak * t3 * t3 / 2.0 - j_max * t3**3 / 6.0
+
+
+def reach_from(v: float, a: float, length: float, a_max: float, j_max: float, top: float) -> float:
+    """The highest velocity ≤ top the path can have with zero acceleration `length` ahead of
+    (v, a) (bisection on `_raise_distance`, increasing in the end velocity); where ramping the
+    acceleration out alone needs more, the velocity it ramps out to."""
+    if j_max == INF:
+        return reach(max(v, 0.0), length, a_max, j_max, top)
+    v_p = v + a * abs(a) / (2.0 * j_max)
+    if v_p >= top or _raise_distance(v, a, v_p, a_max, j_max) >= length:
+        return min(v_p, top)
+    return _highest(lambda v1: _raise_distance(v, a, v1, a_max, j_max), length, v_p, top)
+
+
+class PathRules:
+    """The rules' inputs from the prepared program: ceilings, caps, stops, run boundaries
+    (where the path acceleration is zero), limits."""
+
+    def __init__(self, prog: PathProgram, table: PathTable, look_ahead: int) -> None:
+        self.segs = prog.segments
+        self.bounds = prog.boundaries
+        self.gate = table.gate
+        self.n = len(self.segs)
+        self.look_ahead = max(1, look_ahead)
+        self.v_top = max((seg.v_phys for seg in self.segs), default=0.0)
+        self.a_low = min((seg.a_max for seg in self.segs), default=INF)
+        self.j_low = min((seg.j_max for seg in self.segs), default=INF)
+
+    def ceiling(self, k: int, ov: float) -> float:
+        seg = self.segs[k]
+        return min(min(seg.feed, seg.v_lift_ov) * ov, seg.v_phys, seg.v_lift)
+
+    def target(self, b: int, ov: float) -> float:
+        """The velocity at boundary b by its own rule: the lower ceiling, the transition cap."""
+        if b <= 0 or b >= self.n:
+            return 0.0
+        return min(self.ceiling(b - 1, ov), self.ceiling(b, ov), self.bounds[b].v_cap)
+
+    def is_stop(self, b: int, sample: Sample) -> bool:
+        if b <= 0 or b >= self.n or self.bounds[b].stop or b in sample.lift_stops:
+            return True
+        return self.bounds[b].conditional_stop and b not in sample.acked
+
+    def limits(self, lo: int, hi: int) -> tuple[float, float]:
+        """The lowest acceleration and jerk limits of segments lo … hi − 1."""
+        a = j = INF
+        for k in range(max(lo, 0), min(max(hi, lo + 1), self.n)):
+            a = min(a, self.segs[k].a_max)
+            j = min(j, self.segs[k].j_max)
+        return a, j
+
+    def backward(self, b: int, sample: Sample, window_end: int) -> float:
+        """What the boundaries after b up to `window_end` allow at b. Inside a run the path
+        acceleration is continuous and one brake passes any number of caps; it is zero only at
+        the run's end (a run boundary, a stop, the window's end). So b is held to the least,
+        over the caps k of its run, of the velocity from which k's cap is reachable over
+        s_k − s_b, and to the one from which the run's end is reachable with the value of its
+        own chain (the same rule from there on; rest at a stop or the window's end). The caps
+        that can bind are a stop, the window's end, a target below the ceiling before it and
+        a run boundary, within the distance the path needs to stop from the program's highest
+        velocity. Where the chain ends at the window's end, whose rest becomes a cap as the
+        window moves, the run ends hold only what every higher end velocity allows
+        (`reach_rising`); the caps inside a run do not depend on it."""
+        ov = sample.override
+        w = min(window_end, self.n)
+        if w <= b:
+            return 0.0
+        s_b = self.bounds[b].s
+        reach_d = 2.0 * change_distance(self.v_top, 0.0, self.a_low, self.j_low)
+        nodes: list[tuple[int, float, bool]] = []  # (boundary, cap, ends a run)
+        is_open = False  # the chain ends at the window's end: its rest may become a cap
+        for k in range(b + 1, w + 1):
+            if self.bounds[k].s - s_b > reach_d:
+                break
+            if k == w or self.is_stop(k, sample):
+                nodes.append((k, 0.0, True))
+                is_open = not self.is_stop(k, sample)
+                break
+            cap = self.target(k, ov)
+            if self.gate[k] or cap < self.ceiling(k - 1, ov):
+                nodes.append((k, cap, self.gate[k]))
+        end: tuple[int, float] | None = None  # the next run end after the nodes walked: (k, e)
+        inside: list[tuple[int, float]] = []  # the caps between the start and that run end
+        for i in range(len(nodes) - 1, -2, -1):
+            if i >= 0 and not nodes[i][2]:
+                inside.append(nodes[i][:2])
+                continue
+            start = nodes[i][0] if i >= 0 else b
+            e = self._run(start, inside, end, is_open)
+            if i < 0:
+                return e
+            end, inside = (start, min(e, nodes[i][1])), []
+        return INF  # not reached: the loop returns at i = −1
+
+    def _run(
+        self, start: int, inside: list[tuple[int, float]], end: tuple[int, float] | None,
+        is_open: bool,
+    ) -> float:  # fmt: skip
+        """The highest velocity at boundary `start` (zero acceleration) from which each cap
+        `inside` its run and the run's `end` value are reachable, each by a brake of its own."""
+        s0 = self.bounds[start].s
+        e = INF
+        for k, cap in inside:
+            a, j = self.limits(start, k)
+            length = self.bounds[k].s - s0 - CHAIN_SLACK
+            e = min(e, reach(cap, length, a, j, self.v_top))
+        if end is not None:
+            k, cap = end
+            a, j = self.limits(start, k)
+            length = self.bounds[k].s - s0 - CHAIN_SLACK
+            rule = reach_rising if is_open else reach
+            e = min(e, rule(cap, length, a, j, self.v_top))
+        return e
