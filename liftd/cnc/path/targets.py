@@ -173,7 +173,13 @@ class Targets(Constraints):
                     bad = mid
             self._try_target(s, v, a, s_c, good, max(v_max, good), a_max, j_max, b, w)
             return
-        for tgt in (0.0, cap, hard):
+        if target > 0.0 and self._try_target(s, v, a, s_c, 0.0, v_max, a_max, j_max, b, w):
+            # rest is accepted: the highest velocity below the target that is too (an exact
+            # brake with no room left, refused at the edge: CAM seed 482, an override drop to
+            # 18 % as the path began its brake to a 12.2 mm/s corner, passed it at rest)
+            self._highest_below(s, v, a, s_c, target, v_max, a_max, j_max, b, w)
+            return
+        for tgt in (cap, hard):
             if self._try_target(s, v, a, s_c, tgt, max(v_max, tgt), a_max, j_max, b, w):
                 return
         kept = passed
@@ -187,6 +193,27 @@ class Targets(Constraints):
             return
         self._count(f"target profile refused at boundary {b}")
         self._brake(a_max, j_max, w)
+
+    def _highest_below(
+        self, s: float, v: float, a: float, s_c: float, target: float, v_max: float,
+        a_max: float, j_max: float, b: int, w: int,
+    ) -> None:  # fmt: skip
+        """Ruckig refused `target` and accepted rest (the plan in hand): the highest velocity
+        below the target it accepts, 1e-6 below it or else by 14 bisection steps (within
+        6e-5 of it). Ruckig decides at the edge of what is feasible: where the exact brake to
+        the target has no room left it refuses it and accepts one 1e-8 below (seed 482:
+        12.2034 mm/s refused, 12.2034 · (1 − 1e-8) accepted, no dip)."""
+        near = target * (1.0 - 1e-6)
+        if self._try_target(s, v, a, s_c, near, max(v_max, near), a_max, j_max, b, w):
+            return
+        good, bad = 0.0, near
+        for _ in range(14):
+            mid = 0.5 * (good + bad)
+            if self._try_target(s, v, a, s_c, mid, max(v_max, mid), a_max, j_max, b, w):
+                good = mid
+            else:
+                bad = mid
+        self._try_target(s, v, a, s_c, good, max(v_max, good), a_max, j_max, b, w)
 
     def _dips(self, floor: float) -> bool:
         """The profile just chosen goes below `floor` (the lower of the velocity it starts
