@@ -150,7 +150,7 @@ class Targets(Constraints):
     def _settle(
         self, s: float, v: float, a: float, v_p: float, s_c: float, target: float, cap: float,
         v_max: float, a_max: float, j_max: float, b: int, w: int, hard: float, passed: Plan | None,
-        held: Plan | None = None,
+        held: Plan | None = None, event: bool = False,
     ) -> None:  # fmt: skip
         """The target profile toward boundary b, or, where ruckig refuses it (it decides at
         the edge of what is feasible), in this order: the value nearest to it toward v_p (the
@@ -158,8 +158,14 @@ class Targets(Constraints):
         boundary's hard cap; rest, the cap, the hard cap; the profile that brought the path to
         the boundary it just passed; a brake (an error)."""
         if self._try_target(s, v, a, s_c, target, v_max, a_max, j_max, b, w):
-            if target < 0.5 * max(v, v_p) and self._dips(min(v, v_p, target)):
-                self._undip(target, b, w, (passed, held))
+            floor = min(v, v_p, target)
+            if (
+                target < 0.5 * max(v, v_p)
+                and self._dips(floor)
+                and not self._undip(target, b, w, (passed, held))
+                and not event  # a lift planned with the times before it (wide seed 767)
+            ):
+                self._unpin(s, v, a, s_c, target, v_max, a_max, j_max, b, w, floor)
             return
         if v_p <= max(hard, target) and self._try_target(
             s, v, a, s_c, v_p, max(v_max, v_p), a_max, j_max, b, w
@@ -224,7 +230,24 @@ class Targets(Constraints):
         plan.ev = Evaluator(plan.traj, ph)
         return lowest_velocity(ph) < floor * (1.0 - DIP_TOL) - V_ROUND
 
-    def _undip(self, target: float, b: int, w: int, kept: tuple[Plan | None, Plan | None]) -> None:
+    def _unpin(
+        self, s: float, v: float, a: float, s_c: float, target: float, v_max: float,
+        a_max: float, j_max: float, b: int, w: int, floor: float,
+    ) -> None:  # fmt: skip
+        """The profile just chosen dips and none is kept (`_undip`): where the path's velocity,
+        its acceleration ramped out, is v_max itself (a cruise at the ceiling that the step
+        ended with a last bit of acceleration), ruckig misses the profile that holds v_max and
+        brakes late, and returns one that brakes below the target and comes back, and takes
+        longer (wide seed 54: from 75 mm/s, v_p = v_max, toward 9.485 mm/s 1.012 mm on, a
+        profile through 8.236 in 26.86 ms; with v_max 1e-15 m/s higher, 23.72 ms and no dip).
+        The same target with v_max a rounding higher (`V_ROUND`, a velocity that close above a
+        cap is at it) is taken where it does not dip; else the dip stays (one ruckig call)."""
+        dipping = self.plan
+        top = v_max + V_ROUND
+        if not self._try_target(s, v, a, s_c, target, top, a_max, j_max, b, w) or self._dips(floor):
+            self.plan = dipping
+
+    def _undip(self, target: float, b: int, w: int, kept: tuple[Plan | None, Plan | None]) -> bool:
         """Ruckig's time-optimal profile to a low target brakes below it and comes back where
         the exact brake fits only just (from inside a brake that has no slack left, a re-plan
         for a window that moved on finds it a few 10 nm too long: issue 36, wide seed 35,
@@ -243,7 +266,8 @@ class Targets(Constraints):
             ):
                 plan.window = w
                 self.plan = plan
-                return
+                return True
+        return False
 
     def _brake(self, a_max: float, j_max: float, w: int) -> None:
         """Last resort: brake to rest from the path's state (never expected; counted)."""
