@@ -155,8 +155,10 @@ class Targets(Constraints):
         """The target profile toward boundary b, or, where ruckig refuses it (it decides at
         the edge of what is feasible), in this order: the value nearest to it toward v_p (the
         velocity after ramping the acceleration to 0) that ruckig accepts, within the
-        boundary's hard cap; rest, the cap, the hard cap; the profile that brought the path to
-        the boundary it just passed; a brake (an error)."""
+        boundary's hard cap; where rest is accepted, the highest velocity below the target
+        that is (`_highest_below`); the cap, the hard cap; the profile that brought the path
+        to the boundary it just passed; a brake (an error). A profile that dips below its ends
+        is replaced where `_undip` or, not at an event, `_unpin` finds one that does not."""
         if self._try_target(s, v, a, s_c, target, v_max, a_max, j_max, b, w):
             floor = min(v, v_p, target)
             if (
