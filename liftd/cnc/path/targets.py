@@ -172,14 +172,8 @@ class Targets(Constraints):
         if v_p <= max(hard, target) and self._try_target(
             s, v, a, s_c, v_p, max(v_max, v_p), a_max, j_max, b, w
         ):
-            good, bad = v_p, target
-            for _ in range(14):  # from v_p toward the target while ruckig still accepts it
-                mid = 0.5 * (good + bad)
-                if self._try_target(s, v, a, s_c, mid, max(v_max, mid), a_max, j_max, b, w):
-                    good = mid
-                else:
-                    bad = mid
-            self._try_target(s, v, a, s_c, good, max(v_max, good), a_max, j_max, b, w)
+            # from v_p toward the target while ruckig still accepts it
+            self._bisect(v_p, target, s, v, a, s_c, v_max, a_max, j_max, b, w)
             return
         if target > 0.0 and self._try_target(s, v, a, s_c, 0.0, v_max, a_max, j_max, b, w):
             # rest is accepted: the highest velocity below the target that is too (an exact
@@ -212,9 +206,15 @@ class Targets(Constraints):
         the target has no room left it refuses it and accepts one 1e-8 below (seed 482:
         12.2034 mm/s refused, 12.2034 · (1 − 1e-8) accepted, no dip)."""
         near = target * (1.0 - 1e-6)
-        if self._try_target(s, v, a, s_c, near, max(v_max, near), a_max, j_max, b, w):
-            return
-        good, bad = 0.0, near
+        if not self._try_target(s, v, a, s_c, near, max(v_max, near), a_max, j_max, b, w):
+            self._bisect(0.0, near, s, v, a, s_c, v_max, a_max, j_max, b, w)
+
+    def _bisect(
+        self, good: float, bad: float, s: float, v: float, a: float, s_c: float, v_max: float,
+        a_max: float, j_max: float, b: int, w: int,
+    ) -> None:  # fmt: skip
+        """From `good` (a target ruckig accepts) toward `bad` (one it refuses), 14 bisection
+        steps; the last one accepted is planned."""
         for _ in range(14):
             mid = 0.5 * (good + bad)
             if self._try_target(s, v, a, s_c, mid, max(v_max, mid), a_max, j_max, b, w):
