@@ -150,30 +150,38 @@ class Targets(Constraints):
     def _settle(
         self, s: float, v: float, a: float, v_p: float, s_c: float, target: float, cap: float,
         v_max: float, a_max: float, j_max: float, b: int, w: int, hard: float, passed: Plan | None,
-        held: Plan | None = None,
+        held: Plan | None = None, event: bool = False,
     ) -> None:  # fmt: skip
         """The target profile toward boundary b, or, where ruckig refuses it (it decides at
         the edge of what is feasible), in this order: the value nearest to it toward v_p (the
         velocity after ramping the acceleration to 0) that ruckig accepts, within the
-        boundary's hard cap; rest, the cap, the hard cap; the profile that brought the path to
-        the boundary it just passed; a brake (an error)."""
+        boundary's hard cap; where rest is accepted, the highest velocity below the target
+        that is (`_highest_below`); the cap, the hard cap; the profile that brought the path
+        to the boundary it just passed; a brake (an error). A profile that dips below its ends
+        is replaced where `_undip` or, not at an event, `_unpin` finds one that does not."""
         if self._try_target(s, v, a, s_c, target, v_max, a_max, j_max, b, w):
-            if target < 0.5 * max(v, v_p) and self._dips(min(v, v_p, target)):
-                self._undip(target, b, w, (passed, held))
+            floor = min(v, v_p, target)
+            if (
+                target < 0.5 * max(v, v_p)
+                and self._dips(floor)
+                and not self._undip(target, b, w, (passed, held))
+                and not event  # a lift planned with the times before it (wide seed 767)
+            ):
+                self._unpin(s, v, a, s_c, target, v_max, a_max, j_max, b, w, floor)
             return
         if v_p <= max(hard, target) and self._try_target(
             s, v, a, s_c, v_p, max(v_max, v_p), a_max, j_max, b, w
         ):
-            good, bad = v_p, target
-            for _ in range(14):  # from v_p toward the target while ruckig still accepts it
-                mid = 0.5 * (good + bad)
-                if self._try_target(s, v, a, s_c, mid, max(v_max, mid), a_max, j_max, b, w):
-                    good = mid
-                else:
-                    bad = mid
-            self._try_target(s, v, a, s_c, good, max(v_max, good), a_max, j_max, b, w)
+            # from v_p toward the target while ruckig still accepts it
+            self._bisect(v_p, target, s, v, a, s_c, v_max, a_max, j_max, b, w)
             return
-        for tgt in (0.0, cap, hard):
+        if target > 0.0 and self._try_target(s, v, a, s_c, 0.0, v_max, a_max, j_max, b, w):
+            # rest is accepted: the highest velocity below the target that is too (an exact
+            # brake with no room left, refused at the edge: CAM seed 482, an override drop to
+            # 18 % as the path began its brake to a 12.2 mm/s corner, passed it at rest)
+            self._highest_below(s, v, a, s_c, target, v_max, a_max, j_max, b, w)
+            return
+        for tgt in (cap, hard):
             if self._try_target(s, v, a, s_c, tgt, max(v_max, tgt), a_max, j_max, b, w):
                 return
         kept = passed
@@ -188,6 +196,33 @@ class Targets(Constraints):
         self._count(f"target profile refused at boundary {b}")
         self._brake(a_max, j_max, w)
 
+    def _highest_below(
+        self, s: float, v: float, a: float, s_c: float, target: float, v_max: float,
+        a_max: float, j_max: float, b: int, w: int,
+    ) -> None:  # fmt: skip
+        """Ruckig refused `target` and accepted rest (the plan in hand): the highest velocity
+        below the target it accepts, 1e-6 below it or else by 14 bisection steps (within
+        6e-5 of it). Ruckig decides at the edge of what is feasible: where the exact brake to
+        the target has no room left it refuses it and accepts one 1e-8 below (seed 482:
+        12.2034 mm/s refused, 12.2034 · (1 − 1e-8) accepted, no dip)."""
+        near = target * (1.0 - 1e-6)
+        if not self._try_target(s, v, a, s_c, near, max(v_max, near), a_max, j_max, b, w):
+            self._bisect(0.0, near, s, v, a, s_c, v_max, a_max, j_max, b, w)
+
+    def _bisect(
+        self, good: float, bad: float, s: float, v: float, a: float, s_c: float, v_max: float,
+        a_max: float, j_max: float, b: int, w: int,
+    ) -> None:  # fmt: skip
+        """From `good` (a target ruckig accepts) toward `bad` (one it refuses), 14 bisection
+        steps; the last one accepted is planned."""
+        for _ in range(14):
+            mid = 0.5 * (good + bad)
+            if self._try_target(s, v, a, s_c, mid, max(v_max, mid), a_max, j_max, b, w):
+                good = mid
+            else:
+                bad = mid
+        self._try_target(s, v, a, s_c, good, max(v_max, good), a_max, j_max, b, w)
+
     def _dips(self, floor: float) -> bool:
         """The profile just chosen goes below `floor` (the lower of the velocity it starts
         from and its target) on the way. Its pieces are read for it, and kept for its cycles."""
@@ -197,7 +232,24 @@ class Targets(Constraints):
         plan.ev = Evaluator(plan.traj, ph)
         return lowest_velocity(ph) < floor * (1.0 - DIP_TOL) - V_ROUND
 
-    def _undip(self, target: float, b: int, w: int, kept: tuple[Plan | None, Plan | None]) -> None:
+    def _unpin(
+        self, s: float, v: float, a: float, s_c: float, target: float, v_max: float,
+        a_max: float, j_max: float, b: int, w: int, floor: float,
+    ) -> None:  # fmt: skip
+        """The profile just chosen dips and none is kept (`_undip`): where the path's velocity,
+        its acceleration ramped out, is v_max itself (a cruise at the ceiling that the step
+        ended with a last bit of acceleration), ruckig misses the profile that holds v_max and
+        brakes late, and returns one that brakes below the target and comes back, and takes
+        longer (wide seed 54: from 75 mm/s, v_p = v_max, toward 9.485 mm/s 1.012 mm on, a
+        profile through 8.236 in 26.86 ms; with v_max 1e-15 m/s higher, 23.72 ms and no dip).
+        The same target with v_max a rounding higher (`V_ROUND`, a velocity that close above a
+        cap is at it) is taken where it does not dip; else the dip stays (one ruckig call)."""
+        dipping = self.plan
+        top = v_max + V_ROUND
+        if not self._try_target(s, v, a, s_c, target, top, a_max, j_max, b, w) or self._dips(floor):
+            self.plan = dipping
+
+    def _undip(self, target: float, b: int, w: int, kept: tuple[Plan | None, Plan | None]) -> bool:
         """Ruckig's time-optimal profile to a low target brakes below it and comes back where
         the exact brake fits only just (from inside a brake that has no slack left, a re-plan
         for a window that moved on finds it a few 10 nm too long: issue 36, wide seed 35,
@@ -216,7 +268,8 @@ class Targets(Constraints):
             ):
                 plan.window = w
                 self.plan = plan
-                return
+                return True
+        return False
 
     def _brake(self, a_max: float, j_max: float, w: int) -> None:
         """Last resort: brake to rest from the path's state (never expected; counted)."""

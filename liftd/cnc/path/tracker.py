@@ -76,6 +76,7 @@ class Tracker(Targets):
         self.stopped_at: int | None = 0  # resting at this boundary until `resume`
         self.parked = False  # at rest under a hold, not at a stop
         self._passed: Plan | None = None  # the target plan of the boundary just passed
+        self._event = True  # the next re-plan is an event's (`set_state`): `Targets._unpin`
 
     # -- control --------------------------------------------------------------------------------
     def set_state(
@@ -88,6 +89,7 @@ class Tracker(Targets):
         self.parked = stopped_at is None and self.hold and v == 0.0 and a == 0.0
         self.plan = None
         self._passed = None  # planned for another state: not to be kept (`_replan`)
+        self._event = True
 
     def set_inputs(self, ov: float, hold: bool) -> None:
         """Override (fraction) and feed hold. Override 0 acts as a hold; the caps keep the last
@@ -122,6 +124,7 @@ class Tracker(Targets):
             return None
         errors, last, soft = self.errors, self.last_error, self._soft_from
         self.stopped_at = None
+        self._event = True  # as the resume's re-plan (its `set_state`)
         self._replan(dt)
         plan = self.plan
         primed = None
@@ -137,6 +140,7 @@ class Tracker(Targets):
         plan.t0 = self.t
         self.plan = plan
         self._passed = None
+        self._event = False  # the primed profile is the event's re-plan
         self._soft_from = primed.soft_from
         self.last_error = primed.last_error
 
@@ -162,6 +166,7 @@ class Tracker(Targets):
 
     def _replan(self, dt: float, force: int | None = None) -> None:
         self._clear_s = -INF
+        event, self._event = self._event, False
         passed, self._passed = self._passed, None
         # the profile in hand, where only the window moved on (`Targets._undip`)
         held = self.plan if force is None else None
@@ -282,7 +287,7 @@ class Tracker(Targets):
             target = min(target, top)
             v_max = max(min(v_max, top), target, v, v_p)
         self._settle(s, v, a, v_p, s_c, target, cap, v_max, a_max, j_max, b, w, self._hard(b, w),
-                     passed, held)  # fmt: skip
+                     passed, held, event)  # fmt: skip
 
     def _rests_before(
         self, cands: list[tuple[int, float, float, bool]], s: float, v: float, a: float,

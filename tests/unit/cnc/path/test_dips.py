@@ -6,7 +6,10 @@ from __future__ import annotations
 
 import pytest
 
+from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.path.targets import lowest_velocity
+from liftd.cnc.path.tracker import Tracker
+from liftd.cnc.path.velocity import projected_velocity
 from liftd.cnc.ruckig1 import Phases, Ruckig1
 from tests.support.cam_cases import cam_scenario
 from tests.support.cam_runs import check
@@ -81,3 +84,28 @@ def test_after_an_override_drop_the_dip_stays_where_no_brake_is_in_hand() -> Non
     sc = wide_scenario(767)
     _, hard, _, errors = check(sc)
     assert hard == [] and errors == 0, (hard, describe(sc))
+
+
+def test_a_brake_from_a_cruise_at_the_ceiling_does_not_dip_below_its_target() -> None:
+    """Wide seed 54 (known deviation 2's remainder, planned from a cruise): at 11.4945 s the
+    path cruised at its ceiling of 75 mm/s with a last 0.005 m/s² of acceleration (its
+    projected velocity the ceiling itself, ruckig's v_max) and re-planned for a kink of
+    9.485 mm/s 1.012 mm on, 23 µm more than the exact brake needs. Ruckig missed the profile
+    that holds v_max and brakes late and returned one through 8.236 mm/s, 26.86 ms long;
+    v_max a rounding higher gives the late brake, 23.72 ms, no dip."""
+    sc = wide_scenario(54)
+    task = GeoTask(sc.channel, sc.text)
+    tracker = Tracker(task.interp.table, task.interp.prod.look_ahead)
+    s, v, a = 1.0998018729074313, 0.07499997505712246, 0.004886464101179655
+    s_c, target, v_max = 1.1008143138262327, 0.00948501935134853, 0.07500000000000001
+    a_max, j_max = 9.572885628540265, 478.64428142701325
+    v_p = projected_velocity(v, a, j_max)
+    assert v_p == v_max  # the degenerate case: the acceleration ramps out onto v_max
+    tracker.t = 11.4945
+    tracker._settle(s, v, a, v_p, s_c, target, target, v_max, a_max, j_max, 665, 785, target,
+                    None, None, False)  # fmt: skip
+    plan = tracker.plan
+    assert plan is not None and plan.goal == 665 and plan.v_end == target
+    assert lowest_velocity(Phases(plan.traj)) >= target * (1.0 - 1e-9)
+    assert plan.dur < 0.0240  # the late brake: 23.72 ms, where the dip took 26.86
+    assert tracker.errors == 0

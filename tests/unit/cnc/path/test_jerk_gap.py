@@ -35,3 +35,15 @@ def test_cam_programs_pass_a_cap_in_the_gap_above_it(seed: int) -> None:
     _, hard, slow, errors = check(sc)
     assert hard == [] and errors == 0, (hard, describe(sc))
     assert slow == [], (slow, describe(sc))
+
+
+def test_an_exact_brake_ruckig_refuses_at_the_edge_ends_just_below_the_cap_not_at_rest() -> None:
+    """CAM seed 482: override 87 → 18 % at 0.949 s as the path, at 370 mm/s and accelerating,
+    began its exact brake to a corner of 12.2034 mm/s 24 mm on (no room left: the brake needs
+    the whole distance within 0.1 nm). Ruckig refused that target at the edge of what is
+    feasible, the fallback took rest, and the path passed the corner at 0.033 mm/s. The
+    highest velocity below the cap that ruckig accepts is 12.2034 · (1 − 1e-8), no dip."""
+    sc = cam_scenario(482)
+    _, hard, slow, errors = check(sc)
+    assert hard == [] and errors == 0, (hard, describe(sc))
+    assert slow == [], (slow, describe(sc))
