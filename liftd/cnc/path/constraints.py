@@ -59,7 +59,7 @@ class Constraints:
         self.hold = False
         self.lift_stops = lift_stops if lift_stops is not None else set()
         self.acked = acked if acked is not None else set()
-        self._beyond_key: tuple[int, int, float] | None = None
+        self._beyond_key: tuple[int, int, float, float] | None = None
         self._beyond_val = INF
         self._beyond_open = False  # the last `_beyond` chain ended at the window's end or a cut
         self._floor_key = (-1, -1.0)  # (window end, override) of `_window_floor`'s last value
@@ -123,7 +123,7 @@ class Constraints:
             elif leap and not tb.gate[k]:
                 low = self._low
                 ov = self.ov
-                nxt = tb.next_gate[k + 1]
+                nxt = min(tb.next_gate[k + 1], w)  # within the window (a review: past it)
                 f = k
                 while f < nxt and tb.feed[f] * ov >= low:
                     f = tb.lower_feed[f]
@@ -155,11 +155,13 @@ class Constraints:
 
         One that cannot bind is left out: a constraint without zero acceleration (a feed drop,
         a transition cap inside a run) whose cap is at least that of one before it in the
-        list. Its slack is at least that one's (it is farther, and the need to get below a
-        higher cap is shorter, `_need`), so it is never the first one lost, and a path that
-        keeps that one keeps it by not accelerating between them; the chain of `_target_cap`
-        leaves it reachable for the same reason. Without this, 0.2 mm blocks with a feed drop
-        at every second one put 24 constraints within 9.6 mm and the 24th counted as a stop
+        list. A path that keeps that one passes it with its projected velocity (`_need`) at
+        most that cap, so it keeps this one however near, and it is in the list from there on
+        (not by slack: the brake to a higher cap with zero acceleration at its end can be the
+        longer, 21.00 against 20.72 mm to 100 and 10 mm/s from 500 mm/s, a review found); the
+        chain of `_target_cap` leaves it reachable for the same reason. Without this, 0.2 mm
+        blocks with a feed drop at every second one put 24 constraints within 9.6 mm and the
+        24th counted as a stop
         (known deviation 1 of docs/geo-core.md: 314 for 500 mm/s). The caps compared are the
         ones the check uses: a plan passes the feed caps of boundaries soft[0] … soft[1] − 1
         above them (`Plan.soft_from`), keeping only their hard caps. `keep` is never left out
@@ -231,7 +233,12 @@ class Constraints:
         if last == w:
             return True
         if cands[-1][3] and not self.is_stop(last):
-            self._beyond(last, cands[-1][2], w)  # cached: `_collect` just asked for it
+            if cands[-1][2] <= 0.0:
+                return True  # the 24th counted as a stop: it rises as the list moves on
+            # cached: `_collect` just asked for it with g's entry cap (the result depends on
+            # the cap: a review found a chain for cap 0, cached under g, read back for its
+            # entry cap, which left out every feed drop behind g: 19 mm/s in a 1 mm/s block)
+            self._beyond(last, self.tb.entry_cap(last, self.ov), w)
             return self._beyond_open
         return False
 
@@ -251,10 +258,13 @@ class Constraints:
         is_open = self._chain_open(cands)
         own = False  # e is the next candidate's own cap: no later window raises it
         for k in range(len(cands) - 2, i - 1, -1):
-            _, sk, ck, _ = cands[k]
+            _, sk, ck, gate = cands[k]
             bn, sn, _, _ = cands[k + 1]
             up = self._link(e, sk, bn, sn, is_open and not own)
-            own = ck <= up
+            # (not a run boundary's or the window end's entry: its cap is lowered for what
+            # lies after it, which a later window raises; the review's rest at w below its
+            # floor entry read as own took rest's exact reach, the rule deviation 5 replaced)
+            own = ck <= up and not gate
             e = min(ck, up)
         return e
 
@@ -267,8 +277,9 @@ class Constraints:
         end. (A CAM polyline's rounding kinks are run boundaries, known deviation 0: 0.2 mm
         apart, braking to rest through them takes ~17 mm from 100 mm/s, and the stop at the
         24th link held CAM seeds 0, 30, 38 and 162 5–40 % below their caps.)
-        Cached per (g, window end, override, stop set): a step within one segment asks again."""
-        key = (g, w, self.ov)
+        Cached per (g, window end, override, cap; `Tracker.set_state` drops it where the stop
+        sets change): a step within one segment asks again."""
+        key = (g, w, self.ov, cap)
         if self._beyond_key == key:
             return self._beyond_val
         limit = MAX_CANDIDATES
