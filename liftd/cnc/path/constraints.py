@@ -328,14 +328,8 @@ class Constraints:
             # reach from it (wide seed 768: a 0.107 mm/s corner a block on, 69.98 mm/s where
             # every higher end kept reachable gave 66.16)
             own = c_i <= e and i < len(chain) - 1
-            e = min(c_i, e)
             s_prev = chain[i - 1][0] if i > 0 else s_g
-            a_max, j_max = self._limits(b_i - 1)
-            length = max(s_i - s_prev - CHAIN_MARGIN, 0.0)
-            if is_open and not own:
-                e = reach_velocity_any_above(e, length, a_max, j_max)
-            else:
-                e = reach_velocity(e, length, a_max, j_max)
+            e = self._link(min(c_i, e), s_prev, b_i, s_i, is_open and not own)
         return e, is_open, cut
 
     @staticmethod
