@@ -43,11 +43,11 @@ def check(sc: Scenario) -> tuple[int, list[str], list[str], int]:
         rec(snap)
         snaps.append(snap)
     found = rec.check()
-    hard = [p for p in found if p.startswith(("rest", "stopped"))]
+    hard = [p for p in found if p.startswith(("rest", "stopped", "overrun"))]
     hard += violations(sc, snaps, task.lift.records)
     if task.interp.plan_errors:
         hard.append(f"{task.interp.plan_errors} tracker errors: {task.interp.last_plan_error}")
-    slow = [p for p in found if not p.startswith(("rest", "stopped"))]
+    slow = [p for p in found if not p.startswith(("rest", "stopped", "overrun"))]
     return len(snaps), hard, slow, task.interp.plan_errors
 
 

@@ -20,6 +20,9 @@ The rules (docs/architecture.md, "Which rule decides a slowdown"):
   raised the cap, the path is held to the cap under the window before and to the higher one
   only as far as it can reach it from its state when the window moved.
 * **Between two boundaries** it never goes below the lower of its velocities at the two.
+* **Never faster** than the rules let it be (tests/support/motion_overrun.py): at most the
+  ceiling of its block in every cycle, at most the transition cap and both blocks' ceilings at
+  a boundary, but for the brake from above a ceiling an input lowered ("overrun" findings).
 
 After an input changes (override, feed hold, a stop for Z set or dropped, an acknowledge, a
 resume) the path follows a new plan: where it decelerates, that deceleration is ramped out at
@@ -47,6 +50,7 @@ from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.path.program import PathProgram
 from liftd.cnc.path.table import PathTable
 from liftd.cnc.snapshot import ChannelState, GeoSnapshot
+from tests.support.motion_overrun import overruns
 from tests.support.motion_rules import INF, PathRules, Sample, reach, reach_from
 
 # Sample and reach_from are the tests' too (the samples' type; the check's arithmetic)
@@ -309,4 +313,4 @@ def check_motion(
             braking_from = smp.seg
         interval_from = min(interval_from, braking_from)
         last = smp
-    return out
+    return out + overruns(path, dt, samples, _at)

@@ -143,6 +143,7 @@ class PathRules:
         self.segs = prog.segments
         self.bounds = prog.boundaries
         self.gate = table.gate
+        self.run_j = tuple(table.run_j[r] for r in table.run)  # per segment: its run's jerk
         self.n = len(self.segs)
         self.look_ahead = max(1, look_ahead)
         self.v_top = max((seg.v_phys for seg in self.segs), default=0.0)
@@ -152,6 +153,15 @@ class PathRules:
     def ceiling(self, k: int, ov: float) -> float:
         seg = self.segs[k]
         return min(min(seg.feed, seg.v_lift_ov) * ov, seg.v_phys, seg.v_lift)
+
+    def hard(self, k: int) -> float:
+        """The caps of segment k no override scales: the axes' and the lift's."""
+        seg = self.segs[min(k, self.n - 1)]
+        return min(seg.v_phys, seg.v_lift)
+
+    def run_jerk(self, k: int) -> float:
+        """The jerk limit of segment k's run (the lowest of its segments')."""
+        return self.run_j[min(k, self.n - 1)]
 
     def target(self, b: int, ov: float) -> float:
         """The velocity at boundary b by its own rule: the lower ceiling, the transition cap."""

@@ -1,0 +1,132 @@
+"""The check's other side (tests/support/motion_overrun.py; issue 36 item 1, sixth round part
+O): the path is never faster than the rules let it be. A fifth-round cache bug ran a 1 mm/s
+(F60) block at 19.3 mm/s and no check saw it."""
+
+from __future__ import annotations
+
+import dataclasses
+
+from liftd.cnc.geo_task import GeoTask
+from liftd.cnc.plc import Schedule, SimPlc
+from liftd.sim.simulate import run_cycles
+from tests.support.motion_check import Recorder, Sample, check_motion
+from tests.unit.cnc.path.test_motion_check import at, drive
+from tests.unit.cnc.path.test_no_invented_stops import shipped
+
+MM = 1e-3
+DT = 1e-3
+LINE = "G01 X0 Y0 F600\n" + "".join(f"G01 X{10 * (i + 1)} F6000\n" for i in range(8)) + "M30\n"
+
+
+def findings(task: GeoTask, samples: list[Sample], look_ahead: int = 30) -> list[str]:
+    return check_motion(task.interp.program, task.interp.table, look_ahead, DT, samples)
+
+
+def overruns(found: list[str]) -> list[str]:
+    return [f for f in found if f.startswith("overrun")]
+
+
+def line_task() -> GeoTask:
+    """10 mm collinear blocks at F6000 (100 mm/s), 1 ms cycles, the shipped machine."""
+    return GeoTask(dataclasses.replace(shipped(), cycle_time=DT), LINE)
+
+
+def test_a_path_above_its_ceiling_is_an_overrun() -> None:
+    """At 1.2 × F (120 mm/s on F6000) the path is too fast in every cycle and at every
+    boundary; at F itself it is not (the tolerance is rounding only)."""
+    task = line_task()
+    fast = overruns(findings(task, drive(task, 0.12, DT, 200)))
+    assert (
+        fast[0]
+        == "overrun: 120.0000 mm/s in segment 0 (line 2) above its ceiling 100.0000 (t=0.0010 s)"
+    )
+    assert (
+        "overrun: boundary 1 (line 2) at 120.0000 mm/s above its cap 100.0000 (t=0.0840 s)" in fast
+    )
+    assert overruns(findings(task, drive(task, 0.1, DT, 200))) == []
+    assert overruns(findings(task, drive(task, 0.1 * (1 + 1e-5), DT, 200)))
+
+
+def brake(stop_at: float) -> list[Sample]:
+    """The path cruises at 100 mm/s; the override drops to 50 % in cycle 40 and the path
+    brakes from there at −2 m/s² (jerk-limited in and out at 500 m/s³) to `stop_at` and
+    cruises on there (10 mm blocks: from segment 0 into 1)."""
+    out: list[Sample] = []
+    s, v, a = 0.0, 0.1, 0.0
+    for i in range(121):
+        ov = 1.0 if i < 40 else 0.5
+        if i >= 40:
+            # the acceleration that ends the brake at stop_at: ramp out when v + a²/2J reaches it
+            a = (
+                max(a - 500.0 * DT, -2.0)
+                if v + a * abs(a) / 1000.0 > stop_at
+                else min(a + 500.0 * DT, 0.0)
+            )
+        if i:
+            s += v * DT + a * DT * DT / 2.0
+            v += a * DT
+        out.append(at(s, v, int(s / 0.01), t=i * DT, a=a, ov=ov))
+    return out
+
+
+def test_the_brake_after_an_override_drop_is_no_overrun() -> None:
+    """After the override drops the path is above the new ceiling while it brakes (the CNC
+    brakes from the velocity it has): no overrun while it comes down without a pause."""
+    task = line_task()
+    samples = brake(0.05)
+    assert samples[45].v > 0.05 * 1.1  # still well above the new ceiling, braking
+    assert overruns(findings(task, samples)) == []
+
+
+def test_a_brake_that_stops_above_the_new_ceiling_is_an_overrun() -> None:
+    """The same brake ends at 70 mm/s, above the new ceiling of 50, and the path cruises
+    there: found once, where the brake paused."""
+    task = line_task()
+    found = overruns(findings(task, brake(0.07)))
+    assert len(found) == 1 and "paused at 70." in found[0], found
+
+
+def test_a_rise_after_an_override_drop_is_an_overrun() -> None:
+    """While above the new ceiling the path does not accelerate: a brake that turns back up
+    (to 80 mm/s) is found at once."""
+    task = line_task()
+    samples = brake(0.07)
+    up = [dataclasses.replace(x, v=x.v + (i - 100) * 1e-3, a=1.0) if i >= 100 else x
+          for i, x in enumerate(samples)]  # fmt: skip
+    assert len(overruns(findings(task, up))) == 1
+
+
+def poisoned() -> str:
+    """The review's program of the fifth round (/tmp/rv5/poison_run.py): 23 falling feeds on
+    0.1 mm blocks after a 100 mm lead-in, a shallow kink, then F60 (1 mm/s) blocks."""
+    lines = ["G01 X0 Y0 F600", "G01 X100 F30000"]
+    x = 100.0
+    for i in range(23):
+        x += 0.1
+        lines.append(f"G01 X{x:.4f} F{29000 - 1000 * i}")
+    lines += [f"G01 X{x + 0.05:.4f} Y0.0010 F6000", f"G01 X{x + 0.10:.4f} Y0.0020 F60",
+              f"G01 X{x + 0.50:.4f} Y0.0100 F60", "M30"]  # fmt: skip
+    return "\n".join(lines) + "\n"
+
+
+def test_the_poisoned_cache_s_overrun_is_found() -> None:
+    """Before 54f1834 a cached chain value let the path pass boundary 25 into the F60 blocks
+    at 19.3 mm/s and brake there; the core now passes at 1 mm/s. The core's run has no
+    overrun; the same samples with the path 19.3 mm/s at boundary 25, braking at 8 m/s² into
+    the F60 block as it did then, are found."""
+    ch = dataclasses.replace(shipped(), look_ahead_blocks=200)
+    task = GeoTask(ch, poisoned())
+    rec = Recorder(task)
+    for snap in run_cycles(task, SimPlc(0.02), Schedule(), ch.cycle_time, 60.0):
+        rec(snap)
+    assert overruns(rec.check()) == []
+    s25 = rec.program.boundaries[25].s
+    i = next(i for i, x in enumerate(rec.samples) if x.s >= s25)
+    v, s = 19.3 * MM, rec.samples[i - 1].s
+    bad = rec.samples[:i]
+    for k in range(3):
+        s += v * ch.cycle_time
+        v -= 8.0 * ch.cycle_time
+        bad.append(dataclasses.replace(rec.samples[i + k], s=s, v=v, a=-8.0, seg=25))
+    found = overruns(check_motion(rec.program, rec.table, 200, ch.cycle_time, bad))
+    assert found and "above its ceiling 1.0000" in found[0], found
