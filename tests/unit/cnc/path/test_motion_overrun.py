@@ -1,13 +1,14 @@
 """The check's other side (tests/support/motion_overrun.py; issue 36 item 1, sixth round part
 O): the path is never faster than the rules let it be. A fifth-round cache bug ran a 1 mm/s
-(F60) block at 19.3 mm/s and no check saw it."""
+(F60) block at 19.3 mm/s and no check saw it. And a rest just before an M00 that registers a
+cycle later is the M00's, not a rest without a rule."""
 
 from __future__ import annotations
 
 import dataclasses
 
 from liftd.cnc.geo_task import GeoTask
-from liftd.cnc.plc import Schedule, SimPlc
+from liftd.cnc.plc import Schedule, SimPlc, parse_override_spec
 from liftd.sim.simulate import run_cycles
 from tests.support.motion_check import Recorder, Sample, check_motion
 from tests.unit.cnc.path.test_motion_check import at, drive
@@ -130,3 +131,60 @@ def test_the_poisoned_cache_s_overrun_is_found() -> None:
         bad.append(dataclasses.replace(rec.samples[i + k], s=s, v=v, a=-8.0, seg=25))
     found = overruns(check_motion(rec.program, rec.table, 200, ch.cycle_time, bad))
     assert found and "above its ceiling 1.0000" in found[0], found
+
+
+def m00_program() -> str:
+    """The reviewer's generator (/tmp/r5/cut5.py, seed 0, case 4): 300 blocks of 0.1 mm at
+    F60000/45000/24000/36000, M00 after blocks 63, 149 and 280, corners at 104 and 276."""
+    feeds = (60000, 45000, 24000, 36000)
+    lines = ["G01 X0 Y0 F600"]
+    x = y = 0.0
+    for i in range(300):
+        if i in (104, 276):
+            y += 0.1
+            lines.append(f"G01 Y{y:.4f} F{feeds[i % 4]}")
+        else:
+            x += 0.1
+            lines.append(f"G01 X{x:.4f} F{feeds[i % 4]}")
+        if i in (63, 149, 280):
+            lines.append("M00")
+    return "\n".join([*lines, "M30"]) + "\n"
+
+
+def test_a_rest_a_rounding_before_an_m00_is_the_m00_s() -> None:
+    """The path comes to rest 2.6e-18 m before the M00 after block 63 at t = 0.080 s, a few
+    ns before the cycle ends; the core registers the stop (`stopped_at`) in the next cycle.
+    The check read it as a rest without a rule."""
+    ch = dataclasses.replace(shipped(), look_ahead_blocks=200, cycle_time=2e-3)
+    task = GeoTask(ch, m00_program())
+    rec = Recorder(task)
+    schedule = Schedule(tuple(parse_override_spec("0.03:60,0.06:180,0.3:100")), ())
+    for snap in run_cycles(task, SimPlc(0.02), schedule, ch.cycle_time, 60.0):
+        rec(snap)
+    rest = next(x for x in rec.samples if x.v == 0.0 and x.stopped_at is None and x.t > 0.0)
+    b = rest.seg + 1
+    assert rec.program.boundaries[b].stop and 0.0 < rec.program.boundaries[b].s - rest.s < 1e-12
+    assert not [f for f in rec.check() if f.startswith(("rest", "stopped"))]
+
+
+def test_a_rest_before_a_stop_only_where_the_stop_registers_next() -> None:
+    """Only there: the same rest read where the next cycle does not register the stop, or 1 µm
+    before it, is a rest without a rule."""
+    task = GeoTask(
+        dataclasses.replace(shipped(), cycle_time=DT),
+        "G01 X0 Y0 F600\nG01 X10 F6000\nM00\nX20\nM30\n",
+    )
+    s1 = task.interp.program.boundaries[1].s
+    moving = at(s1 - 1e-3, 0.01, 0, t=0.0, a=-1.0)
+
+    def rest(gap: float, registered: bool) -> list[Sample]:
+        still = at(s1 - gap, 0.0, 0, t=DT)
+        after = dataclasses.replace(at(s1, 0.0, 1, t=2 * DT), stopped_at=1 if registered else None)
+        return [moving, still, after]
+
+    def rests(samples: list[Sample]) -> list[str]:
+        return [f for f in findings(task, samples) if f.startswith("rest")]
+
+    assert rests(rest(1e-18, True)) == []
+    assert rests(rest(1e-18, False))
+    assert rests(rest(1e-6, True))
