@@ -334,4 +334,4 @@ def check_motion(
         last = smp
     if pending is not None:
         out.append(pending[1])
-    return out + overruns(path, dt, samples, _at)
+    return out + overruns(path, samples)

@@ -123,6 +123,36 @@ def _raise_distance(v: float, a: float, v1: float, a_max: float, j_max: float) -
     return d + u * t3 + peak * t3 * t3 / 2.0 - j_max * t3**3 / 6.0
 
 
+def brake_distance(v: float, a: float, v1: float, a_max: float, j_max: float) -> float:
+    """Least distance from (v, a) after which the path can be at v1 or below with zero
+    acceleration, braking as hard as the limits allow (a positive acceleration ramped out
+    first, the deceleration raised at full jerk up to a_max, held, ramped out); where ramping
+    the acceleration out alone takes it there, that ramp's distance."""
+    if j_max == INF:
+        return max(v * v - v1 * v1, 0.0) / (2.0 * a_max)
+    d = 0.0
+    if a > 0.0:  # ramp the acceleration out first
+        t0 = a / j_max
+        d = v * t0 + a * t0 * t0 / 2.0 - j_max * t0**3 / 6.0
+        v, a = v + a * a / (2.0 * j_max), 0.0
+    dec = -a  # ≥ 0
+    drop = v - v1
+    if drop <= dec * dec / (2.0 * j_max):  # ramping out alone
+        t3 = dec / j_max
+        return d + v * t3 - dec * t3 * t3 / 2.0 + j_max * t3**3 / 6.0
+    peak = math.sqrt(j_max * drop + dec * dec / 2.0)
+    hold = 0.0
+    if peak > a_max:
+        peak = a_max
+        hold = (drop - (2.0 * a_max * a_max - dec * dec) / (2.0 * j_max)) / a_max
+    t1, t3 = max(peak - dec, 0.0) / j_max, peak / j_max
+    d += v * t1 - dec * t1 * t1 / 2.0 - j_max * t1**3 / 6.0
+    u = v - dec * t1 - j_max * t1 * t1 / 2.0
+    d += u * hold - peak * hold * hold / 2.0
+    u -= peak * hold
+    return d + u * t3 - peak * t3 * t3 / 2.0 + j_max * t3**3 / 6.0
+
+
 def reach_from(v: float, a: float, length: float, a_max: float, j_max: float, top: float) -> float:
     """The highest velocity ≤ top the path can have with zero acceleration `length` ahead of
     (v, a) (bisection on `_raise_distance`, increasing in the end velocity); where ramping the

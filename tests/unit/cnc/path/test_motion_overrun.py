@@ -188,3 +188,36 @@ def test_a_rest_before_a_stop_only_where_the_stop_registers_next() -> None:
     assert rests(rest(1e-18, True)) == []
     assert rests(rest(1e-18, False))
     assert rests(rest(1e-6, True))
+
+
+def drop_before_feed_drop(drop_mm: float, decel: float) -> tuple[GeoTask, list[Sample]]:
+    """11 mm at F12000 (200 mm/s), then F6000; the override drops to 50 % (ceilings 100 and 50
+    mm/s) as the path passes `drop_mm` at 200 mm/s, and it brakes from there, its
+    deceleration raised at 500 m/s³ up to `decel`, until it is at 50 mm/s."""
+    task = GeoTask(dataclasses.replace(shipped(), cycle_time=DT),
+                   "G01 X0 Y0 F600\nG01 X11 F12000\nX30 F6000\nM30\n")  # fmt: skip
+    s_1 = task.interp.program.boundaries[1].s
+    out: list[Sample] = []
+    s, v, a, ov = 0.0, 0.2, 0.0, 1.0
+    for i in range(200):
+        if ov < 1.0 or s >= drop_mm * MM:
+            ov = 0.5
+            a = max(a - 500.0 * DT, -decel) if v > 0.05 else 0.0
+        if i:
+            s += v * DT + a * DT * DT / 2.0
+            v = max(v + a * DT, 0.05)
+        out.append(at(s, v, 1 if s >= s_1 else 0, t=i * DT, a=a, ov=ov))
+    return task, out
+
+
+def test_a_feed_cap_out_of_reach_at_the_drop_is_passed_above_braking() -> None:
+    """The drop 1 mm before the feed drop: from 200 mm/s the path cannot get down to its new
+    cap of 50 mm/s there (that takes ~4 mm), so it passes it above, braking on (the tracker's
+    `Plan.soft_from`): no overrun. The same boundary 9 mm after the drop, passed above at
+    ~150 mm/s by a brake of 1 m/s²: an overrun (50 mm/s was within reach)."""
+    task, samples = drop_before_feed_drop(10.0, 8.0)
+    assert overruns(findings(task, samples)) == []
+    task, samples = drop_before_feed_drop(2.0, 1.0)
+    found = overruns(findings(task, samples))
+    assert len(found) == 1 and found[0].startswith("overrun: boundary 1 (line 2) at 14"), found
+    assert "above its cap 50.0000" in found[0]
