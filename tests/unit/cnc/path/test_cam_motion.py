@@ -34,7 +34,7 @@ def test_cam_shaped_programs_rest_only_where_a_rule_says(seed: int) -> None:
     assert hard == [] and errors == 0, (hard, describe(sc))
 
 
-# known deviation 9 of docs/geo-core.md (the brake from above a lowered ceiling holds the
+# known deviation 10 of docs/geo-core.md (the brake from above a lowered ceiling holds the
 # velocity first): override 150 → 10 % at 150 mm/s, the path holds it 1.4 ms before braking
 PAUSED = {79: ["overrun: the brake from above the ceiling paused at 150.0000 mm/s in segment 0 "
                "(line 1), ceiling 10.0000 (t=1.3730 s)"]}  # fmt: skip

@@ -87,7 +87,7 @@ def test_dense_feed_drops_run_at_the_lowest_feed() -> None:
 def test_an_override_drop_on_dense_feed_drops_keeps_every_stop_and_limit(
     text: str, cycle: float
 ) -> None:
-    """(The 0.1 mm programs' overruns are known deviation 9 of docs/geo-core.md: after the drop
+    """(The 0.1 mm programs' overruns are known deviation 10 of docs/geo-core.md: after the drop
     to 40 % at 360 mm/s, ceilings 160–400 mm/s, the shift's plan holds ~360 for 22 ms before it
     brakes; found since the sixth round, part O.)"""
     ch = dataclasses.replace(shipped(), look_ahead_blocks=120, cycle_time=cycle)
