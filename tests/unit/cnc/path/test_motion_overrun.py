@@ -11,6 +11,7 @@ from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.plc import Schedule, SimPlc, parse_override_spec
 from liftd.sim.simulate import run_cycles
 from tests.support.motion_check import Recorder, Sample, check_motion
+from tests.unit.cnc.path.test_dense_constraints import poisoned
 from tests.unit.cnc.path.test_motion_check import at, drive
 from tests.unit.cnc.path.test_no_invented_stops import shipped
 
@@ -97,21 +98,9 @@ def test_a_rise_after_an_override_drop_is_an_overrun() -> None:
     assert len(overruns(findings(task, up))) == 1
 
 
-def poisoned() -> str:
-    """The review's program of the fifth round (/tmp/rv5/poison_run.py): 23 falling feeds on
-    0.1 mm blocks after a 100 mm lead-in, a shallow kink, then F60 (1 mm/s) blocks."""
-    lines = ["G01 X0 Y0 F600", "G01 X100 F30000"]
-    x = 100.0
-    for i in range(23):
-        x += 0.1
-        lines.append(f"G01 X{x:.4f} F{29000 - 1000 * i}")
-    lines += [f"G01 X{x + 0.05:.4f} Y0.0010 F6000", f"G01 X{x + 0.10:.4f} Y0.0020 F60",
-              f"G01 X{x + 0.50:.4f} Y0.0100 F60", "M30"]  # fmt: skip
-    return "\n".join(lines) + "\n"
-
-
 def test_the_poisoned_cache_s_overrun_is_found() -> None:
-    """Before 54f1834 a cached chain value let the path pass boundary 25 into the F60 blocks
+    """The review's program of the fifth round (`poisoned`, /tmp/rv5/poison_run.py): before
+    54f1834 a cached chain value let the path pass boundary 25 into the F60 blocks
     at 19.3 mm/s and brake there; the core now passes at 1 mm/s. The core's run has no
     overrun; the same samples with the path 19.3 mm/s at boundary 25, braking at 8 m/s² into
     the F60 block as it did then, are found."""
