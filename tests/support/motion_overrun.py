@@ -10,16 +10,18 @@ The rules:
   at override 0 and while the channel does not run).
 * **At a block boundary** it is at most the transition cap (hard) and the lower of the two
   blocks' ceilings.
-* **Except in the brake after an input lowered the ceiling** (the override drops, a feed hold
-  or a PLC STOP starts): the CNC brakes from the velocity it has, it does not cut it. The
-  path may be above the new ceiling while it brakes; there it does not accelerate (a positive
+* **Except in the brake after an input changed the ceiling** (the override drops, a feed hold
+  or a PLC STOP starts; or the override rises while the path brakes, which can leave a run
+  boundary's cap in the jerk gap): the CNC brakes from the velocity it has, it does not cut
+  it. The path may be above the new ceiling while it brakes; there it does not accelerate (a positive
   acceleration at the drop is ramped out at full jerk, lifting it to v + a²/2J at most) and
   comes down without a pause: its acceleration is negative or falling in every cycle (or
   zero in a cycle where it passed a run boundary, where it must be zero), until it is at the
   ceiling. Within that brake it may pass a block boundary above the feed caps
   (F × override) that it could no longer get down to with zero acceleration there from its
-  state at the drop (the tracker's `Plan.soft_from`, and `Tracker._over_gap`, the jerk gap:
-  docs/geo-core.md), but never above a hard cap: the transition cap and the axes' and the
+  state at the change, or at the last run boundary it passed in the brake (zero acceleration
+  there) (the tracker's `Plan.soft_from`, and `Tracker._over_gap`, the jerk gap:
+  docs/geo-core.md deviation 6), but never above a hard cap: the transition cap and the axes' and the
   lift's caps, which no override scales. The brake ends where the acceleration stops
   falling at or below the ceiling.
 
@@ -115,7 +117,7 @@ def overruns(path: PathRules, samples: Sequence[Sample]) -> list[str]:
     """Every cycle and boundary in `samples` where the path is faster than the rules let it
     be, as text starting with "overrun" (empty: none)."""
     out: list[str] = []
-    drop: Sample | None = None  # in the brake after an input lowered the ceiling: the state then
+    drop: Sample | None = None  # in the brake after an input changed the ceiling: the state then
     top = INF  # the highest velocity the path may have in that brake
     reported = False  # that brake broke a rule (reported once a brake)
     over_in = -1  # the segment the path runs through above its ceiling (reported)

@@ -210,3 +210,35 @@ def test_a_feed_cap_out_of_reach_at_the_drop_is_passed_above_braking() -> None:
     found = overruns(findings(task, samples))
     assert len(found) == 1 and found[0].startswith("overrun: boundary 1 (line 2) at 14"), found
     assert "above its cap 50.0000" in found[0]
+
+
+def test_a_brake_through_a_run_boundary_has_zero_acceleration_there_without_a_pause() -> None:
+    """A run boundary (a kink) needs zero acceleration: the brake after an override drop
+    through it ramps its deceleration out there, and a sample can fall on it. Made up: from
+    200 mm/s, override 100 → 50 % at 2 mm, the path brakes at −1 m/s², at 0 in the cycle
+    it passes the kink at 5 mm, and on at −1 m/s²: no pause; the same with the acceleration
+    still 0 in the next cycle, a pause above the ceiling."""
+    task = GeoTask(dataclasses.replace(shipped(), cycle_time=DT),
+                   "G01 X0 Y0 F600\nG01 X5 F12000\nG01 X10 Y0.01\nX20\nM30\n")  # fmt: skip
+    s_1 = task.interp.program.boundaries[1].s
+    assert task.interp.table.gate[1]
+
+    def samples(zero_cycles: int) -> list[Sample]:
+        out: list[Sample] = []
+        s, v, ov, zero = 0.0, 0.2, 1.0, 0
+        for i in range(120):
+            a = 0.0
+            if ov < 1.0 or s >= 2.0 * MM:
+                ov = 0.5
+                crossing = s < s_1 <= s + v * DT
+                zero = zero_cycles if crossing else max(zero - 1, 0)
+                a = 0.0 if zero or v <= 0.1 else -1.0
+            if i:
+                s += v * DT + a * DT * DT / 2.0
+                v = max(v + a * DT, 0.1)
+            out.append(at(s, v, 1 if s >= s_1 else 0, t=i * DT, a=a, ov=ov))
+        return out
+
+    assert overruns(findings(task, samples(1))) == []
+    found = overruns(findings(task, samples(2)))
+    assert len(found) == 1 and "paused" in found[0], found
