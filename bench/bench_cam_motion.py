@@ -12,7 +12,7 @@ counted apart: docs/architecture.md lists them as known
 deviations. One JSON line per kind of run with the counts and the first findings.
 
 Run: .venv/bin/python bench/bench_cam_motion.py [RUNS [FIRST_SEED]] [--kind cam|wide|narrow] [--all]
-(--all: a line for each run with findings, all of them, before the summary)
+(--all: a line for each run with findings or problems, all of them, before the summary)
 """
 
 from __future__ import annotations
@@ -55,7 +55,7 @@ def main() -> None:
             failed += 1
             if len(first) < 5:
                 first.append({"seed": seed, "problems": hard[:3]})
-        if slow and args.all:
+        if (slow or hard) and args.all:
             print(json.dumps({"seed": seed, "look_ahead": sc.channel.look_ahead_blocks,
                               "findings": slow, "problems": hard}), flush=True)  # fmt: skip
         if slow:

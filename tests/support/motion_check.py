@@ -9,7 +9,8 @@ The rules (docs/architecture.md, "Which rule decides a slowdown"):
   otherwise land, a feed hold or override 0 (and the end of its brake after the release, where
   ramping the deceleration out at full jerk already takes the velocity to 0: narrow seed 448),
   a PLC STOP, or the end of the look-ahead window (the window's last boundary, when nothing
-  beyond it is known).
+  beyond it is known). A rest within STOP_TOL before a stop, in the cycle before the core
+  registers that stop (`stopped_at`), is at it.
 * **At a block boundary** the velocity reaches the lowest of: the two blocks' ceilings (F ×
   override within the axes' and the lift's caps), the transition cap, what the constraints
   ahead within the look-ahead window allow (a backward pass: one brake through the caps of a
@@ -20,6 +21,9 @@ The rules (docs/architecture.md, "Which rule decides a slowdown"):
   raised the cap, the path is held to the cap under the window before and to the higher one
   only as far as it can reach it from its state when the window moved.
 * **Between two boundaries** it never goes below the lower of its velocities at the two.
+* **Never faster** than the rules let it be (tests/support/motion_overrun.py): at most the
+  ceiling of its block in every cycle, at most the transition cap and both blocks' ceilings at
+  a boundary, but for the brake from above a ceiling an input lowered ("overrun" findings).
 
 After an input changes (override, feed hold, a stop for Z set or dropped, an acknowledge, a
 resume) the path follows a new plan: where it decelerates, that deceleration is ramped out at
@@ -47,6 +51,7 @@ from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.path.program import PathProgram
 from liftd.cnc.path.table import PathTable
 from liftd.cnc.snapshot import ChannelState, GeoSnapshot
+from tests.support.motion_overrun import overruns
 from tests.support.motion_rules import INF, PathRules, Sample, reach, reach_from
 
 # Sample and reach_from are the tests' too (the samples' type; the check's arithmetic)
@@ -57,6 +62,7 @@ REL_TOL = 0.05  # a velocity this much below its expected value is still at it (
 # plus, absolute, what the velocity can change within a cycle by the jerk alone (J·dt²): the
 # samples are a cycle apart, the boundaries and turning points lie between them
 ABS_TOL = 1e-6  # m/s
+STOP_TOL = 1e-9  # m: a rest this near before a stop is at it (rounding of its last brake)
 
 
 @dataclass(slots=True)
@@ -117,6 +123,14 @@ def _at(last: Sample, smp: Sample, s_b: float) -> float:
     return max(last.v + tau * (last.a + tau * j / 2.0), 0.0)
 
 
+def _before_stop(path: PathRules, smp: Sample) -> bool:
+    """`smp` rests within STOP_TOL before the stop that ends its segment: a rest that ends a
+    few ns after a cycle registers in the next (the core sets `stopped_at` there; the
+    reviewer's generator, cases 4, 6 and 18: an M00 2.6e-18 m ahead at rest, t = 0.080 s)."""
+    b = smp.seg + 1
+    return b < path.n and path.is_stop(b, smp) and 0.0 <= path.bounds[b].s - smp.s <= STOP_TOL
+
+
 class Expected(NamedTuple):
     """What the check expected at a boundary the path crossed (m/s): the path's velocity,
     the caps' rules (the boundary's target and what the constraints ahead allow), the forward
@@ -175,10 +189,15 @@ def check_motion(
     ramp_ends = -INF  # path position where an event's deceleration is ramped out
     ramp = (0.0, 0.0, 0.0, 0.0)  # that ramp: the state (s, v, a) it starts from, the jerk
     last: Sample | None = None
+    pending: tuple[int, str] | None = None  # a rest just before a stop, and that stop
     for smp in samples:
         if last is None:
             last = smp
             continue
+        if pending is not None:
+            if smp.stopped_at != pending[0]:
+                out.append(pending[1])
+            pending = None
         event = (
             smp.override != last.override
             or smp.hold != last.hold
@@ -224,7 +243,11 @@ def check_motion(
             b = smp.seg  # the window's end as seen before, or a stop
             at_boundary = b <= path.n and path.bounds[b].s == smp.s
             if not (at_boundary and (b == last.seg + path.look_ahead or path.is_stop(b, smp))):
-                out.append(f"rest at s={smp.s * 1e3:.4f} mm, t={smp.t:.4f} s (no rule)")
+                rest = f"rest at s={smp.s * 1e3:.4f} mm, t={smp.t:.4f} s (no rule)"
+                if _before_stop(path, smp):
+                    pending = (smp.seg + 1, rest)  # read when the next cycle registers it
+                else:
+                    out.append(rest)
         # boundaries crossed in this cycle
         for b in range(last.seg + 1, min(smp.seg, path.n - 1) + 1):
             s_b = path.bounds[b].s
@@ -309,4 +332,6 @@ def check_motion(
             braking_from = smp.seg
         interval_from = min(interval_from, braking_from)
         last = smp
-    return out
+    if pending is not None:
+        out.append(pending[1])
+    return out + overruns(path, samples)

@@ -123,6 +123,36 @@ def _raise_distance(v: float, a: float, v1: float, a_max: float, j_max: float) -
     return d + u * t3 + peak * t3 * t3 / 2.0 - j_max * t3**3 / 6.0
 
 
+def brake_distance(v: float, a: float, v1: float, a_max: float, j_max: float) -> float:
+    """Least distance from (v, a) after which the path can be at v1 or below with zero
+    acceleration, braking as hard as the limits allow (a positive acceleration ramped out
+    first, the deceleration raised at full jerk up to a_max, held, ramped out); where ramping
+    the acceleration out alone takes it there, that ramp's distance."""
+    if j_max == INF:
+        return max(v * v - v1 * v1, 0.0) / (2.0 * a_max)
+    d = 0.0
+    if a > 0.0:  # ramp the acceleration out first
+        t0 = a / j_max
+        d = v * t0 + a * t0 * t0 / 2.0 - j_max * t0**3 / 6.0
+        v, a = v + a * a / (2.0 * j_max), 0.0
+    dec = -a  # ≥ 0
+    drop = v - v1
+    if drop <= dec * dec / (2.0 * j_max):  # ramping out alone
+        t3 = dec / j_max
+        return d + v * t3 - dec * t3 * t3 / 2.0 + j_max * t3**3 / 6.0
+    peak = math.sqrt(j_max * drop + dec * dec / 2.0)
+    hold = 0.0
+    if peak > a_max:
+        peak = a_max
+        hold = (drop - (2.0 * a_max * a_max - dec * dec) / (2.0 * j_max)) / a_max
+    t1, t3 = max(peak - dec, 0.0) / j_max, peak / j_max
+    d += v * t1 - dec * t1 * t1 / 2.0 - j_max * t1**3 / 6.0
+    u = v - dec * t1 - j_max * t1 * t1 / 2.0
+    d += u * hold - peak * hold * hold / 2.0
+    u -= peak * hold
+    return d + u * t3 - peak * t3 * t3 / 2.0 + j_max * t3**3 / 6.0
+
+
 def reach_from(v: float, a: float, length: float, a_max: float, j_max: float, top: float) -> float:
     """The highest velocity ≤ top the path can have with zero acceleration `length` ahead of
     (v, a) (bisection on `_raise_distance`, increasing in the end velocity); where ramping the
@@ -143,6 +173,7 @@ class PathRules:
         self.segs = prog.segments
         self.bounds = prog.boundaries
         self.gate = table.gate
+        self.run_j = tuple(table.run_j[r] for r in table.run)  # per segment: its run's jerk
         self.n = len(self.segs)
         self.look_ahead = max(1, look_ahead)
         self.v_top = max((seg.v_phys for seg in self.segs), default=0.0)
@@ -152,6 +183,15 @@ class PathRules:
     def ceiling(self, k: int, ov: float) -> float:
         seg = self.segs[k]
         return min(min(seg.feed, seg.v_lift_ov) * ov, seg.v_phys, seg.v_lift)
+
+    def hard(self, k: int) -> float:
+        """The caps of segment k no override scales: the axes' and the lift's."""
+        seg = self.segs[min(k, self.n - 1)]
+        return min(seg.v_phys, seg.v_lift)
+
+    def run_jerk(self, k: int) -> float:
+        """The jerk limit of segment k's run (the lowest of its segments')."""
+        return self.run_j[min(k, self.n - 1)]
 
     def target(self, b: int, ov: float) -> float:
         """The velocity at boundary b by its own rule: the lower ceiling, the transition cap."""

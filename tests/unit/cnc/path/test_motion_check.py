@@ -123,12 +123,12 @@ def test_a_dip_after_an_event_is_found() -> None:
     task = GeoTask(ch, "G01 X0 Y0 F600\nG01 X20 F12000\nX40\nX60\nM30\n")
 
     def accel(i: int) -> float:
-        return -4.0 if 41 <= i < 66 else 4.0 if 66 <= i < 81 else 0.0
+        return -4.0 if 40 <= i < 65 else 4.0 if 65 <= i < 80 else 0.0
 
     samples = drive(task, 0.2, ch.cycle_time, 200, accel, lambda i: 1.0 if i < 40 else 0.8)
     found = check_motion(task.interp.program, task.interp.table, 30, ch.cycle_time, samples)
     assert found == [
-        "dip to 100.0000 mm/s before boundary 1 (line 2) between 200.0000 and 160.0000 (t=0.1200 s)"
+        "dip to 100.0000 mm/s before boundary 1 (line 2) between 176.0000 and 160.0000 (t=0.1200 s)"
     ]
 
 
