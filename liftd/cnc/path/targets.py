@@ -17,7 +17,7 @@ only when nothing else is accepted.
 from __future__ import annotations
 
 from liftd.cnc.path.constraints import CAP_TOL, SLACK_TOL, V_ROUND, Constraints
-from liftd.cnc.path.plan import BRAKE, Plan
+from liftd.cnc.path.plan import BRAKE, EPS_S, Plan
 from liftd.cnc.path.table import PathTable
 from liftd.cnc.path.velocity import (
     brake_distance,
@@ -158,16 +158,19 @@ class Targets(Constraints):
         boundary's hard cap; where rest is accepted, the highest velocity below the target
         that is (`_highest_below`); the cap, the hard cap; the profile that brought the path
         to the boundary it just passed; a brake (an error). A profile that dips below its ends
-        is replaced where `_undip` or, not at an event, `_unpin` finds one that does not."""
+        is replaced where `_undip` or `_unpin` (at an event `_exact_brake`) finds one that does
+        not."""
         if self._try_target(s, v, a, s_c, target, v_max, a_max, j_max, b, w):
             floor = min(v, v_p, target)
             if (
                 target < 0.5 * max(v, v_p)
                 and self._dips(floor)
                 and not self._undip(target, b, w, (passed, held))
-                and not event  # a lift planned with the times before it (wide seed 767)
             ):
-                self._unpin(s, v, a, s_c, target, v_max, a_max, j_max, b, w, floor)
+                if event:  # a lift planned with the times before it (wide seed 767)
+                    self._exact_brake(s, v, a, s_c, target, a_max, j_max, b, w)
+                else:
+                    self._unpin(s, v, a, s_c, target, v_max, a_max, j_max, b, w, floor)
             return
         if v_p <= max(hard, target) and self._try_target(
             s, v, a, s_c, v_p, max(v_max, v_p), a_max, j_max, b, w
@@ -248,6 +251,36 @@ class Targets(Constraints):
         top = v_max + V_ROUND
         if not self._try_target(s, v, a, s_c, target, top, a_max, j_max, b, w) or self._dips(floor):
             self.plan = dipping
+
+    def _exact_brake(
+        self, s: float, v: float, a: float, s_c: float, target: float, a_max: float,
+        j_max: float, b: int, w: int,
+    ) -> None:  # fmt: skip
+        """An event's re-plan (`Tracker.set_state`) chose a profile that dips and no profile
+        is in hand (the producer's is the queue tail's, not the path's). Where the path is
+        on the exact brake to the target, the brake reaching b within EPS_S, that brake is
+        planned: ruckig's velocity interface, time-optimal from (v, a) to the target, with b
+        as its goal. It is the profile the path followed before the event (from a state
+        inside it, the hardest brake that fits is the only one), so every arrival stays as a
+        lift planned it; ruckig's position interface finds that brake a rounding too long
+        and returns one that dips and arrives later (issue 36, narrow seed 635: override
+        100 → 77 % while braking from 196 mm/s to 4.82 mm/s 3.663 mm on, the brake
+        3e-17 m longer than the distance, a profile through 3.09 mm/s, 44.27 ms, where the
+        brake takes 39.90; CAM seed 956: 46.3 → 2.68 mm/s, 1.15 mm/s and 21.65 against 17.61
+        ms). Elsewhere the dip stays: a profile that leaves the brake may reach a lift's
+        boundary sooner than planned (a lower target, tried: wide seed 767, Z 0.2 ms late)."""
+        if abs(s + brake_distance(v, a, target, a_max, j_max) - s_c) > EPS_S:
+            return
+        try:
+            traj = self.calc.velocity(s, v, a, target, a_max, j_max)
+        except ProfileError as exc:
+            self.last_error = str(exc)
+            return
+        if abs(float(traj.at_time(traj.duration)[0][0]) - s_c) > EPS_S:
+            return  # ruckig's brake is not the closed form's (never seen)
+        plan = Plan(traj, self.t, b, w, s_c, target)
+        plan.soft_from = min(self._soft_from, b)
+        self.plan = plan
 
     def _undip(self, target: float, b: int, w: int, kept: tuple[Plan | None, Plan | None]) -> bool:
         """Ruckig's time-optimal profile to a low target brakes below it and comes back where

@@ -100,6 +100,9 @@ class Tracker(Targets):
             self.ov, self.hold = cap_ov, hold
             self.plan = None
             self._passed = None  # planned under the old inputs: not to be kept
+            # an event's re-plan (`Targets._settle`), also where no `set_state` follows: a
+            # nominal run's tracker takes an override change as the path does (`nominal.py`)
+            self._event = True
             self._clear_s = -INF
             if not hold:
                 self.parked = False
