@@ -253,19 +253,22 @@ class Constraints:
 
     def _target_cap(self, cands: list[tuple[int, float, float, bool]], i: int) -> float:
         """The velocity to plan for at candidate i (zero acceleration there): its cap, lowered
-        so that the later candidates in the list stay reachable from it."""
-        e = cands[-1][2]
+        so that the later candidates in the list stay reachable from it. They lie in one run
+        up to its end (the list's last, a run boundary, a stop or the window's end, with the
+        window end's floor after it): one brake passes any number of caps inside a run, with
+        zero acceleration only at its end, so each later candidate is a brake of its own from
+        i (known deviation 8 of docs/geo-core.md: composed link by link, zero acceleration at
+        every cap, CAM seed 41 passed boundary 70 at 44.5 for 47.2 mm/s). Braking toward the
+        lowest of them from i passes every higher one no later than the brake to that one
+        (the same jerk phase first, its ramp out later), so the least over them keeps all."""
+        s_i = cands[i][1]
+        e = cands[i][2]
         is_open = self._chain_open(cands)
-        own = False  # e is the next candidate's own cap: no later window raises it
-        for k in range(len(cands) - 2, i - 1, -1):
-            _, sk, ck, gate = cands[k]
-            bn, sn, _, _ = cands[k + 1]
-            up = self._link(e, sk, bn, sn, is_open and not own)
-            # (not a run boundary's or the window end's entry: its cap is lowered for what
-            # lies after it, which a later window raises; the review's rest at w below its
-            # floor entry read as own took rest's exact reach, the rule deviation 5 replaced)
-            own = ck <= up and not gate
-            e = min(ck, up)
+        for k in range(i + 1, len(cands)):
+            bk, sk, ck, gate = cands[k]
+            # a cap inside the run is its own (no later window raises it): the exact reach; the
+            # run's end is lowered for what lies after it, which a later window may raise
+            e = min(e, self._link(ck, s_i, bk, sk, is_open and gate))
         return e
 
     def _beyond(self, g: int, cap: float, w: int) -> float:
@@ -297,10 +300,11 @@ class Constraints:
     def _chain(self, g: int, cap: float, w: int, limit: int) -> tuple[float, bool, bool]:
         """(`_beyond`'s velocity at g, whether the chain is open, whether it was cut) over at
         most `limit` links after g, the last counting as a stop. A constraint without zero
-        acceleration that a lower cap before it keeps (g's own cap first) is not a link."""
+        acceleration that a lower cap before it keeps (g's own cap first) is not a link. The
+        links compose as in `_target_cap`: from each run boundary (g first), a brake of its
+        own to every cap inside its run and to the run's end, at that end's value."""
         tb = self.tb
-        s_g = tb.s[g]
-        chain: list[tuple[float, float, int]] = []
+        chain: list[tuple[float, float, int, bool]] = []
         low = self._low = cap
         cut = False
         for b in self._ahead(g + 1, w, True):  # leaping over those it keeps
@@ -308,29 +312,40 @@ class Constraints:
             if not gate and c >= low:
                 continue
             low = self._low = min(low, c)
-            chain.append((tb.s[b], c, b))
+            chain.append((tb.s[b], c, b, gate))
             if stop or len(chain) == limit:
                 cut = not stop
-                chain[-1] = (tb.s[b], 0.0, b)
+                chain[-1] = (tb.s[b], 0.0, b, True)
                 break
         # open: the chain ends at the window's end or is cut, not at a stop of the program: its
         # end may rise as the window moves on, and with a jerk limit a higher end velocity is
         # not always reachable from where a lower one is (`reach_velocity_any_above`), so every
-        # link keeps every higher end reachable (wide seed 146: 162's cap fell from 261.9 to
-        # 259.8 mm/s as the window moved from 189 to 190; the path, planned for the first, went
-        # on above every cap after it and came to near rest at 189 for a corner it could no
-        # longer get down to)
+        # run's end keeps every higher end reachable (wide seed 146: 162's cap fell from 261.9
+        # to 259.8 mm/s as the window moved from 189 to 190; the path, planned for the first,
+        # went on above every cap after it and came to near rest at 189 for a corner it could
+        # no longer get down to)
         is_open = bool(chain) and not self.is_stop(chain[-1][2])
-        e = INF
-        for i in range(len(chain) - 1, -1, -1):
-            s_i, c_i, b_i = chain[i]
-            # a link held at its own cap keeps it however the window moves on: the exact
-            # reach from it (wide seed 768: a 0.107 mm/s corner a block on, 69.98 mm/s where
+        end: tuple[float, float, int, bool] | None = None  # the next run's end: (s, value, b, open)
+        inside: list[tuple[float, float, int]] = []  # the caps before it, after the next start
+        for i in range(len(chain) - 1, -2, -1):
+            if i >= 0 and not chain[i][3]:
+                inside.append(chain[i][:3])
+                continue
+            s_start = chain[i][0] if i >= 0 else tb.s[g]
+            e = INF
+            for s_k, c_k, b_k in inside:  # their own caps: the exact reach
+                e = min(e, self._link(c_k, s_start, b_k, s_k, False))
+            if end is not None:
+                e = min(e, self._link(end[1], s_start, end[2], end[0], end[3]))
+            if i < 0:
+                return e, is_open, cut
+            s_i, c_i, b_i, _ = chain[i]
+            # a run's end held at its own cap keeps it however the window moves on: the exact
+            # reach to it (wide seed 768: a 0.107 mm/s corner a block on, 69.98 mm/s where
             # every higher end kept reachable gave 66.16)
             own = c_i <= e and i < len(chain) - 1
-            s_prev = chain[i - 1][0] if i > 0 else s_g
-            e = self._link(min(c_i, e), s_prev, b_i, s_i, is_open and not own)
-        return e, is_open, cut
+            end, inside = (s_i, min(c_i, e), b_i, is_open and not own), []
+        return INF, is_open, cut  # not reached: the loop returns at i = -1
 
     @staticmethod
     def _need(v: float, a: float, cap: float, gate: bool, a_max: float, j_max: float) -> float:
