@@ -49,6 +49,8 @@ from liftd.cnc.path.velocity import (
 )
 from liftd.cnc.ruckig1 import ProfileError
 
+AIMS = 4  # profiles `Tracker._aim_through` tries at most (one ruckig solve each)
+
 
 class Primed:
     """The profile a resting path will leave its stop with (`Tracker.plan_leaving`) and what
@@ -214,6 +216,13 @@ class Tracker(Targets):
             self._cruise(0.0, a_max, j_max, w)
             return
         cap = self._target_cap(cands, best_i)
+        if (
+            not gate
+            and not self.hold
+            and cap < cands[best_i][2] * (1.0 - CAP_TOL)
+            and self._aim_through(cands, best_i, cap, ceiling, a_max, j_max, w, passed, held, event)
+        ):
+            return
         d = s_c - s
         over = self._gap_over(cands, best_i, min(cap, ceiling), w) if gate else 0.0
         target = self._pick_target(v, a, v_p, d, cap, ceiling, a_max, j_max, self._hard(b, w), over)
@@ -288,6 +297,70 @@ class Tracker(Targets):
             v_max = max(min(v_max, top), target, v, v_p)
         self._settle(s, v, a, v_p, s_c, target, cap, v_max, a_max, j_max, b, w, self._hard(b, w),
                      passed, held, event)  # fmt: skip
+
+    def _aim_through(
+        self, cands: list[tuple[int, float, float, bool]], i: int, cap: float, ceiling: float,
+        a_max: float, j_max: float, w: int, passed: Plan | None, held: Plan | None, event: bool,
+    ) -> bool:  # fmt: skip
+        """Candidate i (no run boundary) binds, but its target is lowered for a later one
+        (`Constraints._target_cap`): zero acceleration at i, below its cap, is not a rule of
+        the CNC, and one brake toward the later one passes i faster (falling feeds block by
+        block before an M00: the first feed drop at 52.5 where one brake allows 56.4 mm/s,
+        and at 39.8 where the forced re-plan of a cruise took it; known deviation 8 of
+        docs/geo-core.md). Plans toward the candidate that lowers i's target (and on to the
+        one that lowers that one's), keeping the profile where it passes every candidate from
+        i on below its cap, braking from i on: their feed caps are then the profile's
+        (`Plan.soft_from`). Where it passes one of them too fast, toward that one instead (at
+        most AIMS profiles). False (nothing changed) where none is kept."""
+        k, e = i, cap
+        while True:
+            nk = self._binding(cands, k, e)
+            if nk <= k:
+                break
+            k, e = nk, self._target_cap(cands, nk)
+            if cands[k][3] or e >= cands[k][2] * (1.0 - CAP_TOL):
+                break
+        s, v, a = self.s, self.v, self.a
+        v_p = projected_velocity(v, a, j_max)
+        errors, last, soft, prev = self.errors, self.last_error, self._soft_from, self.plan
+        for _ in range(AIMS):
+            if k == i:
+                break
+            b, s_c, _, gate = cands[k]
+            over = self._gap_over(cands, k, min(e, ceiling), w) if gate else 0.0
+            hard = self._hard(b, w)
+            target = self._pick_target(v, a, v_p, s_c - s, e, ceiling, a_max, j_max, hard, over)
+            v_max = max(ceiling, target, v_p) if v <= ceiling else max(ceiling, target, v, v_p)
+            self._soft_from = cands[i][0]
+            self._settle(s, v, a, v_p, s_c, target, e, v_max, a_max, j_max, b, w, hard,
+                         passed, held, event)  # fmt: skip
+            plan = self.plan
+            if plan is None or plan.goal != b or self.errors != errors:
+                break
+            fast = self._passed_above(plan, cands, i, k)
+            if fast < 0:
+                return True
+            k = fast  # passed too fast: toward that one (its target lowered for the ones after)
+            e = self._target_cap(cands, k)
+        self.plan = prev
+        self.errors, self.last_error, self._soft_from = errors, last, soft
+        return False
+
+    @staticmethod
+    def _passed_above(
+        plan: Plan, cands: list[tuple[int, float, float, bool]], i: int, k: int
+    ) -> int:
+        """The first of candidates i … k − 1 that `plan` passes above its cap (or not braking,
+        at i: it could speed up after it), -1 where none."""
+        for j in range(i, k):
+            _, sj, cj, gj = cands[j]
+            tj = plan.time_at(sj, INF)
+            if gj or tj == INF:
+                return j
+            _, vj, aj = plan.at(tj)
+            if vj > cj * (1.0 + CAP_TOL) + V_ROUND or (j == i and aj > GATE_TOL):
+                return j
+        return -1
 
     def _rests_before(
         self, cands: list[tuple[int, float, float, bool]], s: float, v: float, a: float,
