@@ -8,7 +8,8 @@ the motion and the planning.
 Effective caps come from a backward pass over the constraints up to the next run boundary (and,
 for that boundary, beyond it as far as they can matter): a cap that a later constraint makes
 unreachable is lowered, so arriving at a constraint with zero acceleration below its effective
-cap leaves every later one reachable. The work is bounded by MAX_CANDIDATES constraints at once.
+cap leaves every later one reachable. The work is bounded by MAX_CANDIDATES constraints at once:
+the last of them stands for those after it as a run boundary does (zero acceleration there).
 """
 
 from __future__ import annotations
@@ -27,7 +28,7 @@ from liftd.cnc.path.velocity import (
 )
 
 INF = float("inf")
-MAX_CANDIDATES = 24  # constraints considered at once; beyond, the last one counts as a stop
+MAX_CANDIDATES = 24  # constraints considered at once; the last one stands for those after it
 SLACK_TOL = 1e-9  # m
 # A step is kept only if every constraint keeps this much slack: the profile toward it from the
 # step's start is then comfortably feasible for ruckig (at the very edge it may refuse by
@@ -189,8 +190,14 @@ class Constraints:
                     continue  # kept by one before it
                 low = min(low, used)
                 self._low = low
-            if len(out) == MAX_CANDIDATES - 1 and not every:  # the last counts as a stop
-                cap, gate, stop = 0.0, True, True
+            if len(out) == MAX_CANDIDATES - 1 and not every and not gate:
+                # the last: zero acceleration there, below what the constraints after it
+                # allow (`_beyond`, as behind a run boundary); it counted as a stop, and a
+                # feed falling block by block held the path 5-15 % below the rules (known
+                # deviation 1 of docs/geo-core.md)
+                gate = True
+                if soft[0] <= b < soft[1]:
+                    cap = min(tb.point_cap[b], tb.cap[b])
             if gate and not stop and cap > 0.0:
                 cap = min(cap, self._beyond(b, cap, w))
             out.append((b, s_b, cap, gate))
@@ -234,7 +241,7 @@ class Constraints:
             return True
         if cands[-1][3] and not self.is_stop(last):
             if cands[-1][2] <= 0.0:
-                return True  # the 24th counted as a stop: it rises as the list moves on
+                return True  # rest behind no stop (a cap of 0): a later list may raise it
             # cached: `_collect` just asked for it with g's entry cap (the result depends on
             # the cap: a review found a chain for cap 0, cached under g, read back for its
             # entry cap, which left out every feed drop behind g: 19 mm/s in a 1 mm/s block)
