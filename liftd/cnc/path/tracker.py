@@ -220,6 +220,9 @@ class Tracker(Targets):
             not gate
             and not self.hold
             and cap < cands[best_i][2] * (1.0 - CAP_TOL)
+            # not where its own cap is out of reach (after an override drop: the shift below
+            # passes such caps above them; aimed at, each cost AIMS profiles in vain)
+            and self._need(v, a, cands[best_i][2], False, a_max, j_max) <= s_c - s + SLACK_TOL
             and self._aim_through(cands, best_i, cap, ceiling, a_max, j_max, w, passed, held, event)
         ):
             return
@@ -331,15 +334,17 @@ class Tracker(Targets):
             hard = self._hard(b, w)
             target = self._pick_target(v, a, v_p, s_c - s, e, ceiling, a_max, j_max, hard, over)
             v_max = max(ceiling, target, v_p) if v <= ceiling else max(ceiling, target, v, v_p)
-            self._soft_from = cands[i][0]
+            self._soft_from = cands[0][0]
             self._settle(s, v, a, v_p, s_c, target, e, v_max, a_max, j_max, b, w, hard,
                          passed, held, event)  # fmt: skip
             plan = self.plan
             if plan is None or plan.goal != b or self.errors != errors:
                 break
-            fast = self._passed_above(plan, cands, i, k)
+            fast = self._passed_above(plan, cands, k)
             if fast < 0:
                 return True
+            if fast <= i:
+                break  # one before i (or i itself): the target at i as before
             k = fast  # passed too fast: toward that one (its target lowered for the ones after)
             e = self._target_cap(cands, k)
         self.plan = prev
@@ -347,18 +352,15 @@ class Tracker(Targets):
         return False
 
     @staticmethod
-    def _passed_above(
-        plan: Plan, cands: list[tuple[int, float, float, bool]], i: int, k: int
-    ) -> int:
-        """The first of candidates i … k − 1 that `plan` passes above its cap (or not braking,
-        at i: it could speed up after it), -1 where none."""
-        for j in range(i, k):
-            _, sj, cj, gj = cands[j]
-            tj = plan.time_at(sj, INF)
-            if gj or tj == INF:
+    def _passed_above(plan: Plan, cands: list[tuple[int, float, float, bool]], k: int) -> int:
+        """The first of candidates 0 … k − 1 that `plan` passes above its cap (or, the first,
+        not braking: it could speed up after it), -1 where none."""
+        speeds = plan.speeds_at([cands[j][1] for j in range(k)])
+        for j in range(k):
+            vj, aj = speeds[j]
+            if cands[j][3] or vj > cands[j][2] * (1.0 + CAP_TOL) + V_ROUND:
                 return j
-            _, vj, aj = plan.at(tj)
-            if vj > cj * (1.0 + CAP_TOL) + V_ROUND or (j == i and aj > GATE_TOL):
+            if j == 0 and aj > GATE_TOL:
                 return j
         return -1
 
