@@ -323,6 +323,7 @@ class Tracker(Targets):
             k, e = nk, self._target_cap(cands, nk)
             if cands[k][3] or e >= cands[k][2] * (1.0 - CAP_TOL):
                 break
+        far, e_far = k, e
         s, v, a = self.s, self.v, self.a
         v_p = projected_velocity(v, a, j_max)
         errors, last, soft, prev = self.errors, self.last_error, self._soft_from, self.plan
@@ -349,7 +350,31 @@ class Tracker(Targets):
             e = self._target_cap(cands, k)
         self.plan = prev
         self.errors, self.last_error, self._soft_from = errors, last, soft
-        return False
+        return far > i and self._brake_through(cands, far, e_far, a_max, j_max, w)
+
+    def _brake_through(
+        self, cands: list[tuple[int, float, float, bool]], k: int, e: float, a_max: float,
+        j_max: float, w: int,
+    ) -> bool:  # fmt: skip
+        """A brake at once to e, candidate k's target, then a cruise at it (ruckig's velocity
+        interface), kept where it gets there before k and passes every candidate before k
+        below its cap: braking toward the lowest, it is below the brake toward each of them
+        (`Constraints._target_cap`), which keeps that one where its own cap is in reach. Where
+        the time-optimal profile toward k holds the velocity and passes a feed drop above its
+        cap (CAM seed 0: boundary 52 at 34.19 for 33.09 mm/s 0.2 mm before a run boundary of
+        25.82, its target at zero acceleration out of reach, its cap not; the shift of
+        `_replan` dropped that cap, known deviation 12 of docs/geo-core.md). Slower than a
+        late brake, never above a cap."""
+        try:
+            traj = self.calc.velocity(self.s, self.v, self.a, e, a_max, j_max)
+        except ProfileError:
+            return False
+        plan = Plan(traj, self.t, CRUISE, w, None, e)
+        if plan.p_end > cands[k][1] or self._passed_above(plan, cands, k) >= 0:
+            return False
+        plan.serves, plan.soft_from = cands[k][0], cands[0][0]
+        self.plan, self._soft_from = plan, cands[0][0]
+        return True
 
     @staticmethod
     def _passed_above(plan: Plan, cands: list[tuple[int, float, float, bool]], k: int) -> int:
