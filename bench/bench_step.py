@@ -81,6 +81,24 @@ def _feed_drops(blocks: int, step_mm: float) -> str:
     return "\n".join([*lines, "M30"]) + "\n"
 
 
+def _falling_feeds(parts: int) -> str:
+    """`parts` times: 20 mm at F30000, then 40 blocks of 0.2 mm whose feed falls by 3 % each,
+    then a corner (issue 36: more falling caps within one brake than a step plans at once)."""
+    lines = ["G90 G17 G94", "G01 X0 Y0 F6000"]
+    x = y = 0.0
+    for _ in range(parts):
+        x += 20.0
+        lines.append(f"G01 X{x:.4f} F30000")
+        f = 30000.0
+        for _ in range(40):
+            f *= 0.97
+            x += 0.2
+            lines.append(f"G01 X{x:.4f} F{int(f)}")
+        y += 1.0
+        lines.append(f"G01 Y{y:.4f} F6000")
+    return "\n".join([*lines, "M30"]) + "\n"
+
+
 def _range(blocks: int, step_mm: float, feed: int = 12000) -> str:
     """One lift range over `blocks` collinear blocks of `step_mm`."""
     lines = [
@@ -110,6 +128,8 @@ def programs() -> dict[str, tuple[str, Callable[[float], Schedule]]]:
         "range-2000-blocks": (_range(2000, 0.5), lambda _: Schedule()),
         # a feed drop at every second block: every constraint within the brake is scanned
         "feed-drops-0.2mm override+hold": (_feed_drops(2000, 0.2), _schedule),
+        # 40 falling feeds within one brake: the last candidate a step plans stands for the rest
+        "falling-feeds override+hold": (_falling_feeds(40), _schedule),
         # the issue's bad input
         "range-10000-blocks": (_range(10000, 0.1), lambda _: Schedule()),
         "blocks-0.001mm": (_range(5000, 0.001), lambda _: Schedule()),

@@ -8,7 +8,8 @@ the motion and the planning.
 Effective caps come from a backward pass over the constraints up to the next run boundary (and,
 for that boundary, beyond it as far as they can matter): a cap that a later constraint makes
 unreachable is lowered, so arriving at a constraint with zero acceleration below its effective
-cap leaves every later one reachable. The work is bounded by MAX_CANDIDATES constraints at once.
+cap leaves every later one reachable. The work is bounded by MAX_CANDIDATES constraints at once:
+the last of them stands for those after it as a run boundary does (zero acceleration there).
 """
 
 from __future__ import annotations
@@ -27,7 +28,7 @@ from liftd.cnc.path.velocity import (
 )
 
 INF = float("inf")
-MAX_CANDIDATES = 24  # constraints considered at once; beyond, the last one counts as a stop
+MAX_CANDIDATES = 24  # constraints considered at once; the last one stands for those after it
 SLACK_TOL = 1e-9  # m
 # A step is kept only if every constraint keeps this much slack: the profile toward it from the
 # step's start is then comfortably feasible for ruckig (at the very edge it may refuse by
@@ -189,8 +190,14 @@ class Constraints:
                     continue  # kept by one before it
                 low = min(low, used)
                 self._low = low
-            if len(out) == MAX_CANDIDATES - 1 and not every:  # the last counts as a stop
-                cap, gate, stop = 0.0, True, True
+            if len(out) == MAX_CANDIDATES - 1 and not every and not gate:
+                # the last: zero acceleration there, below what the constraints after it
+                # allow (`_beyond`, as behind a run boundary); it counted as a stop, and a
+                # feed falling block by block held the path 5-15 % below the rules (known
+                # deviation 1 of docs/geo-core.md)
+                gate = True
+                if soft[0] <= b < soft[1]:
+                    cap = min(tb.point_cap[b], tb.cap[b])
             if gate and not stop and cap > 0.0:
                 cap = min(cap, self._beyond(b, cap, w))
             out.append((b, s_b, cap, gate))
@@ -234,7 +241,7 @@ class Constraints:
             return True
         if cands[-1][3] and not self.is_stop(last):
             if cands[-1][2] <= 0.0:
-                return True  # the 24th counted as a stop: it rises as the list moves on
+                return True  # rest behind no stop (a cap of 0): a later list may raise it
             # cached: `_collect` just asked for it with g's entry cap (the result depends on
             # the cap: a review found a chain for cap 0, cached under g, read back for its
             # entry cap, which left out every feed drop behind g: 19 mm/s in a 1 mm/s block)
@@ -253,20 +260,34 @@ class Constraints:
 
     def _target_cap(self, cands: list[tuple[int, float, float, bool]], i: int) -> float:
         """The velocity to plan for at candidate i (zero acceleration there): its cap, lowered
-        so that the later candidates in the list stay reachable from it."""
-        e = cands[-1][2]
+        so that the later candidates in the list stay reachable from it. They lie in one run
+        up to its end (the list's last, a run boundary, a stop or the window's end, with the
+        window end's floor after it): one brake passes any number of caps inside a run, with
+        zero acceleration only at its end, so each later candidate is a brake of its own from
+        i (known deviation 8 of docs/geo-core.md: composed link by link, zero acceleration at
+        every cap, CAM seed 41 passed boundary 70 at 44.5 for 47.2 mm/s). Braking toward the
+        lowest of them from i passes every higher one no later than the brake to that one
+        (the same jerk phase first, its ramp out later), so the least over them keeps all."""
+        s_i = cands[i][1]
+        e = cands[i][2]
         is_open = self._chain_open(cands)
-        own = False  # e is the next candidate's own cap: no later window raises it
-        for k in range(len(cands) - 2, i - 1, -1):
-            _, sk, ck, gate = cands[k]
-            bn, sn, _, _ = cands[k + 1]
-            up = self._link(e, sk, bn, sn, is_open and not own)
-            # (not a run boundary's or the window end's entry: its cap is lowered for what
-            # lies after it, which a later window raises; the review's rest at w below its
-            # floor entry read as own took rest's exact reach, the rule deviation 5 replaced)
-            own = ck <= up and not gate
-            e = min(ck, up)
+        for k in range(i + 1, len(cands)):
+            bk, sk, ck, gate = cands[k]
+            # a cap inside the run is its own (no later window raises it): the exact reach; the
+            # run's end is lowered for what lies after it, which a later window may raise
+            e = min(e, self._link(ck, s_i, bk, sk, is_open and gate))
         return e
+
+    def _binding(self, cands: list[tuple[int, float, float, bool]], i: int, e: float) -> int:
+        """The first candidate after i whose link alone gives i's target e (`_target_cap`),
+        -1 where none does (e is i's own cap)."""
+        is_open = self._chain_open(cands)
+        s_i = cands[i][1]
+        for k in range(i + 1, len(cands)):
+            bk, sk, ck, gate = cands[k]
+            if self._link(ck, s_i, bk, sk, is_open and gate) <= e:
+                return k
+        return -1
 
     def _beyond(self, g: int, cap: float, w: int) -> float:
         """Velocity at run boundary g (zero acceleration) from which every constraint after it
@@ -297,10 +318,11 @@ class Constraints:
     def _chain(self, g: int, cap: float, w: int, limit: int) -> tuple[float, bool, bool]:
         """(`_beyond`'s velocity at g, whether the chain is open, whether it was cut) over at
         most `limit` links after g, the last counting as a stop. A constraint without zero
-        acceleration that a lower cap before it keeps (g's own cap first) is not a link."""
+        acceleration that a lower cap before it keeps (g's own cap first) is not a link. The
+        links compose as in `_target_cap`: from each run boundary (g first), a brake of its
+        own to every cap inside its run and to the run's end, at that end's value."""
         tb = self.tb
-        s_g = tb.s[g]
-        chain: list[tuple[float, float, int]] = []
+        chain: list[tuple[float, float, int, bool]] = []
         low = self._low = cap
         cut = False
         for b in self._ahead(g + 1, w, True):  # leaping over those it keeps
@@ -308,29 +330,40 @@ class Constraints:
             if not gate and c >= low:
                 continue
             low = self._low = min(low, c)
-            chain.append((tb.s[b], c, b))
+            chain.append((tb.s[b], c, b, gate))
             if stop or len(chain) == limit:
                 cut = not stop
-                chain[-1] = (tb.s[b], 0.0, b)
+                chain[-1] = (tb.s[b], 0.0, b, True)
                 break
         # open: the chain ends at the window's end or is cut, not at a stop of the program: its
         # end may rise as the window moves on, and with a jerk limit a higher end velocity is
         # not always reachable from where a lower one is (`reach_velocity_any_above`), so every
-        # link keeps every higher end reachable (wide seed 146: 162's cap fell from 261.9 to
-        # 259.8 mm/s as the window moved from 189 to 190; the path, planned for the first, went
-        # on above every cap after it and came to near rest at 189 for a corner it could no
-        # longer get down to)
+        # run's end keeps every higher end reachable (wide seed 146: 162's cap fell from 261.9
+        # to 259.8 mm/s as the window moved from 189 to 190; the path, planned for the first,
+        # went on above every cap after it and came to near rest at 189 for a corner it could
+        # no longer get down to)
         is_open = bool(chain) and not self.is_stop(chain[-1][2])
-        e = INF
-        for i in range(len(chain) - 1, -1, -1):
-            s_i, c_i, b_i = chain[i]
-            # a link held at its own cap keeps it however the window moves on: the exact
-            # reach from it (wide seed 768: a 0.107 mm/s corner a block on, 69.98 mm/s where
+        end: tuple[float, float, int, bool] | None = None  # the next run's end: (s, value, b, open)
+        inside: list[tuple[float, float, int]] = []  # the caps before it, after the next start
+        for i in range(len(chain) - 1, -2, -1):
+            if i >= 0 and not chain[i][3]:
+                inside.append(chain[i][:3])
+                continue
+            s_start = chain[i][0] if i >= 0 else tb.s[g]
+            e = INF
+            for s_k, c_k, b_k in inside:  # their own caps: the exact reach
+                e = min(e, self._link(c_k, s_start, b_k, s_k, False))
+            if end is not None:
+                e = min(e, self._link(end[1], s_start, end[2], end[0], end[3]))
+            if i < 0:
+                return e, is_open, cut
+            s_i, c_i, b_i, _ = chain[i]
+            # a run's end held at its own cap keeps it however the window moves on: the exact
+            # reach to it (wide seed 768: a 0.107 mm/s corner a block on, 69.98 mm/s where
             # every higher end kept reachable gave 66.16)
             own = c_i <= e and i < len(chain) - 1
-            s_prev = chain[i - 1][0] if i > 0 else s_g
-            e = self._link(min(c_i, e), s_prev, b_i, s_i, is_open and not own)
-        return e, is_open, cut
+            end, inside = (s_i, min(c_i, e), b_i, is_open and not own), []
+        return INF, is_open, cut  # not reached: the loop returns at i = -1
 
     @staticmethod
     def _need(v: float, a: float, cap: float, gate: bool, a_max: float, j_max: float) -> float:
