@@ -159,6 +159,8 @@ class Tracker(Targets):
         if cands[i][2] > top * (1.0 + CAP_TOL):
             return 0.0
         b, s_c = cands[i][0], cands[i][1]
+        if not self.tb.gate[b]:
+            return 0.0  # a feed drop that stands for the ones after it (`_collect`): no gap rule
         over = self._hard(b, w)
         if i + 1 < len(cands):
             nb, ns = cands[i + 1][0], cands[i + 1][1]
