@@ -159,6 +159,8 @@ class Tracker(Targets):
         if cands[i][2] > top * (1.0 + CAP_TOL):
             return 0.0
         b, s_c = cands[i][0], cands[i][1]
+        if not self.tb.gate[b]:
+            return 0.0  # a feed drop that stands for the ones after it (`_collect`): no gap rule
         over = self._hard(b, w)
         if i + 1 < len(cands):
             nb, ns = cands[i + 1][0], cands[i + 1][1]
@@ -240,6 +242,7 @@ class Tracker(Targets):
         # candidate may be lost too, although the path could still keep it by braking through
         # this one (a feed drop 5 mm before a corner: stress seed 1777, lifting). Then the path
         # aims at the next candidate, passing this one as it brakes (only its hard cap kept).
+        first = cands[best_i]  # the candidate the shift, if any, passes first
         while not gate:
             own = cands[best_i][2]
             hard = min(tb.point_cap[b], tb.cap[b])
@@ -303,6 +306,18 @@ class Tracker(Targets):
             v_max = max(min(v_max, top), target, v, v_p)
         self._settle(s, v, a, v_p, s_c, target, cap, v_max, a_max, j_max, b, w, self._hard(b, w),
                      passed, held, event)  # fmt: skip
+        plan = self.plan
+        if (
+            shifted
+            and plan is not None
+            and plan.goal == b
+            and self._need(v, a, first[2], False, a_max, j_max) <= first[1] - s + SLACK_TOL
+            and self._passed_above(plan, [first], 1) >= 0
+        ):
+            # the shift gave up a feed cap the path could still get below braking, and its
+            # profile passes it above: a brake at once instead (known deviation 12 of
+            # docs/geo-core.md, CAM seed 0)
+            self._brake_through([first, (b, s_c, cap, gate)], 1, target, a_max, j_max, w)
 
     def _aim_through(
         self, cands: list[tuple[int, float, float, bool]], i: int, cap: float, ceiling: float,
@@ -326,7 +341,6 @@ class Tracker(Targets):
             k, e = nk, self._target_cap(cands, nk)
             if cands[k][3] or e >= cands[k][2] * (1.0 - CAP_TOL):
                 break
-        far, e_far = k, e
         s, v, a = self.s, self.v, self.a
         v_p = projected_velocity(v, a, j_max)
         errors, last, soft, prev = self.errors, self.last_error, self._soft_from, self.plan
@@ -353,7 +367,7 @@ class Tracker(Targets):
             e = self._target_cap(cands, k)
         self.plan = prev
         self.errors, self.last_error, self._soft_from = errors, last, soft
-        return far > i and self._brake_through(cands, far, e_far, a_max, j_max, w)
+        return False
 
     def _brake_through(
         self, cands: list[tuple[int, float, float, bool]], k: int, e: float, a_max: float,

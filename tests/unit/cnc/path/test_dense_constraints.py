@@ -20,6 +20,7 @@ from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.path.constraints import MAX_CANDIDATES
 from liftd.cnc.path.table import build_table
 from liftd.cnc.path.tracker import Tracker
+from liftd.cnc.path.velocity import brake_reach
 from liftd.cnc.plc import Schedule, parse_override_spec
 from tests.support.cam_cases import cam_scenario
 from tests.support.cam_runs import apart, check, core_time
@@ -232,3 +233,24 @@ def test_a_feed_falling_block_by_block_brakes_through_more_caps_than_a_step_plan
     assert bound <= t_core <= over * bound
     _, hard, _, _ = check(Scenario(0, ch, text, Schedule()))
     assert hard == []
+
+
+def test_the_candidate_that_stands_for_the_rest_passes_no_feed_cap_above() -> None:
+    """The 24th of more falling caps within one brake is listed with zero acceleration there,
+    as a run boundary is (`Constraints._collect`), but it is a feed drop: the jerk gap's rule
+    that lets a run boundary's own cap be passed above after an override drop
+    (`Tracker._gap_over`) does not apply to it (a feed cap passed above is an overrun)."""
+    task = GeoTask(shipped(), falling(0.2, 60000, 0.96, 60))
+    tb = task.prog.table
+    tr = Tracker(tb, 200)
+    tr.ov = 0.4
+    k = max(range(tb.n), key=lambda i: tb.s[i + 1] - tb.s[i])  # the 20 mm line
+    v = tb.ceiling(k, 1.0)  # its feed before the drop to 40 %
+    cands = tr._collect(tb.s[k + 1] - 1e-3, k, brake_reach(v, 0.0, 10.0, 500.0) + 0.05)
+    assert len(cands) == MAX_CANDIDATES
+    last, s_last, cap, gate = cands[-1]
+    assert gate and not tb.gate[last]  # listed as a run boundary, a feed drop in the table
+    assert tr._gap_over(cands, len(cands) - 1, cap, tr.window_end) == 0.0
+    run_end = next(b for b in range(last, tb.n) if tb.gate[b])
+    real = [(run_end, tb.s[run_end], tb.entry_cap(run_end, 0.4), True)]
+    assert tr._gap_over(real, 0, real[0][2], tr.window_end) > 0.0  # a run boundary's: its hard cap

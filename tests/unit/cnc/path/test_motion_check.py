@@ -11,6 +11,8 @@ from collections.abc import Callable
 
 from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.params import ChannelParams
+from tests.support.cam_cases import cam_scenario
+from tests.support.cam_runs import check
 from tests.support.motion_check import Expected, check_motion
 from tests.support.motion_rules import PathRules, Sample
 from tests.unit.cnc.path.test_no_invented_stops import shipped
@@ -146,3 +148,14 @@ def test_a_brake_longer_than_the_window_is_checked() -> None:
     found = check_motion(task.interp.program, task.interp.table, 3, ch.cycle_time, samples)
     braking = [f for f in found if 0.1 < float(f.split("t=")[1].split(" s")[0]) <= 0.18]
     assert braking, found
+
+
+def test_the_forward_pass_goes_through_the_caps_it_passes() -> None:
+    """CAM seed 244 (override 165 %): from run boundary 59 at 53.5 mm/s the path accelerates
+    through a feed rise 1 mm on (F3600 × 1.65 = 99.0 mm/s before it, F12173 after), crossing
+    it at 93.3 mm/s and 2.4 m/s², and reaches run boundary 67, 3 mm after the rise, at 172.8.
+    The forward pass from boundary 59 alone expected 188.1 there, a motion that passes the
+    rise at 105 mm/s, above its cap; from the cap (zero acceleration there, as the backward
+    pass takes each cap) 163 are reachable. No finding, and the run has no other problem."""
+    _, hard, slow, errors = check(cam_scenario(244))
+    assert (hard, slow, errors) == ([], [], 0)
