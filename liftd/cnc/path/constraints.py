@@ -278,17 +278,6 @@ class Constraints:
             e = min(e, self._link(ck, s_i, bk, sk, is_open and gate))
         return e
 
-    def _binding(self, cands: list[tuple[int, float, float, bool]], i: int, e: float) -> int:
-        """The first candidate after i whose link alone gives i's target e (`_target_cap`),
-        -1 where none does (e is i's own cap)."""
-        is_open = self._chain_open(cands)
-        s_i = cands[i][1]
-        for k in range(i + 1, len(cands)):
-            bk, sk, ck, gate = cands[k]
-            if self._link(ck, s_i, bk, sk, is_open and gate) <= e:
-                return k
-        return -1
-
     def _beyond(self, g: int, cap: float, w: int) -> float:
         """Velocity at run boundary g (zero acceleration) from which every constraint after it
         up to the window end stays reachable. Braking does not compose across run boundaries
