@@ -16,8 +16,8 @@ only when nothing else is accepted.
 
 from __future__ import annotations
 
-from liftd.cnc.path.constraints import CAP_TOL, SLACK_TOL, V_ROUND, Constraints
-from liftd.cnc.path.plan import BRAKE, EPS_S, Plan
+from liftd.cnc.path.constraints import CAP_TOL, GATE_TOL, SLACK_TOL, V_ROUND, Constraints
+from liftd.cnc.path.plan import BRAKE, CRUISE, EPS_S, Plan
 from liftd.cnc.path.table import PathTable
 from liftd.cnc.path.velocity import (
     brake_distance,
@@ -28,6 +28,7 @@ from liftd.cnc.path.velocity import (
 )
 from liftd.cnc.ruckig1 import Evaluator, Phases, ProfileError, Ruckig1
 
+BRAKE_CRUISE = 0.25  # share of the way `Targets._brake_through`'s cruise may take at most
 DIP_TOL = 1e-4  # relative: a profile this much below the lower of its ends' velocities dips
 
 
@@ -308,3 +309,50 @@ class Targets(Constraints):
         """Last resort: brake to rest from the path's state (never expected; counted)."""
         traj = self.calc.velocity(self.s, self.v, self.a, 0.0, a_max, j_max)
         self.plan = Plan(traj, self.t, BRAKE, w, None, 0.0)
+
+    def _brake_through(
+        self, cands: list[tuple[int, float, float, bool]], k: int, e: float, a_max: float,
+        j_max: float, w: int,
+    ) -> bool:  # fmt: skip
+        """A brake at once to e, candidate k's target, then a cruise at it (ruckig's velocity
+        interface), kept where it gets there before k and passes every candidate before k
+        below its cap: braking toward the lowest, it is below the brake toward each of them
+        (`Constraints._target_cap`), which keeps that one where its own cap is in reach. Where
+        the time-optimal profile toward k holds the velocity and passes a feed drop above its
+        cap (CAM seed 0: boundary 52 at 34.19 for 33.09 mm/s 0.2 mm before a run boundary of
+        25.82, its target at zero acceleration out of reach, its cap not; the shift of
+        `_replan` dropped that cap, known deviation 12 of docs/geo-core.md). Slower than a
+        late brake, never above a cap. Not toward rest or the window's end (a cruise at 0 is
+        never re-planned: a review found the path stand still for good before an M00), and
+        only where the cruise after the brake takes at most BRAKE_CRUISE of the way (one to a
+        corner of 0.43 mm/s 4.8 mm early crawled there, 12 % of the program's time)."""
+        b, s_k = cands[k][0], cands[k][1]
+        if e <= 0.0 or self.is_stop(b) or b == w:
+            return False
+        try:
+            traj = self.calc.velocity(self.s, self.v, self.a, e, a_max, j_max)
+        except ProfileError:
+            return False
+        plan = Plan(traj, self.t, CRUISE, w, None, e)
+        if (
+            plan.p_end > s_k
+            or s_k - plan.p_end > BRAKE_CRUISE * (s_k - self.s)
+            or self._passed_above(plan, cands, k) >= 0
+        ):
+            return False
+        plan.serves, plan.soft_from = cands[k][0], cands[0][0]
+        self.plan, self._soft_from = plan, cands[0][0]
+        return True
+
+    @staticmethod
+    def _passed_above(plan: Plan, cands: list[tuple[int, float, float, bool]], k: int) -> int:
+        """The first of candidates 0 … k − 1 that `plan` passes above its cap (or, the first,
+        not braking: it could speed up after it), -1 where none."""
+        speeds = plan.speeds_at([cands[j][1] for j in range(k)])
+        for j in range(k):
+            vj, aj = speeds[j]
+            if cands[j][3] or vj > cands[j][2] * (1.0 + CAP_TOL) + V_ROUND:
+                return j
+            if j == 0 and aj > GATE_TOL:
+                return j
+        return -1
