@@ -183,44 +183,6 @@ class Phases:
         return _integrate(t, self.p[i], self.v[i], self.a[i], self.j[i])
 
 
-def speeds_at(ph: Phases, positions: list[float]) -> list[tuple[float, float]]:
-    """(v, a) where the profile first reaches each of `positions` (ascending), in one pass over
-    its pieces, by bisection within the piece (native in the compiled core: the binding's
-    position search, ~1.2 µs an evaluation and off at times, `first_time_at`, made the
-    tracker's check of a profile against two dozen caps cost ~1 ms). Past the profile's end,
-    its end state."""
-    pieces: list[tuple[float, float, float, float, float]] = []
-    if ph.b_dur > 0.0:
-        pieces.append((ph.b_t0, ph.b_p[0], ph.b_v[0], ph.b_a[0], ph.b_j[0]))
-        pieces.append((ph.b_dur - ph.b_t0, ph.b_p[1], ph.b_v[1], ph.b_a[1], ph.b_j[1]))
-    start = 0.0
-    for i in range(7):
-        pieces.append((ph.t_sum[i] - start, ph.p[i], ph.v[i], ph.a[i], ph.j[i]))
-        start = ph.t_sum[i]
-    out: list[tuple[float, float]] = []
-    k = 0
-    for s in positions:
-        while k < len(pieces):
-            dur, p0, v0, a0, j = pieces[k]
-            if _integrate(dur, p0, v0, a0, j)[0] >= s:
-                break
-            k += 1
-        if k == len(pieces):
-            out.append((ph.v[7], ph.a[7]))
-            continue
-        dur, p0, v0, a0, j = pieces[k]
-        lo, hi = 0.0, dur
-        for _ in range(52):
-            mid = 0.5 * (lo + hi)
-            if _integrate(mid, p0, v0, a0, j)[0] < s:
-                lo = mid
-            else:
-                hi = mid
-        _, v, a = _integrate(hi, p0, v0, a0, j)
-        out.append((v, a))
-    return out
-
-
 def _integrate(t: float, p0: float, v0: float, a0: float, j: float) -> tuple[float, float, float]:
     return (
         p0 + t * (v0 + t * (a0 / 2 + t * j / 6)),

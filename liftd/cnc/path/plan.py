@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from ruckig import Trajectory
 
-from liftd.cnc.ruckig1 import Evaluator, first_time_at, speeds_at
+from liftd.cnc.ruckig1 import Evaluator, first_time_at
 
 EPS_S = 1e-12  # m: a boundary counts as reached within this distance
 CRUISE = -1
@@ -78,15 +78,6 @@ class Plan:
         if local >= self.dur:
             return self.p_end + self.v_end * (local - self.dur), self.v_end, 0.0
         return self.ev.at(max(0.0, local))
-
-    def speeds_at(self, positions: list[float]) -> list[tuple[float, float]]:
-        """(v, a) where the plan first reaches each of `positions` (ascending; its end state
-        past its end)."""
-        ev = self.ev
-        ev.prepare()
-        ph = ev.phases
-        assert ph is not None
-        return speeds_at(ph, positions)
 
     def time_at(self, s: float, t_default: float) -> float:
         """Absolute time the plan first reaches position s (t_default if it never does)."""

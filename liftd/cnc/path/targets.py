@@ -16,7 +16,7 @@ only when nothing else is accepted.
 
 from __future__ import annotations
 
-from liftd.cnc.path.constraints import CAP_TOL, GATE_TOL, SLACK_TOL, V_ROUND, Constraints
+from liftd.cnc.path.constraints import CAP_TOL, GATE_TOL, INF, SLACK_TOL, V_ROUND, Constraints
 from liftd.cnc.path.plan import BRAKE, CRUISE, EPS_S, Plan
 from liftd.cnc.path.table import PathTable
 from liftd.cnc.path.velocity import (
@@ -348,9 +348,8 @@ class Targets(Constraints):
     def _passed_above(plan: Plan, cands: list[tuple[int, float, float, bool]], k: int) -> int:
         """The first of candidates 0 … k − 1 that `plan` passes above its cap (or, the first,
         not braking: it could speed up after it), -1 where none."""
-        speeds = plan.speeds_at([cands[j][1] for j in range(k)])
         for j in range(k):
-            vj, aj = speeds[j]
+            _, vj, aj = plan.at(plan.time_at(cands[j][1], INF))
             if cands[j][3] or vj > cands[j][2] * (1.0 + CAP_TOL) + V_ROUND:
                 return j
             if j == 0 and aj > GATE_TOL:
