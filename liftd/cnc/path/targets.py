@@ -16,7 +16,15 @@ only when nothing else is accepted.
 
 from __future__ import annotations
 
-from liftd.cnc.path.constraints import CAP_TOL, GATE_TOL, INF, SLACK_TOL, V_ROUND, Constraints
+from liftd.cnc.path.constraints import (
+    CAP_TOL,
+    GATE_TOL,
+    INF,
+    SLACK_MARGIN,
+    SLACK_TOL,
+    V_ROUND,
+    Constraints,
+)
 from liftd.cnc.path.plan import BRAKE, CRUISE, EPS_S, Plan
 from liftd.cnc.path.table import PathTable
 from liftd.cnc.path.velocity import (
@@ -28,6 +36,7 @@ from liftd.cnc.path.velocity import (
 )
 from liftd.cnc.ruckig1 import Evaluator, Phases, ProfileError, Ruckig1
 
+BISECT_STEPS = 24  # `Targets._brake_first`: the velocity it brakes to, within 2^-24 of the ceiling
 BRAKE_CRUISE = 0.25  # share of the way `Targets._brake_through`'s cruise may take at most
 DIP_TOL = 1e-4  # relative: a profile this much below the lower of its ends' velocities dips
 
@@ -309,6 +318,91 @@ class Targets(Constraints):
         """Last resort: brake to rest from the path's state (never expected; counted)."""
         traj = self.calc.velocity(self.s, self.v, self.a, 0.0, a_max, j_max)
         self.plan = Plan(traj, self.t, BRAKE, w, None, 0.0)
+
+    def _brake_first(
+        self, cands: list[tuple[int, float, float, bool]], ceiling: float, a_max: float,
+        j_max: float, w: int,
+    ) -> bool:  # fmt: skip
+        """Above a lowered ceiling (an override drop): a brake at once down to the ceiling,
+        then a cruise at it (ruckig's velocity interface), where that keeps every candidate
+        ahead (`_first_keeps`); else to the highest velocity below it that does (a stop or a
+        low cap near ahead: narrow seed 426, override 100 → 70 % at 100 mm/s 1.8 mm before a
+        stop). The steps re-plan toward the first candidate whose slack runs out, as from any
+        cruise. A CNC brakes from the velocity it has at once; the time-optimal profile toward
+        the binding candidate holds that velocity above F × override and brakes late (known
+        deviation 10 of docs/geo-core.md: wide seed 79, 150 mm/s for 1.4 ms after an override
+        drop to 10 mm/s). Where none keeps them (a feed cap the path can no longer get below,
+        a run boundary inside the brake) the target profile stays (False): one that cannot
+        get below a cap brakes at once toward it anyway."""
+        e = ceiling
+        if not self._first_keeps(cands, e, a_max, j_max):
+            # never below the lowest cap ahead (with a jerk limit a brake to a lower velocity
+            # can be the shorter: CAM seed 956, on the exact brake to 2.68 mm/s at the drop, a
+            # brake to 2.45 fitted and dipped), never a cruise at rest
+            good = min(c[2] for c in cands)
+            if not self._first_keeps(cands, good, a_max, j_max):
+                return False
+            bad = ceiling
+            for _ in range(BISECT_STEPS):
+                mid = 0.5 * (good + bad)
+                if self._first_keeps(cands, mid, a_max, j_max):
+                    good = mid
+                else:
+                    bad = mid
+            if good <= 0.0 or not self._first_keeps(cands, good, a_max, j_max):
+                return False
+            e = good
+        try:
+            traj = self.calc.velocity(self.s, self.v, self.a, e, a_max, j_max)
+        except ProfileError:
+            return False
+        self.plan = Plan(traj, self.t, CRUISE, w, None, e)
+        return True
+
+    def _brake_into(
+        self, cands: list[tuple[int, float, float, bool]], v_p: float, s_c: float,
+        target: float, ceiling: float, v_max: float, a_max: float, j_max: float, b: int,
+        w: int,
+    ) -> bool:  # fmt: skip
+        """Above a lowered ceiling, where the brake at once to it is not enough
+        (`_brake_first`): the target profile with ruckig's v_max at the ceiling, or lower, at
+        the lowest cap of the candidates before b that the path can still get down to with
+        zero acceleration there (a profile held at the ceiling passes them above); ruckig then
+        brakes from outside its limits at once (its brake profile) before the profile to the
+        target. After an override drop to 40 % at 360 mm/s over 0.1 mm blocks whose feed
+        caps it could no longer get down to, the profile with v_max = v held 360 mm/s for
+        22 ms. Kept where ruckig accepts it and it does not dip below the target; else (False)
+        the target profile with v_max = v stays (known deviation 10 of docs/geo-core.md)."""
+        s, v, a = self.s, self.v, self.a
+        top = ceiling
+        for _, s_j, cap, _ in cands:
+            if s_j < s_c and cap < top and brake_distance(v, a, cap, a_max, j_max) <= s_j - s:
+                top = cap
+        top = max(top, target)
+        if top >= v_max or not self._try_target(s, v, a, s_c, target, top, a_max, j_max, b, w):
+            return False
+        return not self._dips(min(v, v_p, target))
+
+    def _first_keeps(
+        self, cands: list[tuple[int, float, float, bool]], e: float, a_max: float, j_max: float
+    ) -> bool:
+        """The brake at once from the path's state to e (zero acceleration there) and a cruise
+        at e keep every candidate: a run boundary or stop after the brake's end with room to
+        get down to its cap from e; a feed cap the brake passes below it (it reaches any
+        velocity sooner than the brake to it with zero acceleration there), or one after it
+        that the path gets down to from e. Within SLACK_MARGIN, as `_violated` reads them."""
+        s, v, a = self.s, self.v, self.a
+        d_e = brake_distance(v, a, e, a_max, j_max)
+        for _, s_b, cap, gate in cands:
+            room = s_b - s
+            if room - d_e < SLACK_MARGIN:
+                if gate or brake_distance(v, a, cap, a_max, j_max) > room - SLACK_MARGIN:
+                    return False
+            elif (cap < e or gate) and (
+                room - d_e - self._need(e, 0.0, cap, gate, a_max, j_max) < SLACK_MARGIN
+            ):
+                return False
+        return True
 
     def _brake_through(
         self, cands: list[tuple[int, float, float, bool]], k: int, e: float, a_max: float,
