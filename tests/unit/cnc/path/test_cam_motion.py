@@ -9,6 +9,7 @@ deviations; the bench counts them over thousands of runs."""
 
 from __future__ import annotations
 
+import itertools
 import math
 import random
 import re
@@ -17,10 +18,13 @@ import pytest
 
 from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.path.velocity import ramp_distance, reach_from
+from liftd.cnc.plc import Schedule, SimPlc, parse_override_spec
+from liftd.sim.simulate import run_cycles
 from tests.support.cam_cases import X_RANGE, Y_RANGE, cam_scenario
-from tests.support.cam_runs import apart, check, core_time, time_limit
+from tests.support.cam_runs import check, core_time, time_limit
 from tests.support.motion_check import reach_from as check_reach_from
-from tests.support.scenarios import describe, scenario, wide_scenario
+from tests.support.scenarios import Scenario, describe, scenario, wide_scenario
+from tests.unit.cnc.path.test_no_invented_stops import shipped
 
 # every 17th seed of the first 340: a spread over look-ahead sizes, cycle times and shapes
 CAM_SEEDS = list(range(0, 340, 17))
@@ -34,19 +38,32 @@ def test_cam_shaped_programs_rest_only_where_a_rule_says(seed: int) -> None:
     assert hard == [] and errors == 0, (hard, describe(sc))
 
 
-# known deviation 10 of docs/geo-core.md (the brake from above a lowered ceiling holds the
-# velocity first): override 150 → 10 % at 150 mm/s, the path holds it 1.4 ms before braking
-PAUSED = {79: ["overrun: the brake from above the ceiling paused at 150.0000 mm/s in segment 0 "
-               "(line 1), ceiling 10.0000 (t=1.3730 s)"]}  # fmt: skip
-
-
 @pytest.mark.parametrize("seed", WIDE_SEEDS)
 def test_random_lift_runs_rest_only_where_a_rule_says(seed: int) -> None:
     sc = wide_scenario(seed)
     _, hard, _, errors = check(sc)
-    over, other = apart(hard)
-    assert other == [] and errors == 0, (hard, describe(sc))
-    assert over == PAUSED.get(seed, []), (over, describe(sc))
+    assert hard == [] and errors == 0, (hard, describe(sc))
+
+
+def test_an_override_drop_brakes_at_once() -> None:
+    """Wide seed 79: override 150 → 10 % at 150 mm/s. The path held 150 mm/s for 1.4 ms
+    (the time-optimal profile toward the next constraint) before it braked: known deviation
+    10 of docs/geo-core.md until `Targets._brake_first`. The check fails a brake that pauses
+    above the new ceiling; the velocity falls in the cycle after the drop."""
+    sc = wide_scenario(79)
+    task = GeoTask(sc.channel, sc.text)
+    limit = time_limit(task.prog.table, sc)
+    drop, ov = sc.schedule.override[1]
+    assert ov == 0.1
+    seen: list[tuple[float, float, float]] = []
+    for snap in run_cycles(task, SimPlc(0.02), sc.schedule, sc.channel.cycle_time, limit):
+        if drop <= snap.t <= drop + 0.004:
+            seen.append((snap.t, task.interp.v, task.interp.a))
+    assert len(seen) >= 3
+    assert all(a < 0.0 for _, _, a in seen), seen
+    assert all(v2 < v1 for (_, v1, _), (_, v2, _) in itertools.pairwise(seen)), seen
+    _, hard, _, errors = check(sc)
+    assert hard == [] and errors == 0, (hard, describe(sc))
 
 
 @pytest.mark.parametrize("seed", [285, 181])
@@ -199,3 +216,24 @@ def test_the_checks_reach_from_a_state_matches_the_cores_closed_form() -> None:
             continue
         got = check_reach_from(v, a, length, 8.0, 400.0, 10.0)
         assert got == pytest.approx(reach_from(v, a, length, 8.0, 400.0), rel=1e-9)
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "G01 X0 Y0 F600\nG01 X50 F12000\nG01 Y50\nM30\n",  # a corner
+        "G01 X0 Y0 F600\nG01 X50 F12000\nM00\nG01 X100\nM30\n",  # a programmed stop
+        "G01 X0 Y0 F600\nG01 X50 F12000\nG01 X100 F1200\nM30\n",  # a feed drop
+    ],
+)
+@pytest.mark.parametrize("override", [10, 70])
+def test_an_override_drop_before_a_slowdown_brakes_at_once(text: str, override: int) -> None:
+    """200 mm/s on a 50 mm line toward a corner, an M00 or a feed drop; the override drops
+    while the path is 1–4 mm before it. The check fails a brake that pauses above the new
+    ceiling: with the time-optimal profile toward the slowdown ahead the path held 200 mm/s
+    for a cycle first wherever the drop came at 0.248 s (known deviation 10 of
+    docs/geo-core.md); a CNC brakes from the velocity it has at once."""
+    for i in range(9):
+        sched = Schedule(tuple(parse_override_spec(f"{0.240 + 0.002 * i:.3f}:{override}")), ())
+        _, hard, slow, errors = check(Scenario(0, shipped(), text, sched))
+        assert hard == [] and errors == 0 and slow == [], (hard, slow, sched)
