@@ -438,6 +438,26 @@ class Targets(Constraints):
         self.plan, self._soft_from = plan, cands[0][0]
         return True
 
+    def _keep_below(
+        self, passed: Plan | None, first: tuple[int, float, float, bool], b: int, w: int
+    ) -> bool:
+        """The shift's new profile toward b passes `first` above its feed cap, and the one that
+        brought the path to the boundary it just passed, toward the same goal, passes it below:
+        that one is kept (True). As the window moves on, the goal's target rises and each
+        re-plan brakes later; one that gives up a cap the profile in hand still keeps is the
+        step that loses it (known deviation 12 of docs/geo-core.md, CAM seed 956: boundary 93,
+        114.8 mm/s, passed at 113.8 by the profile in hand, at 120.9 by the new one)."""
+        if (
+            passed is None
+            or passed.goal != b
+            or passed.t0 > self.t
+            or self._passed_above(passed, [first], 1) >= 0
+        ):
+            return False
+        passed.window = w
+        self.plan = passed
+        return True
+
     @staticmethod
     def _passed_above(plan: Plan, cands: list[tuple[int, float, float, bool]], k: int) -> int:
         """The first of candidates 0 … k − 1 that `plan` passes above its cap (or, the first,

@@ -317,6 +317,7 @@ class Tracker(Targets):
             and plan is not None
             and plan.goal == b
             and self._passed_above(plan, [first], 1) >= 0
+            and not self._keep_below(passed, first, b, w)
             and self._need(v, a, first[2], False, a_max, j_max) <= first[1] - s + SLACK_TOL
         ):
             # the shift gave up a feed cap the path could still get below braking, and its

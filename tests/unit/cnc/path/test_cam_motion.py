@@ -237,3 +237,21 @@ def test_an_override_drop_before_a_slowdown_brakes_at_once(text: str, override: 
         sched = Schedule(tuple(parse_override_spec(f"{0.240 + 0.002 * i:.3f}:{override}")), ())
         _, hard, slow, errors = check(Scenario(0, shipped(), text, sched))
         assert hard == [] and errors == 0 and slow == [], (hard, slow, sched)
+
+
+@pytest.mark.parametrize(
+    ("kind", "seed"),
+    [("narrow", 201), ("narrow", 426), ("narrow", 967), ("wide", 131), ("wide", 157),
+     ("cam", 268), ("cam", 665), ("cam", 876), ("narrow", 525), ("cam", 956)],
+)  # fmt: skip
+def test_the_overruns_the_benches_found_are_gone(kind: str, seed: int) -> None:
+    """The runs bench/bench_cam_motion.py failed for an overrun since the sixth round: the
+    brake from above a lowered ceiling held the velocity first (deviation 10 of
+    docs/geo-core.md: narrow 201 431.6 for 236.5 mm/s, 426 100 for 70.0, 967; wide 131, 157;
+    CAM 268, 665, 876), a feed drop crossed accelerating was ramped out above its feed
+    (deviation 11: narrow 525, 96.86 for 96.69), a re-plan gave up a feed cap the profile in
+    hand kept (deviation 12: CAM 956, 120.9 for 114.8 at boundary 93)."""
+    make = {"cam": cam_scenario, "wide": wide_scenario, "narrow": scenario}[kind]
+    sc = make(seed)
+    _, hard, _, errors = check(sc)
+    assert hard == [] and errors == 0, (hard, describe(sc))
