@@ -165,3 +165,16 @@ def test_an_event_inside_the_exact_brake_plans_that_brake(case: str) -> None:
     _, hard, slow, errors = check(sc)
     assert hard == [] and errors == 0, (hard, describe(sc))
     assert not [f for f in slow if f.startswith("dip")], (slow, describe(sc))
+
+
+def test_the_lowest_velocity_of_a_profile_that_brakes_into_its_limits_first() -> None:
+    """From 150 mm/s and −1 m/s² with v_max 100 mm/s, ruckig brakes into its limits first with
+    a brake of one piece; the second piece's velocity, never written, reads 0, and the
+    lowest velocity read 0 where the profile never goes below its target of 10 mm/s (a review
+    found: 242 of 266 profiles of `Targets._brake_into` refused as dips that were none)."""
+    traj = Ruckig1().position(0.0, 0.15, -1.0, 0.01, 0.01, 0.1, 8.0, 400.0)
+    ph = Phases(traj)
+    assert ph.b_dur > 0.0 and ph.b_t0 == ph.b_dur  # a brake of one piece
+    sampled = min(float(traj.at_time(traj.duration * k / 2000)[1][0]) for k in range(2001))
+    assert lowest_velocity(ph) == pytest.approx(sampled, rel=1e-6)
+    assert lowest_velocity(ph) >= 0.01 * (1.0 - 1e-9)
