@@ -25,7 +25,7 @@ from liftd.cnc.path.constraints import (
     V_ROUND,
     Constraints,
 )
-from liftd.cnc.path.plan import BRAKE, CRUISE, EPS_S, Plan
+from liftd.cnc.path.plan import BRAKE, CRUISE, EPS_S, SETTLE, Plan
 from liftd.cnc.path.table import PathTable
 from liftd.cnc.path.velocity import (
     brake_distance,
@@ -339,23 +339,24 @@ class Targets(Constraints):
         self, cands: list[tuple[int, float, float, bool]], ceiling: float, a_max: float,
         j_max: float, w: int,
     ) -> bool:  # fmt: skip
-        """Above a lowered ceiling (an override drop): a brake at once down to the ceiling,
-        then a cruise at it (ruckig's velocity interface), where that keeps every candidate
-        ahead (`_first_keeps`); else to the highest velocity below it that does (a stop or a
-        low cap near ahead: narrow seed 426, override 100 → 70 % at 100 mm/s 1.8 mm before a
-        stop). The steps re-plan toward the first candidate whose slack runs out, as from any
-        cruise. A CNC brakes from the velocity it has at once; the time-optimal profile toward
-        the binding candidate holds that velocity above F × override and brakes late (known
-        deviation 10 of docs/geo-core.md: wide seed 79, 150 mm/s for 1.4 ms after an override
-        drop to 10 mm/s). Where none keeps them (a feed cap the path can no longer get below,
-        a run boundary inside the brake) the target profile stays (False): one that cannot
-        get below a cap brakes at once toward it anyway."""
-        e = ceiling
+        """Above a lowered ceiling (an override drop): a brake at once (ruckig's velocity
+        interface) down to the ceiling, then a cruise at it, where that keeps every candidate
+        ahead (`_first_keeps`); the steps re-plan toward the first candidate whose slack runs
+        out, as from any cruise. A CNC brakes from the velocity it has at once; the
+        time-optimal profile toward the binding candidate holds that velocity above F ×
+        override and brakes late (known deviation 10 of docs/geo-core.md: wide seed 79, 150
+        mm/s for 1.4 ms after an override drop to 10 mm/s). Else the brake at once to the
+        highest velocity below the ceiling from which a cruise keeps them (a stop or a low
+        cap near ahead: narrow seed 426, override 100 → 70 % at 100 mm/s 1.8 mm before a
+        stop), re-planned where it ends (`SETTLE`: a cruise below the ceiling is never
+        re-planned as the window moves on, and crawled to the program's end, a review found),
+        never below the lowest cap ahead (with a jerk limit a brake to a lower velocity can be
+        the shorter: CAM seed 956, on the exact brake to 2.68 mm/s at the drop, a brake to
+        2.45 fitted and dipped). False where none keeps them (a feed cap it can no longer get
+        below, a run boundary inside the brake: `_brake_into`)."""
+        e, goal = ceiling, CRUISE
         if not self._first_keeps(cands, e, a_max, j_max):
-            # never below the lowest cap ahead (with a jerk limit a brake to a lower velocity
-            # can be the shorter: CAM seed 956, on the exact brake to 2.68 mm/s at the drop, a
-            # brake to 2.45 fitted and dipped), never a cruise at rest
-            good = min(c[2] for c in cands)
+            good = min((c[2] for c in cands if not self._moves_on(c)), default=0.0)
             if not self._first_keeps(cands, good, a_max, j_max):
                 return False
             bad = ceiling
@@ -365,14 +366,14 @@ class Targets(Constraints):
                     good = mid
                 else:
                     bad = mid
-            if good <= 0.0 or not self._first_keeps(cands, good, a_max, j_max):
-                return False
-            e = good
+            if good <= 0.0:
+                return False  # never a brake to rest where no stop is
+            e, goal = good, SETTLE
         try:
             traj = self.calc.velocity(self.s, self.v, self.a, e, a_max, j_max)
         except ProfileError:
             return False
-        self.plan = Plan(traj, self.t, CRUISE, w, None, e)
+        self.plan = Plan(traj, self.t, goal, w, None, e)
         return True
 
     def _brake_into(
@@ -397,7 +398,29 @@ class Targets(Constraints):
         top = max(top, target)
         if top >= v_max or not self._try_target(s, v, a, s_c, target, top, a_max, j_max, b, w):
             return False
-        return not self._dips(min(v, v_p, target))
+        if self._dips(min(v, v_p, target)):
+            return False
+        # from above its v_max the profile only brakes: ruckig's brake into its limits is not
+        # a brake to v_max with zero acceleration, and the profile after it can brake to rest
+        # and start again (a review found: override 100 → 30 % at 200 mm/s 5.1 mm before an
+        # M00, at rest 0.7 mm before it; a dip below a target of 0 is no dip)
+        ph = Phases(self.plan.traj) if self.plan is not None else None
+        return (
+            ph is not None
+            and max(ph.a) <= GATE_TOL
+            and (
+                ph.b_dur <= 0.0
+                or max(ph.b_a[0], ph.b_a[1] if ph.b_dur > ph.b_t0 else 0.0) <= GATE_TOL
+            )
+        )
+
+    def _moves_on(self, cand: tuple[int, float, float, bool]) -> bool:
+        """`cand` is the window's end (rest there, or its floor) where that is not a stop: the
+        window moves on with the path, block by block."""
+        w = self.window_end
+        return (
+            cand[0] == w and w < self.tb.n and not self.is_stop(w) and self._window_floor(w) > 0.0
+        )
 
     def _first_keeps(
         self, cands: list[tuple[int, float, float, bool]], e: float, a_max: float, j_max: float
@@ -406,10 +429,18 @@ class Targets(Constraints):
         at e keep every candidate: a run boundary or stop after the brake's end with room to
         get down to its cap from e; a feed cap the brake passes below it (it reaches any
         velocity sooner than the brake to it with zero acceleration there), or one after it
-        that the path gets down to from e. Within SLACK_MARGIN, as `_violated` reads them."""
+        that the path gets down to from e. Within SLACK_MARGIN, as `_violated` reads them.
+        Not the window's end where it is not a stop: it moves on with the path, and the steps
+        keep it reachable as from any cruise (`_violated`, a forced re-plan toward it); read
+        as fixed, rest or its floor there held the brake to 26 mm/s for a ceiling of 300 after
+        an override drop on a line of 0.1 mm blocks (look-ahead 120, 12 mm: the brake to the
+        ceiling took 6.2 of them, the window moving on by as much; a review found)."""
         s, v, a = self.s, self.v, self.a
         d_e = brake_distance(v, a, e, a_max, j_max)
-        for _, s_b, cap, gate in cands:
+        for c in cands:
+            if self._moves_on(c):
+                continue  # the window's end moves on: the steps keep it (`_violated`)
+            _, s_b, cap, gate = c
             room = s_b - s
             if room - d_e < SLACK_MARGIN:
                 if gate or brake_distance(v, a, cap, a_max, j_max) > room - SLACK_MARGIN:

@@ -304,7 +304,7 @@ class Tracker(Targets):
         if not (
             not self.hold
             and skip < 0
-            and (shifted or v_p > ceiling * (1.0 + CAP_TOL) + V_ROUND)
+            and v_p > ceiling * (1.0 + CAP_TOL) + V_ROUND
             and self._brake_into(
                 looked, v_p, s_c, target, min(ceiling, v_max), v_max, a_max, j_max, b, w
             )  # above a lowered ceiling: brake at once (deviation 10 of docs/geo-core.md)
