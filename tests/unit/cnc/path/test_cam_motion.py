@@ -18,6 +18,7 @@ import re
 import pytest
 
 from liftd.cnc.geo_task import GeoTask
+from liftd.cnc.params import LiftMethod
 from liftd.cnc.path.velocity import ramp_distance, reach_from
 from liftd.cnc.plc import Schedule, SimPlc, parse_override_spec
 from liftd.sim.simulate import run_cycles
@@ -315,3 +316,14 @@ def test_an_override_drop_5_mm_before_an_m00_brakes_into_it(drop: float) -> None
     for finding in slow:
         m = re.match(r"boundary 30 \(line 30\) at ([0-9.]+) mm/s, expected ([0-9.]+) ", finding)
         assert m is not None and float(m.group(1)) >= 0.85 * float(m.group(2)), slow
+
+
+def test_a_lift_range_s_lower_feed_with_a_run_boundary_1_um_ahead_does_not_hang() -> None:
+    """Path-based Lifting, wide seed 879: entering a range's reduced feed (27.5 mm/s) at 39.2
+    mm/s with a run boundary 1 µm ahead whose cap (42.3) is above it. The brake at once
+    looked for a velocity between that cap and the ceiling, planned a brake of no length to
+    the velocity the path had, re-planned at its end, again: `advance did not converge` 6
+    times (bench_lift_safety.py --wide … lifting)."""
+    sc = wide_scenario(879, LiftMethod.LIFTING)
+    _, hard, _, errors = check(sc)
+    assert hard == [] and errors == 0, (hard, describe(sc))
