@@ -53,7 +53,7 @@ def check(sc: Scenario) -> tuple[int, list[str], list[str], int]:
 
 def apart(hard: list[str]) -> tuple[list[str], list[str]]:
     """(the overruns, the other hard problems) of a run: tests whose run has a known overrun
-    (docs/geo-core.md, known deviations 10 to 12) assert it apart from everything else."""
+    (docs/geo-core.md, known deviation 10's remainder) assert it apart from everything else."""
     over = [p for p in hard if p.startswith("overrun")]
     return over, [p for p in hard if not p.startswith("overrun")]
 

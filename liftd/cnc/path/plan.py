@@ -12,6 +12,7 @@ from liftd.cnc.ruckig1 import Evaluator, first_time_at
 EPS_S = 1e-12  # m: a boundary counts as reached within this distance
 CRUISE = -1
 BRAKE = -2  # the last resort: to rest (counted as an error)
+SETTLE = -3  # a brake at once to a velocity below the ceiling, re-planned at its end
 
 
 class Crossing:
@@ -59,7 +60,7 @@ class Plan:
     ) -> None:
         self.traj = traj
         self.t0 = t0
-        self.goal = goal  # CRUISE, BRAKE or the target boundary
+        self.goal = goal  # CRUISE, BRAKE, SETTLE or the target boundary
         self.serves = goal  # the constraint boundary the profile keeps (-1 for none)
         # constraint boundaries from here up to the goal are passed above their feed caps (only
         # their hard caps are kept): a feed cap the path cannot get down to (an override drop)

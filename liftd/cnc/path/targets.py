@@ -16,8 +16,16 @@ only when nothing else is accepted.
 
 from __future__ import annotations
 
-from liftd.cnc.path.constraints import CAP_TOL, GATE_TOL, INF, SLACK_TOL, V_ROUND, Constraints
-from liftd.cnc.path.plan import BRAKE, CRUISE, EPS_S, Plan
+from liftd.cnc.path.constraints import (
+    CAP_TOL,
+    GATE_TOL,
+    INF,
+    SLACK_MARGIN,
+    SLACK_TOL,
+    V_ROUND,
+    Constraints,
+)
+from liftd.cnc.path.plan import BRAKE, CRUISE, EPS_S, SETTLE, Plan
 from liftd.cnc.path.table import PathTable
 from liftd.cnc.path.velocity import (
     brake_distance,
@@ -28,6 +36,7 @@ from liftd.cnc.path.velocity import (
 )
 from liftd.cnc.ruckig1 import Evaluator, Phases, ProfileError, Ruckig1
 
+BISECT_STEPS = 24  # `Targets._brake_first`: the velocity it brakes to, within 2^-24 of the ceiling
 BRAKE_CRUISE = 0.25  # share of the way `Targets._brake_through`'s cruise may take at most
 DIP_TOL = 1e-4  # relative: a profile this much below the lower of its ends' velocities dips
 
@@ -47,6 +56,8 @@ def lowest_velocity(ph: Phases) -> float:
     if ph.b_dur > 0.0:
         durs = (ph.b_t0, ph.b_dur - ph.b_t0)
         for i in range(2):
+            if durs[i] <= 0.0:
+                continue  # a brake of one piece: the second is all zeros (ruckig's BrakeProfile)
             low = min(low, ph.b_v[i])
             a, j = ph.b_a[i], ph.b_j[i]
             if a < 0.0 < j and -a / j < durs[i]:
@@ -197,6 +208,20 @@ class Targets(Constraints):
             kept.window = w
             self.plan = kept
             return
+        for kept in (passed, held):
+            if (
+                kept is not None
+                and kept.goal > b
+                and kept.t0 <= self.t
+                and not self.tb.gate[b]
+                and self._passed_above(kept, [(b, s_c, cap, False)], 1) < 0
+            ):
+                # the profile in hand, toward a goal beyond b, passes b below its cap, braking
+                # (a re-plan from inside a brake at once, `_brake_into`, 0.5 mm before a feed
+                # drop at 116.6 mm/s and −3.3 m/s²: nothing toward b itself was accepted)
+                kept.window = w
+                self.plan = kept
+                return
         self._count(f"target profile refused at boundary {b}")
         self._brake(a_max, j_max, w)
 
@@ -310,6 +335,126 @@ class Targets(Constraints):
         traj = self.calc.velocity(self.s, self.v, self.a, 0.0, a_max, j_max)
         self.plan = Plan(traj, self.t, BRAKE, w, None, 0.0)
 
+    def _brake_first(
+        self, cands: list[tuple[int, float, float, bool]], ceiling: float, a_max: float,
+        j_max: float, w: int,
+    ) -> bool:  # fmt: skip
+        """Above a lowered ceiling (an override drop): a brake at once (ruckig's velocity
+        interface) down to the ceiling, then a cruise at it, where that keeps every candidate
+        ahead (`_first_keeps`); the steps re-plan toward the first candidate whose slack runs
+        out, as from any cruise. A CNC brakes from the velocity it has at once; the
+        time-optimal profile toward the binding candidate holds that velocity above F ×
+        override and brakes late (known deviation 10 of docs/geo-core.md: wide seed 79, 150
+        mm/s for 1.4 ms after an override drop to 10 mm/s). Else the brake at once to the
+        highest velocity below the ceiling from which a cruise keeps them (a stop or a low
+        cap near ahead: narrow seed 426, override 100 → 70 % at 100 mm/s 1.8 mm before a
+        stop), re-planned where it ends (`SETTLE`: a cruise below the ceiling is never
+        re-planned as the window moves on, and crawled to the program's end, a review found),
+        never below the lowest cap ahead (with a jerk limit a brake to a lower velocity can be
+        the shorter: CAM seed 956, on the exact brake to 2.68 mm/s at the drop, a brake to
+        2.45 fitted and dipped). False where none keeps them (a feed cap it can no longer get
+        below, a run boundary inside the brake: `_brake_into`)."""
+        e, goal = ceiling, CRUISE
+        if not self._first_keeps(cands, e, a_max, j_max):
+            good = min((c[2] for c in cands if not self._moves_on(c)), default=0.0)
+            if good >= ceiling or not self._first_keeps(cands, good, a_max, j_max):
+                # nothing between (path-based Lifting, wide seed 879: a run boundary 1 µm
+                # ahead above the ceiling, a brake of no length planned again and again)
+                return False
+            bad = ceiling
+            for _ in range(BISECT_STEPS):
+                mid = 0.5 * (good + bad)
+                if self._first_keeps(cands, mid, a_max, j_max):
+                    good = mid
+                else:
+                    bad = mid
+            if good <= 0.0:
+                return False  # never a brake to rest where no stop is
+            e, goal = good, SETTLE
+        try:
+            traj = self.calc.velocity(self.s, self.v, self.a, e, a_max, j_max)
+        except ProfileError:
+            return False
+        if goal == SETTLE and traj.duration <= 0.0:
+            return False  # a brake of no length, re-planned at its end without end
+        self.plan = Plan(traj, self.t, goal, w, None, e)
+        return True
+
+    def _brake_into(
+        self, cands: list[tuple[int, float, float, bool]], v_p: float, s_c: float,
+        target: float, ceiling: float, v_max: float, a_max: float, j_max: float, b: int,
+        w: int,
+    ) -> bool:  # fmt: skip
+        """Above a lowered ceiling, where the brake at once to it is not enough
+        (`_brake_first`): the target profile with ruckig's v_max at the ceiling, or lower, at
+        the lowest cap of the candidates before b that the path can still get down to with
+        zero acceleration there (a profile held at the ceiling passes them above); ruckig then
+        brakes from outside its limits at once (its brake profile) before the profile to the
+        target. After an override drop to 40 % at 360 mm/s over 0.1 mm blocks whose feed
+        caps it could no longer get down to, the profile with v_max = v held 360 mm/s for
+        22 ms. Kept where ruckig accepts it and it does not dip below the target; else (False)
+        the target profile with v_max = v stays (known deviation 10 of docs/geo-core.md)."""
+        s, v, a = self.s, self.v, self.a
+        top = ceiling
+        for _, s_j, cap, _ in cands:
+            if s_j < s_c and cap < top and brake_distance(v, a, cap, a_max, j_max) <= s_j - s:
+                top = cap
+        top = max(top, target)
+        if top >= v_max or not self._try_target(s, v, a, s_c, target, top, a_max, j_max, b, w):
+            return False
+        if self._dips(min(v, v_p, target)):
+            return False
+        # from above its v_max the profile only brakes: ruckig's brake into its limits is not
+        # a brake to v_max with zero acceleration, and the profile after it can brake to rest
+        # and start again (a review found: override 100 → 30 % at 200 mm/s 5.1 mm before an
+        # M00, at rest 0.7 mm before it; a dip below a target of 0 is no dip)
+        ph = Phases(self.plan.traj) if self.plan is not None else None
+        return (
+            ph is not None
+            and max(ph.a) <= GATE_TOL
+            and (
+                ph.b_dur <= 0.0
+                or max(ph.b_a[0], ph.b_a[1] if ph.b_dur > ph.b_t0 else 0.0) <= GATE_TOL
+            )
+        )
+
+    def _moves_on(self, cand: tuple[int, float, float, bool]) -> bool:
+        """`cand` is the window's end (rest there, or its floor) where that is not a stop: the
+        window moves on with the path, block by block."""
+        w = self.window_end
+        return (
+            cand[0] == w and w < self.tb.n and not self.is_stop(w) and self._window_floor(w) > 0.0
+        )
+
+    def _first_keeps(
+        self, cands: list[tuple[int, float, float, bool]], e: float, a_max: float, j_max: float
+    ) -> bool:
+        """The brake at once from the path's state to e (zero acceleration there) and a cruise
+        at e keep every candidate: a run boundary or stop after the brake's end with room to
+        get down to its cap from e; a feed cap the brake passes below it (it reaches any
+        velocity sooner than the brake to it with zero acceleration there), or one after it
+        that the path gets down to from e. Within SLACK_MARGIN, as `_violated` reads them.
+        Not the window's end where it is not a stop: it moves on with the path, and the steps
+        keep it reachable as from any cruise (`_violated`, a forced re-plan toward it); read
+        as fixed, rest or its floor there held the brake to 26 mm/s for a ceiling of 300 after
+        an override drop on a line of 0.1 mm blocks (look-ahead 120, 12 mm: the brake to the
+        ceiling took 6.2 of them, the window moving on by as much; a review found)."""
+        s, v, a = self.s, self.v, self.a
+        d_e = brake_distance(v, a, e, a_max, j_max)
+        for c in cands:
+            if self._moves_on(c):
+                continue  # the window's end moves on: the steps keep it (`_violated`)
+            _, s_b, cap, gate = c
+            room = s_b - s
+            if room - d_e < SLACK_MARGIN:
+                if gate or brake_distance(v, a, cap, a_max, j_max) > room - SLACK_MARGIN:
+                    return False
+            elif (cap < e or gate) and (
+                room - d_e - self._need(e, 0.0, cap, gate, a_max, j_max) < SLACK_MARGIN
+            ):
+                return False
+        return True
+
     def _brake_through(
         self, cands: list[tuple[int, float, float, bool]], k: int, e: float, a_max: float,
         j_max: float, w: int,
@@ -342,6 +487,26 @@ class Targets(Constraints):
             return False
         plan.serves, plan.soft_from = cands[k][0], cands[0][0]
         self.plan, self._soft_from = plan, cands[0][0]
+        return True
+
+    def _keep_below(
+        self, passed: Plan | None, first: tuple[int, float, float, bool], b: int, w: int
+    ) -> bool:
+        """The shift's new profile toward b passes `first` above its feed cap, and the one that
+        brought the path to the boundary it just passed, toward the same goal, passes it below:
+        that one is kept (True). As the window moves on, the goal's target rises and each
+        re-plan brakes later; one that gives up a cap the profile in hand still keeps is the
+        step that loses it (known deviation 12 of docs/geo-core.md, CAM seed 956: boundary 93,
+        114.8 mm/s, passed at 113.8 by the profile in hand, at 120.9 by the new one)."""
+        if (
+            passed is None
+            or passed.goal != b
+            or passed.t0 > self.t
+            or self._passed_above(passed, [first], 1) >= 0
+        ):
+            return False
+        passed.window = w
+        self.plan = passed
         return True
 
     @staticmethod

@@ -218,6 +218,13 @@ class Tracker(Targets):
             # landed late; the brake is behind every other profile at every moment
             self._cruise(0.0, a_max, j_max, w)
             return
+        if (
+            force is None
+            and not self.hold
+            and v_p > ceiling * (1.0 + CAP_TOL) + V_ROUND
+            and self._brake_first(cands, ceiling, a_max, j_max, w)
+        ):
+            return  # an override drop: brake at once (known deviation 10 of docs/geo-core.md)
         cap = self._target_cap(cands, best_i)
         d = s_c - s
         over = self._gap_over(cands, best_i, min(cap, ceiling), w) if gate else 0.0
@@ -231,6 +238,7 @@ class Tracker(Targets):
         # this one (a feed drop 5 mm before a corner: stress seed 1777, lifting). Then the path
         # aims at the next candidate, passing this one as it brakes (only its hard cap kept).
         first = cands[best_i]  # the candidate the shift, if any, passes first
+        looked = list(cands)  # every candidate the shift looks at (`Targets._brake_into`)
         while not gate:
             own = cands[best_i][2]
             hard = min(tb.point_cap[b], tb.cap[b])
@@ -256,6 +264,7 @@ class Tracker(Targets):
             if self._need(v, a, e, False, a_max, j_max) <= d + SLACK_TOL:
                 break  # zero acceleration at b, at most e there, loses nothing after it
             cands, best_i = tail, 0
+            looked += tail
             b, s_c, gate, cap = nb, ns, ngate, ncap
             d = s_c - s
             target = self._pick_target(v, a, v_p, d, cap, ceiling, a_max, j_max,
@@ -292,15 +301,24 @@ class Tracker(Targets):
         if skip >= 0:  # nor beyond the forced one's cap
             target = min(target, top)
             v_max = max(min(v_max, top), target, v, v_p)
-        self._settle(s, v, a, v_p, s_c, target, cap, v_max, a_max, j_max, b, w, self._hard(b, w),
-                     passed, held, event)  # fmt: skip
+        if not (
+            not self.hold
+            and skip < 0
+            and v_p > ceiling * (1.0 + CAP_TOL) + V_ROUND
+            and self._brake_into(
+                looked, v_p, s_c, target, min(ceiling, v_max), v_max, a_max, j_max, b, w
+            )  # above a lowered ceiling: brake at once (deviation 10 of docs/geo-core.md)
+        ):
+            self._settle(s, v, a, v_p, s_c, target, cap, v_max, a_max, j_max, b, w,
+                         self._hard(b, w), passed, held, event)  # fmt: skip
         plan = self.plan
         if (
             shifted
             and plan is not None
             and plan.goal == b
-            and self._need(v, a, first[2], False, a_max, j_max) <= first[1] - s + SLACK_TOL
             and self._passed_above(plan, [first], 1) >= 0
+            and not self._keep_below(passed, first, b, w)
+            and self._need(v, a, first[2], False, a_max, j_max) <= first[1] - s + SLACK_TOL
         ):
             # the shift gave up a feed cap the path could still get below braking, and its
             # profile passes it above: a brake at once instead (known deviation 12 of

@@ -9,6 +9,8 @@ deviations; the bench counts them over thousands of runs."""
 
 from __future__ import annotations
 
+import dataclasses
+import itertools
 import math
 import random
 import re
@@ -16,11 +18,15 @@ import re
 import pytest
 
 from liftd.cnc.geo_task import GeoTask
+from liftd.cnc.params import LiftMethod
 from liftd.cnc.path.velocity import ramp_distance, reach_from
+from liftd.cnc.plc import Schedule, SimPlc, parse_override_spec
+from liftd.sim.simulate import run_cycles
 from tests.support.cam_cases import X_RANGE, Y_RANGE, cam_scenario
-from tests.support.cam_runs import apart, check, core_time, time_limit
+from tests.support.cam_runs import check, core_time, time_limit
 from tests.support.motion_check import reach_from as check_reach_from
-from tests.support.scenarios import describe, scenario, wide_scenario
+from tests.support.scenarios import Scenario, describe, scenario, wide_scenario
+from tests.unit.cnc.path.test_no_invented_stops import shipped
 
 # every 17th seed of the first 340: a spread over look-ahead sizes, cycle times and shapes
 CAM_SEEDS = list(range(0, 340, 17))
@@ -34,19 +40,32 @@ def test_cam_shaped_programs_rest_only_where_a_rule_says(seed: int) -> None:
     assert hard == [] and errors == 0, (hard, describe(sc))
 
 
-# known deviation 10 of docs/geo-core.md (the brake from above a lowered ceiling holds the
-# velocity first): override 150 → 10 % at 150 mm/s, the path holds it 1.4 ms before braking
-PAUSED = {79: ["overrun: the brake from above the ceiling paused at 150.0000 mm/s in segment 0 "
-               "(line 1), ceiling 10.0000 (t=1.3730 s)"]}  # fmt: skip
-
-
 @pytest.mark.parametrize("seed", WIDE_SEEDS)
 def test_random_lift_runs_rest_only_where_a_rule_says(seed: int) -> None:
     sc = wide_scenario(seed)
     _, hard, _, errors = check(sc)
-    over, other = apart(hard)
-    assert other == [] and errors == 0, (hard, describe(sc))
-    assert over == PAUSED.get(seed, []), (over, describe(sc))
+    assert hard == [] and errors == 0, (hard, describe(sc))
+
+
+def test_an_override_drop_brakes_at_once() -> None:
+    """Wide seed 79: override 150 → 10 % at 150 mm/s. The path held 150 mm/s for 1.4 ms
+    (the time-optimal profile toward the next constraint) before it braked: known deviation
+    10 of docs/geo-core.md until `Targets._brake_first`. The check fails a brake that pauses
+    above the new ceiling; the velocity falls in the cycle after the drop."""
+    sc = wide_scenario(79)
+    task = GeoTask(sc.channel, sc.text)
+    limit = time_limit(task.prog.table, sc)
+    drop, ov = sc.schedule.override[1]
+    assert ov == 0.1
+    seen: list[tuple[float, float, float]] = []
+    for snap in run_cycles(task, SimPlc(0.02), sc.schedule, sc.channel.cycle_time, limit):
+        if drop <= snap.t <= drop + 0.004:
+            seen.append((snap.t, task.interp.v, task.interp.a))
+    assert len(seen) >= 3
+    assert all(a < 0.0 for _, _, a in seen), seen
+    assert all(v2 < v1 for (_, v1, _), (_, v2, _) in itertools.pairwise(seen)), seen
+    _, hard, _, errors = check(sc)
+    assert hard == [] and errors == 0, (hard, describe(sc))
 
 
 @pytest.mark.parametrize("seed", [285, 181])
@@ -199,3 +218,112 @@ def test_the_checks_reach_from_a_state_matches_the_cores_closed_form() -> None:
             continue
         got = check_reach_from(v, a, length, 8.0, 400.0, 10.0)
         assert got == pytest.approx(reach_from(v, a, length, 8.0, 400.0), rel=1e-9)
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "G01 X0 Y0 F600\nG01 X50 F12000\nG01 Y50\nM30\n",  # a corner
+        "G01 X0 Y0 F600\nG01 X50 F12000\nM00\nG01 X100\nM30\n",  # a programmed stop
+        "G01 X0 Y0 F600\nG01 X50 F12000\nG01 X100 F1200\nM30\n",  # a feed drop
+    ],
+)
+@pytest.mark.parametrize("override", [10, 70])
+def test_an_override_drop_before_a_slowdown_brakes_at_once(text: str, override: int) -> None:
+    """200 mm/s on a 50 mm line toward a corner, an M00 or a feed drop; the override drops
+    while the path is 1–4 mm before it. The check fails a brake that pauses above the new
+    ceiling: with the time-optimal profile toward the slowdown ahead the path held 200 mm/s
+    for a cycle first wherever the drop came at 0.248 s (known deviation 10 of
+    docs/geo-core.md); a CNC brakes from the velocity it has at once."""
+    for i in range(9):
+        sched = Schedule(tuple(parse_override_spec(f"{0.240 + 0.002 * i:.3f}:{override}")), ())
+        _, hard, slow, errors = check(Scenario(0, shipped(), text, sched))
+        assert hard == [] and errors == 0 and slow == [], (hard, slow, sched)
+
+
+@pytest.mark.parametrize(
+    ("kind", "seed"),
+    [("narrow", 201), ("narrow", 426), ("narrow", 967), ("wide", 131), ("wide", 157),
+     ("cam", 268), ("cam", 665), ("cam", 876), ("narrow", 525), ("cam", 956)],
+)  # fmt: skip
+def test_the_overruns_the_benches_found_are_gone(kind: str, seed: int) -> None:
+    """The runs bench/bench_cam_motion.py failed for an overrun since the sixth round: the
+    brake from above a lowered ceiling held the velocity first (deviation 10 of
+    docs/geo-core.md: narrow 201 431.6 for 236.5 mm/s, 426 100 for 70.0, 967; wide 131, 157;
+    CAM 268, 665, 876), a feed drop crossed accelerating was ramped out above its feed
+    (deviation 11: narrow 525, 96.86 for 96.69), a re-plan gave up a feed cap the profile in
+    hand kept (deviation 12: CAM 956, 120.9 for 114.8 at boundary 93)."""
+    make = {"cam": cam_scenario, "wide": wide_scenario, "narrow": scenario}[kind]
+    sc = make(seed)
+    _, hard, _, errors = check(sc)
+    assert hard == [] and errors == 0, (hard, describe(sc))
+
+
+def _line(step_mm: float, length_mm: float, feed: int, m00_at: float = -1.0) -> str:
+    """A line along X in blocks of `step_mm` from X1 at one feed, an M00 after the block that
+    ends at `m00_at`."""
+    lines = [f"G01 X1 Y0 F{feed}"]
+    for i in range(1, round(length_mm / step_mm) + 1):
+        x = 1.0 + step_mm * i
+        lines.append(f"G01 X{x:.3f} Y0")
+        if abs(x - m00_at) < 1e-9:
+            lines.append("M00")
+    return "\n".join([*lines, "M30"]) + "\n"
+
+
+def _end_time(sc: Scenario) -> float:
+    task = GeoTask(sc.channel, sc.text)
+    t = 0.0
+    for snap in run_cycles(task, SimPlc(0.02), sc.schedule, sc.channel.cycle_time, 10.0):
+        t = snap.t
+    return t
+
+
+@pytest.mark.parametrize(
+    ("feed", "length", "look_ahead", "drop", "ceiling", "limit"),
+    [(60000, 150.0, 120, 0.06, 300.0, 0.58), (12000, 40.0, 30, 0.03, 60.0, 0.70)],
+)
+def test_after_an_override_drop_a_line_of_short_blocks_runs_at_the_new_feed(
+    feed: int, length: float, look_ahead: int, drop: float, ceiling: float, limit: float
+) -> None:
+    """0.1 mm blocks on one line, override 100 → 30 %: the brake at once read rest at the
+    look-ahead window's end as a constraint, braked to 26 mm/s for a ceiling of 300 (12 to
+    60) and cruised there to the program's end, 5.1 s for 0.56 (a review found). The window
+    moves on with the path: the path brakes to the new feed and runs at it."""
+    ch = dataclasses.replace(shipped(), look_ahead_blocks=look_ahead, cycle_time=1e-3)
+    sched = Schedule(tuple(parse_override_spec(f"{drop}:30")), ())
+    sc = Scenario(0, ch, _line(0.1, length, feed), sched)
+    _, hard, slow, errors = check(sc)
+    assert hard == [] and errors == 0 and slow == [], (hard, slow)
+    # the whole line at the new feed after the drop is at least length / ceiling
+    assert _end_time(sc) <= limit, (length / ceiling, limit)
+
+
+@pytest.mark.parametrize("drop", [0.077, 0.078, 0.079, 0.080])
+def test_an_override_drop_5_mm_before_an_m00_brakes_into_it(drop: float) -> None:
+    """200 mm/s on 0.5 mm blocks toward an M00 5 mm ahead, override 100 → 30 %: where the
+    brake to 60 mm/s and from there to rest does not fit, the brake goes to the highest
+    velocity from which it does and is re-planned there (`SETTLE`). Ruckig's brake into its
+    limits, tried first, came to rest 0.7 mm before the M00 and started again (a review
+    found); the path rests only at the M00. With the drop at 0.078 s the brake goes to 34.9
+    mm/s and the path passes the last boundary before the M00 at 39.4 mm/s where the check
+    expects 46.1: the check's bound is a brake to rest that starts as late as it can, which
+    the rule against a pause above the ceiling excludes (known deviation 10's remainder)."""
+    sched = Schedule(tuple(parse_override_spec(f"{drop}:30")), ())
+    sc = Scenario(0, shipped(), _line(0.5, 30.0, 12000, m00_at=16.0), sched)
+    _, hard, slow, errors = check(sc)
+    assert hard == [] and errors == 0, hard
+    for finding in slow:
+        m = re.match(r"boundary 30 \(line 30\) at ([0-9.]+) mm/s, expected ([0-9.]+) ", finding)
+        assert m is not None and float(m.group(1)) >= 0.85 * float(m.group(2)), slow
+
+
+def test_a_lift_range_s_lower_feed_with_a_run_boundary_1_um_ahead_does_not_hang() -> None:
+    """Path-based Lifting, wide seed 879: entering a range's reduced feed (27.5 mm/s) at 39.2
+    mm/s with a run boundary 1 µm ahead whose cap (42.3) is above it. The brake at once
+    looked for a velocity between that cap and the ceiling, planned a brake of no length to
+    the velocity the path had, re-planned at its end, again: `advance did not converge` 6
+    times (bench_lift_safety.py --wide … lifting)."""
+    sc = wide_scenario(879, LiftMethod.LIFTING)
+    _, hard, _, errors = check(sc)
+    assert hard == [] and errors == 0, (hard, describe(sc))

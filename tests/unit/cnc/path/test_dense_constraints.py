@@ -90,17 +90,24 @@ def test_dense_feed_drops_run_at_the_lowest_feed() -> None:
 def test_an_override_drop_on_dense_feed_drops_keeps_every_stop_and_limit(
     text: str, cycle: float
 ) -> None:
-    """(The 0.1 mm programs' overruns are known deviation 10 of docs/geo-core.md: after the drop
-    to 40 % at 360 mm/s, ceilings 160–400 mm/s, the shift's plan holds ~360 for 22 ms before it
-    brakes; found since the sixth round, part O. Each lies after the drop at 0.12 s and before
-    the rise at 0.2 s.)"""
+    """The 0.1 mm programs held ~360 mm/s for 22 ms after the drop to 40 % (ceilings 160–400
+    mm/s) before they braked, and passed 60 boundaries above feed caps they could have got
+    down to (known deviation 10 of docs/geo-core.md). They now brake at once
+    (`Targets._brake_first`, `_brake_into`); what remains is the end of that brake: in the
+    blocks of 400 mm/s between those of 160 the path is below its ceiling and the re-plans
+    there ease the brake, so up to four boundaries whose 160 mm/s cap the brake from the drop
+    reaches with 0.2 mm to spare are passed up to 1.8 % above it."""
     ch = dataclasses.replace(shipped(), look_ahead_blocks=120, cycle_time=cycle)
     sched = Schedule(tuple(parse_override_spec("0.05:150,0.12:40,0.2:200")), ())
     _, hard, slow, errors = check(Scenario(0, ch, text, sched))
     over, other = apart(hard)
     assert errors == 0 and other == [], hard
-    at = [float(m.group(1)) for o in over if (m := re.search(r"\(t=([0-9.]+) s\)", o))]
-    assert len(at) == len(over) and all(0.12 <= t < 0.2 for t in at), over
+    assert len(over) <= 4, over
+    for o in over:
+        m = re.search(r"^overrun: boundary \d+ .* at ([0-9.]+) mm/s above its cap ([0-9.]+) "
+                      r"\(t=([0-9.]+) s\)$", o)  # fmt: skip
+        assert m is not None, o
+        assert float(m.group(1)) <= float(m.group(2)) * 1.02 and 0.12 <= float(m.group(3)) < 0.2
     assert slow == []
 
 
