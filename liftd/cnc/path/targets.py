@@ -36,9 +36,19 @@ from liftd.cnc.path.velocity import (
 )
 from liftd.cnc.ruckig1 import Evaluator, Phases, ProfileError, Ruckig1
 
-BISECT_STEPS = 24  # `Targets._brake_first`: the velocity it brakes to, within 2^-24 of the ceiling
+BISECT_STEPS = 24  # `Targets._brake_first`: its velocity within 2^-24 of the interval searched
 BRAKE_CRUISE = 0.25  # share of the way `Targets._brake_through`'s cruise may take at most
 DIP_TOL = 1e-4  # relative: a profile this much below the lower of its ends' velocities dips
+
+
+def _brake_pieces(ph: Phases) -> list[tuple[float, float, float, float]]:
+    """(v, a, j, duration) of each piece of ruckig's brake into its limits that lasts: a brake
+    of one piece leaves its second unwritten (all zeros, ruckig's BrakeProfile), which read
+    as a velocity of 0 made `_dips` refuse profiles that do not dip (a review found)."""
+    if ph.b_dur <= 0.0:
+        return []
+    durs = (ph.b_t0, ph.b_dur - ph.b_t0)
+    return [(ph.b_v[i], ph.b_a[i], ph.b_j[i], durs[i]) for i in range(2) if durs[i] > 0.0]
 
 
 def lowest_velocity(ph: Phases) -> float:
@@ -53,16 +63,16 @@ def lowest_velocity(ph: Phases) -> float:
         if a < 0.0 < j and -a / j < end - start:
             low = min(low, ph.v[i] - a * a / (2.0 * j))
         start = end
-    if ph.b_dur > 0.0:
-        durs = (ph.b_t0, ph.b_dur - ph.b_t0)
-        for i in range(2):
-            if durs[i] <= 0.0:
-                continue  # a brake of one piece: the second is all zeros (ruckig's BrakeProfile)
-            low = min(low, ph.b_v[i])
-            a, j = ph.b_a[i], ph.b_j[i]
-            if a < 0.0 < j and -a / j < durs[i]:
-                low = min(low, ph.b_v[i] - a * a / (2.0 * j))
+    for v, a, j, dur in _brake_pieces(ph):
+        low = min(low, v)
+        if a < 0.0 < j and -a / j < dur:
+            low = min(low, v - a * a / (2.0 * j))
     return low
+
+
+def only_brakes(ph: Phases) -> bool:
+    """The profile's acceleration is nowhere positive (it is linear in each piece: its ends)."""
+    return max(ph.a) <= GATE_TOL and all(a <= GATE_TOL for _, a, _, _ in _brake_pieces(ph))
 
 
 class Targets(Constraints):
@@ -335,6 +345,17 @@ class Targets(Constraints):
         traj = self.calc.velocity(self.s, self.v, self.a, 0.0, a_max, j_max)
         self.plan = Plan(traj, self.t, BRAKE, w, None, 0.0)
 
+    def _velocity_plan(
+        self, e: float, goal: int, w: int, a_max: float, j_max: float
+    ) -> Plan | None:
+        """Ruckig's velocity interface from the path's state to e (time-optimal, zero
+        acceleration there) as a plan toward `goal` (CRUISE or SETTLE); None where refused."""
+        try:
+            traj = self.calc.velocity(self.s, self.v, self.a, e, a_max, j_max)
+        except ProfileError:
+            return None
+        return Plan(traj, self.t, goal, w, None, e)
+
     def _brake_first(
         self, cands: list[tuple[int, float, float, bool]], ceiling: float, a_max: float,
         j_max: float, w: int,
@@ -371,13 +392,10 @@ class Targets(Constraints):
             if good <= 0.0:
                 return False  # never a brake to rest where no stop is
             e, goal = good, SETTLE
-        try:
-            traj = self.calc.velocity(self.s, self.v, self.a, e, a_max, j_max)
-        except ProfileError:
-            return False
-        if goal == SETTLE and traj.duration <= 0.0:
-            return False  # a brake of no length, re-planned at its end without end
-        self.plan = Plan(traj, self.t, goal, w, None, e)
+        plan = self._velocity_plan(e, goal, w, a_max, j_max)
+        if plan is None or (goal == SETTLE and plan.dur <= 0.0):
+            return False  # refused, or a brake of no length, re-planned at its end without end
+        self.plan = plan
         return True
 
     def _brake_into(
@@ -407,16 +425,10 @@ class Targets(Constraints):
         # from above its v_max the profile only brakes: ruckig's brake into its limits is not
         # a brake to v_max with zero acceleration, and the profile after it can brake to rest
         # and start again (a review found: override 100 → 30 % at 200 mm/s 5.1 mm before an
-        # M00, at rest 0.7 mm before it; a dip below a target of 0 is no dip)
-        ph = Phases(self.plan.traj) if self.plan is not None else None
-        return (
-            ph is not None
-            and max(ph.a) <= GATE_TOL
-            and (
-                ph.b_dur <= 0.0
-                or max(ph.b_a[0], ph.b_a[1] if ph.b_dur > ph.b_t0 else 0.0) <= GATE_TOL
-            )
-        )
+        # M00, at rest 0.7 mm before it; a dip below a target of 0 is no dip). Its pieces were
+        # read by `_dips`.
+        assert self.plan is not None and self.plan.ev.phases is not None
+        return only_brakes(self.plan.ev.phases)
 
     def _moves_on(self, cand: tuple[int, float, float, bool]) -> bool:
         """`cand` is the window's end (rest there, or its floor) where that is not a stop: the
@@ -474,13 +486,10 @@ class Targets(Constraints):
         b, s_k = cands[k][0], cands[k][1]
         if e <= 0.0 or self.is_stop(b) or b == w:
             return False
-        try:
-            traj = self.calc.velocity(self.s, self.v, self.a, e, a_max, j_max)
-        except ProfileError:
-            return False
-        plan = Plan(traj, self.t, CRUISE, w, None, e)
+        plan = self._velocity_plan(e, CRUISE, w, a_max, j_max)
         if (
-            plan.p_end > s_k
+            plan is None
+            or plan.p_end > s_k
             or s_k - plan.p_end > BRAKE_CRUISE * (s_k - self.s)
             or self._passed_above(plan, cands, k) >= 0
         ):
