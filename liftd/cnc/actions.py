@@ -45,6 +45,7 @@ class BoundaryActions:
         self.waiting: list[Action] = []  # actions left at the boundary where the path rests
         self.wait_since = 0.0  # time from which the current wait counts
         self.rest_since = 0.0  # time the path came to rest at the boundary where it rests
+        self.z_delay = 0.0  # the part of the last wait inside a range that was for Z
         self.z_rest: tuple[int, float] | None = None  # (axis, Z) after a lift that ended here
         self.z_hold: tuple[int, float] | None = None  # (axis, Z) a RESET left, until a START
 
@@ -104,7 +105,7 @@ class BoundaryActions:
             return False
         # a RESET under way keeps the path where it came to rest (a resume inside a range
         # set the lift rising for the rest of it again, instead of holding at POS_LIMIT)
-        return self.channel.may_move()
+        return self.channel.may_move() and self.z_lets_go(now)
 
     def _do(self, action: Action, t_at: float, crossing: Crossing | None, now: float = 0.0) -> bool:
         """Execute one action at time t_at; False while it still waits (only where the path
@@ -135,34 +136,46 @@ class BoundaryActions:
             self.end_of_program(t_at, action.line)
             return False
         elif kind is ActionKind.FLUSH and crossing is None:
-            return self.flush_may_go(now)  # unless Z could not make it from here
+            return self.z_lets_go(now)  # unless Z could not make it from here
         return True
 
-    def flush_may_go(self, now: float) -> bool:
-        """The path rests at a #FLUSH: it leaves unless it must wait for Z, that is unless Z,
-        as it is now, needs longer to reach POS than the path needs from here to the lift's
-        horizon (a lower bound at the override in effect). Then it leaves at the exact time
-        from which Z lands before the path can arrive (vendor §2.1.3 case 3: the flush "may
-        stop the path"); meanwhile Z descends against that time (`LiftAhead.lift_time`)."""
+    def z_lets_go(self, now: float) -> bool:
+        """The path rests inside a lift range at a #FLUSH or at a waiting point of the program
+        (G04, a synchronised M function, M00) whose wait is over: it leaves unless it must
+        wait for Z, that is unless Z, as it is now, needs longer to reach POS than the path
+        needs from here to the horizon beyond (a lower bound at the override in effect).
+        Then it leaves at the exact time from which Z lands before the path can arrive
+        (vendor §2.1.3 case 3: the flush "may stop the path"; §2.1.1: the path waits for Z
+        where the feed cannot be reduced enough); meanwhile Z descends against that time
+        (`LiftAhead.lift_time`). A waiting point's wait for Z is the lift's delay
+        (`z_delay`), not the program's wait. Z is short of POS there after a START or a feed
+        hold's release just before it (`TimeBasedLift.limit_override`: the path waits
+        there), and left then it rose again for the rest of the range and landed after the
+        path had passed LIFT_END (wide --stops seed 474: 0.48 mm, 10 ms late)."""
+        self.z_delay = 0.0
         lift = self.lift
         m = lift.motion
-        if m is None or not m.uses_time or not self.ahead.at_flush():
+        if m is None or not m.uses_time:
             return True
-        k = self.ahead.horizon()
+        k = self.ahead.leaving_horizon()
         if k < 0:
-            return True  # another flush lies before the horizon: decided there
+            return True  # not inside a range, or another flush lies before the horizon
         ip = self.interp
         path_needs = ip.lower_bound(k, self.ov_eff) - ip.t_state
         if path_needs == INF:
             return True  # a feed hold or override 0: the override rule decides on release
         leave = lift.t + m.landing_time() - path_needs
-        if leave <= self.wait_since:
-            return True
-        if leave > now:
-            return False
-        # never before the last cycle, where the path was published at rest (Z's need can
-        # fall by more than a cycle in one, when it turns to its descent)
-        self.wait_since = max(leave, now - self.dt)
+        if leave > self.wait_since:
+            if leave > now:
+                return False
+            # never before the last cycle, where the path was published at rest (Z's need
+            # can fall by more than a cycle in one, when it turns to its descent)
+            leave = max(leave, now - self.dt)
+            self.z_delay = leave - self.wait_since
+            self.wait_since = leave
+        here = ip.stopped_at
+        if here is not None and here in ip.lift_stops:  # (the path rests there: no re-plan)
+            ip.drop_lift_stop(here)
         return True
 
     def resumed(self, k: int, rested: float) -> None:
@@ -178,8 +191,7 @@ class BoundaryActions:
             if k in self.prog.flushes[rng.index]:
                 return
             self.lift.resume_in_range(self.wait_since)
-            if k not in self.interp.lift_stops:
-                rec.waits += self.wait_since - rested
+            rec.waits += max(0.0, self.wait_since - self.z_delay - rested)
         elif k == rng.k_start:
             self._departure(rec, self.wait_since, None)
 

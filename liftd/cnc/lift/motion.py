@@ -119,7 +119,7 @@ class LiftMotion(ABC):
     @abstractmethod
     def landing_time(self) -> float:
         """Time Z needs from its state now to be at POS: the descent in hand, or, while it
-        rises, the time-optimal one from here (`BoundaryActions.flush_may_go`)."""
+        rises, the time-optimal one from here (`BoundaryActions.z_lets_go`)."""
 
     @abstractmethod
     def resume_in_range(self, t: float) -> None: ...
