@@ -135,8 +135,8 @@ class BoundaryActions:
         elif kind is ActionKind.PROGRAM_END:
             self.end_of_program(t_at, action.line)
             return False
-        elif kind is ActionKind.FLUSH and crossing is None:
-            return self.z_lets_go(now)  # unless Z could not make it from here
+        # (a #FLUSH where the path rests: it leaves unless Z could not make it from there,
+        # decided with the boundary's other waits, `work_waiting`)
         return True
 
     def z_lets_go(self, now: float) -> bool:
@@ -153,6 +153,15 @@ class BoundaryActions:
         there), and left then it rose again for the rest of the range and landed after the
         path had passed LIFT_END (wide --stops seed 474: 0.48 mm, 10 ms late)."""
         self.z_delay = 0.0
+        if not self._z_lets_go(now):
+            return False
+        ip = self.interp
+        here = ip.stopped_at
+        if here is not None and here in ip.lift_stops:  # (the path rests there: no re-plan)
+            ip.drop_lift_stop(here)
+        return True
+
+    def _z_lets_go(self, now: float) -> bool:
         lift = self.lift
         m = lift.motion
         if m is None or not m.uses_time:
@@ -160,11 +169,14 @@ class BoundaryActions:
         k = self.ahead.leaving_horizon()
         if k < 0:
             return True  # not inside a range, or another flush lies before the horizon
+        landing = lift.t + m.landing_time()
+        if landing <= self.wait_since:
+            return True  # Z is down by then (at POS as a rule): no bound needed
         ip = self.interp
         path_needs = ip.lower_bound(k, self.ov_eff) - ip.t_state
         if path_needs == INF:
             return True  # a feed hold or override 0: the override rule decides on release
-        leave = lift.t + m.landing_time() - path_needs
+        leave = landing - path_needs
         if leave > self.wait_since:
             if leave > now:
                 return False
@@ -173,9 +185,6 @@ class BoundaryActions:
             leave = max(leave, now - self.dt)
             self.z_delay = leave - self.wait_since
             self.wait_since = leave
-        here = ip.stopped_at
-        if here is not None and here in ip.lift_stops:  # (the path rests there: no re-plan)
-            ip.drop_lift_stop(here)
         return True
 
     def resumed(self, k: int, rested: float) -> None:
@@ -193,7 +202,11 @@ class BoundaryActions:
             self.lift.resume_in_range(self.wait_since)
             rec.waits += max(0.0, self.wait_since - self.z_delay - rested)
         elif k == rng.k_start:
-            self._departure(rec, self.wait_since, None)
+            # where the range's own waits held the path there, a wait for Z after them is
+            # the lift's delay: the nominal run leaves when the program's waits end
+            self._departure(rec, self.wait_since - self.z_delay, None)
+            if k in self.prog.stops[rng.index]:
+                self.lift.resume_in_range(self.wait_since)  # Z went to POS: lift again
 
     def _lift_start(self, rng: LiftRange, t_at: float, crossing: Crossing | None) -> None:
         if self.channel.reset_requested:  # the path brakes for a RESET: no range starts now

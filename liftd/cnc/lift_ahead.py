@@ -66,8 +66,11 @@ class LiftAhead:
         path leaves it; -1 where it rests elsewhere, or where that horizon is unknown."""
         rng = self.lift.current
         k = self.interp.stopped_at
-        if rng is None or k is None or not rng.k_start < k < rng.k_end:
+        if rng is None or k is None or not rng.k_start <= k < rng.k_end:
             return -1
+        i = rng.index
+        if k == rng.k_start and k not in self.prog.stops[i] and k not in self.prog.flushes[i]:
+            return -1  # a rest at LIFT_START with nothing to wait for after it
         return self._after(rng, k)
 
     def _after(self, rng: LiftRange, ahead: int) -> int:
@@ -140,7 +143,7 @@ class LiftAhead:
                 if b > rng.k_start:
                     horizon = b
                     break
-            if not any(f < horizon for f in self.prog.flushes[rng.index]):
+            if not any(rng.k_start < f < horizon for f in self.prog.flushes[rng.index]):
                 ip.arrival_bound(horizon)  # (beyond a flush the lift plans with no bound)
 
 

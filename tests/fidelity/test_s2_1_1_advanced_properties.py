@@ -150,6 +150,30 @@ def test_s2_1_1_a_waiting_condition_inside_a_range_z_moves_on_to_target_height(w
     assert rec.arrival_error <= LANDED
 
 
+@pytest.mark.parametrize("wait", ["G04 X0.1", "G04 X1", "M08"])
+def test_s2_1_1_a_waiting_condition_right_after_lift_start_is_inside_the_range(wait: str) -> None:
+    """A wait that follows LIFT_START with no motion between is a waiting condition of the
+    range (§2.1.1: Z moves on to target height): Z goes to POS while the path waits at the
+    range's start, lifts again for the 10 mm to LIFT_END and lands there on time. Z took the
+    wait as a feed hold (no arrival known while the path rests), rose toward POS_LIMIT, and
+    the path left at F6000: 71 mm above POS at LIFT_END after a G04 X0.1 (a review found)."""
+    ch = make_channel()
+    text = (
+        f"G01 X10 Y10 Z1 F6000\nZ[LIFT_START POS=5 POS_LIMIT=80]\n{wait}\nG01 X20\n"
+        "Z[LIFT_END]\nG01 X200\nM30\n"
+    )
+    task, snaps = run_task(ch, text)
+    assert snaps[-1].state is ChannelState.READY and not events(snaps, "lift.late")
+    (rec,) = task.lift.records
+    assert rec.arrival_error <= LANDED and rec.path_delay == pytest.approx(0.0, abs=1e-9)
+    at_start = [s for s in snaps if s.lift_active and s.positions[0] == 0.01]
+    assert max(s.positions[2] for s in at_start) <= 5 * MM + LANDED  # toward POS, not up
+    if wait == "G04 X1":
+        assert at_start[-1].positions[2] == pytest.approx(5 * MM, abs=LANDED)  # at POS
+    after = [s for s in snaps if 0.01 < s.positions[0] < 0.02]
+    assert max(s.positions[2] for s in after) > 6 * MM  # and lifted again for the rest
+
+
 def _run_with_restart(ch: ChannelParams, text: str) -> tuple[GeoTask, list[GeoSnapshot]]:
     """M00: the PLC presses START again 0.3 s after the channel held."""
     held: list[float] = []
