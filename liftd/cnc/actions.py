@@ -19,8 +19,7 @@ from liftd.cnc.path.program import Action, ActionKind
 
 LANDING_TOL = 1e-6  # m: Z counts as at POS when the path passes LIFT_END (1 µm)
 LANDING_TIME_TOL = 1e-6  # s: … and as at rest when its descent ends within 1 µs of that,
-LANDING_V_TOL = 1e-6  # m/s: … or when it moves slower than 1 µm/s and ends within
-LANDING_SETTLE_MAX = 1e-4  # s: 0.1 ms (then it moves less than 1e-10 m more)
+# or when what is left of it keeps Z within LANDING_TOL of POS (`LiftMotion.travel_left`)
 ACK_SYNCS = (MSync.MVS_SVS, MSync.MVS_SNS, MSync.MNS_SNS, MSync.MNE_SNS)
 INF = float("inf")
 
@@ -280,13 +279,15 @@ class BoundaryActions:
             rec.waits += max(0.0, reached - max(self.rest_since, rec.t_start))
         error = abs(lift.z - lift.current.start.target)
         # Z at POS but its descent ends a rounding later than the path's crossing (≤ 1 µs; wide
-        # seed 1965: 2e-17 m, 0.5 µs), or a few µs later at a crawl (wide --stops seed 983: the
-        # path braking for a STOP comes to rest on LIFT_END; Z 3e-15 m from POS at 3e-9 m/s,
-        # 2.8 µs to go): landed. It finishes that descent as planned, and the lift closes when
+        # seed 1965: 2e-17 m, 0.5 µs), or later at a crawl that keeps it within LANDING_TOL of
+        # POS to its end (wide --stops seed 983: the path braking for a STOP comes to rest on
+        # LIFT_END, Z 3e-15 m from POS at 3e-9 m/s, 2.8 µs to go; --flush seed 425: a descent
+        # re-planned 0.23 µm above POS for the path's later arrival, 1.07 ms and under 8 nm
+        # still to go): landed. It finishes that descent as planned, and the lift closes when
         # it has (snapping it to rest here would be a jerk).
         need = m.needed_time() if m.uses_time and not lift.z_done else -1.0
         settling = 0.0 <= need <= LANDING_TIME_TOL or (
-            0.0 <= need <= LANDING_SETTLE_MAX and abs(lift.vz) <= LANDING_V_TOL
+            need >= 0.0 and error + m.travel_left() <= LANDING_TOL
         )
         if error <= LANDING_TOL and settling:
             lift.ending = True
