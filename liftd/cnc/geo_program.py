@@ -192,15 +192,36 @@ def _flush_only(path: PathProgram, k: int) -> bool:
 
 
 def _stops_inside(path: PathProgram, rng: LiftRange, flush: bool) -> tuple[int, ...]:
-    """The boundaries strictly inside `rng` where the path stops: those that wait (`flush`
-    False) or those that stop only for a #FLUSH (`flush` True)."""
+    """The boundaries inside `rng` where the path stops: those that wait (`flush` False) or
+    those that stop only for a #FLUSH (`flush` True). LIFT_START's own boundary is one where
+    such a wait follows the LIFT_START there (`Z[LIFT_START …]` then `G04`): the range has
+    begun when the path waits (as a wait before it lies before the range)."""
     if rng.k_end < 0:
         return ()
-    return tuple(
+    inside = tuple(
         k
         for k in range(rng.k_start + 1, rng.k_end)
         if path.boundaries[k].stop and _flush_only(path, k) == flush
     )
+    if rng.k_end > rng.k_start and _waits_after_start(path, rng, flush):
+        return (rng.k_start, *inside)
+    return inside
+
+
+def _waits_after_start(path: PathProgram, rng: LiftRange, flush: bool) -> bool:
+    """Whether the path stops at LIFT_START's boundary after the LIFT_START there: for a wait
+    (`flush` False) or only for a #FLUSH (`flush` True)."""
+    b = path.boundaries[rng.k_start]
+    kinds: set[ActionKind] = set()
+    begun = False
+    for a in b.actions:
+        if a.kind is ActionKind.LIFT_START:
+            begun = a.lift_start is rng.start
+        elif begun:
+            kinds.add(a.kind)
+    if kinds & (_WAITS - {ActionKind.PROGRAM_END}):
+        return not flush
+    return flush and ActionKind.FLUSH in kinds
 
 
 def _conditional(path: PathProgram) -> dict[int, tuple[int, ...]]:

@@ -48,7 +48,7 @@ class LiftAhead:
         nor starts again after it. The channel is emptied at a flush, so the lift does not
         count on the blocks after it until the path is there: Z keeps rising toward POS_LIMIT
         as in a feed hold, and at the flush the path waits if Z could not make it from there
-        (`BoundaryActions.flush_may_go`). liftd follows this passage where the general one
+        (`BoundaryActions.z_lets_go`). liftd follows this passage where the general one
         (§2.4: "the programmed target position is reached briefly in the flush block")
         disagrees: the method-specific passage first, and it keeps Z up (issue 37 item 2)."""
         rng = self.lift.current
@@ -58,7 +58,24 @@ class LiftAhead:
         stops = self.prog.stops[rng.index]  # (stops_in: a Python frame every cycle)
         if stopped is not None and stopped in stops:
             return stopped  # waiting inside the range: Z goes to (and stays at) POS here
-        ahead = self.interp.segment if stopped is None else stopped
+        return self._after(rng, self.interp.segment if stopped is None else stopped)
+
+    def leaving_horizon(self) -> int:
+        """Where the path rests inside the current range, at a waiting point of the program
+        (G04, a synchronised M function, M00) or at a #FLUSH: the horizon Z plans for once the
+        path leaves it; -1 where it rests elsewhere, or where that horizon is unknown."""
+        rng = self.lift.current
+        k = self.interp.stopped_at
+        if rng is None or k is None or not rng.k_start <= k < rng.k_end:
+            return -1
+        i = rng.index
+        if k == rng.k_start and k not in self.prog.stops[i] and k not in self.prog.flushes[i]:
+            return -1  # a rest at LIFT_START with nothing to wait for after it
+        return self._after(rng, k)
+
+    def _after(self, rng: LiftRange, ahead: int) -> int:
+        """The horizon of a path that has passed boundary `ahead` (or rests there)."""
+        stops = self.prog.stops[rng.index]
         horizon = rng.k_end
         for k in stops:
             if k > ahead:
@@ -80,7 +97,7 @@ class LiftAhead:
         horizon, a lower bound that `refine` makes exact; inf where the horizon is unknown.
         Where the path rests at a flush, the least time it needs from there if it left now
         (at t): Z plans to land by then, the path waits until it can
-        (`BoundaryActions.flush_may_go`)."""
+        (`BoundaryActions.z_lets_go`)."""
         k = self.horizon()
         if k < 0:
             return INF, None
@@ -126,7 +143,7 @@ class LiftAhead:
                 if b > rng.k_start:
                     horizon = b
                     break
-            if not any(f < horizon for f in self.prog.flushes[rng.index]):
+            if not any(rng.k_start < f < horizon for f in self.prog.flushes[rng.index]):
                 ip.arrival_bound(horizon)  # (beyond a flush the lift plans with no bound)
 
 

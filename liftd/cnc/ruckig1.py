@@ -183,6 +183,34 @@ class Phases:
         return _integrate(t, self.p[i], self.v[i], self.a[i], self.j[i])
 
 
+def travel_after(ph: Phases, time: float) -> float:
+    """An upper bound of the distance the profile moves from `time` (from its start) to its
+    end: over each piece left, its largest |v| times the time left in it (v is quadratic in a
+    piece: its extremes are at the ends or where a = 0)."""
+    pieces: list[tuple[float, float, float, float, float]] = []  # (t0, t1, v, a, j)
+    t0 = 0.0
+    if ph.b_dur > 0.0:
+        pieces.append((0.0, ph.b_t0, ph.b_v[0], ph.b_a[0], ph.b_j[0]))
+        pieces.append((ph.b_t0, ph.b_dur, ph.b_v[1], ph.b_a[1], ph.b_j[1]))
+        t0 = ph.b_dur
+    for i in range(7):
+        t1 = ph.b_dur + ph.t_sum[i]
+        pieces.append((t0, t1, ph.v[i], ph.a[i], ph.j[i]))
+        t0 = t1
+    total = 0.0
+    for start, end, v0, a0, j in pieces:
+        if end <= time or end <= start:
+            continue
+        u = max(0.0, time - start)  # the piece's state from where it is still ahead
+        v, a = v0 + u * (a0 + u * j / 2), a0 + u * j
+        span = end - start - u
+        top = max(abs(v), abs(v + span * (a + span * j / 2)))
+        if j != 0.0 and 0.0 < -a / j < span:
+            top = max(top, abs(v - a * a / (2 * j)))
+        total += top * span
+    return total
+
+
 def _integrate(t: float, p0: float, v0: float, a0: float, j: float) -> tuple[float, float, float]:
     return (
         p0 + t * (v0 + t * (a0 / 2 + t * j / 6)),

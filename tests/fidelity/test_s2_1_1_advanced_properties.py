@@ -11,10 +11,12 @@ import pytest
 
 from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.params import ChannelParams, LiftMethod
+from liftd.cnc.plc import Schedule
 from liftd.cnc.snapshot import ChannelState, Command, GeoInputs, GeoSnapshot
 from tests.fidelity.helpers import MM
 from tests.support.channel import make_channel
 from tests.support.closed_loop import events, run_task
+from tests.support.stops import StopThenStart
 
 LANDED = 1e-6  # m
 
@@ -148,6 +150,30 @@ def test_s2_1_1_a_waiting_condition_inside_a_range_z_moves_on_to_target_height(w
     assert rec.arrival_error <= LANDED
 
 
+@pytest.mark.parametrize("wait", ["G04 X0.1", "G04 X1", "M08"])
+def test_s2_1_1_a_waiting_condition_right_after_lift_start_is_inside_the_range(wait: str) -> None:
+    """A wait that follows LIFT_START with no motion between is a waiting condition of the
+    range (§2.1.1: Z moves on to target height): Z goes to POS while the path waits at the
+    range's start, lifts again for the 10 mm to LIFT_END and lands there on time. Z took the
+    wait as a feed hold (no arrival known while the path rests), rose toward POS_LIMIT, and
+    the path left at F6000: 71 mm above POS at LIFT_END after a G04 X0.1 (a review found)."""
+    ch = make_channel()
+    text = (
+        f"G01 X10 Y10 Z1 F6000\nZ[LIFT_START POS=5 POS_LIMIT=80]\n{wait}\nG01 X20\n"
+        "Z[LIFT_END]\nG01 X200\nM30\n"
+    )
+    task, snaps = run_task(ch, text)
+    assert snaps[-1].state is ChannelState.READY and not events(snaps, "lift.late")
+    (rec,) = task.lift.records
+    assert rec.arrival_error <= LANDED and rec.path_delay == pytest.approx(0.0, abs=1e-9)
+    at_start = [s for s in snaps if s.lift_active and s.positions[0] == 0.01]
+    assert max(s.positions[2] for s in at_start) <= 5 * MM + LANDED  # toward POS, not up
+    if wait == "G04 X1":
+        assert at_start[-1].positions[2] == pytest.approx(5 * MM, abs=LANDED)  # at POS
+    after = [s for s in snaps if 0.01 < s.positions[0] < 0.02]
+    assert max(s.positions[2] for s in after) > 6 * MM  # and lifted again for the rest
+
+
 def _run_with_restart(ch: ChannelParams, text: str) -> tuple[GeoTask, list[GeoSnapshot]]:
     """M00: the PLC presses START again 0.3 s after the channel held."""
     held: list[float] = []
@@ -160,3 +186,47 @@ def _run_with_restart(ch: ChannelParams, text: str) -> tuple[GeoTask, list[GeoSn
         return GeoInputs()
 
     return run_task(ch, text, inputs=inputs)
+
+
+WAIT_AFTER_HOLD = (
+    "G01 X10 Y10 Z1 F6000\nZ[LIFT_START POS=5 POS_LIMIT=80]\nG01 X150 F6000\nM08\nG01 X160\n"
+    "Z[LIFT_END]\nG01 X200\nM30\n"
+)
+ACK = 0.02  # s, the simulated PLC's acknowledgement of M08
+
+
+def _held(ch: ChannelParams, how: str, t_hold: float) -> tuple[GeoTask, list[GeoSnapshot]]:
+    """WAIT_AFTER_HOLD with a 1 s feed hold or a PLC STOP (then START 1 s later) at t_hold."""
+    if how == "hold":
+        return run_task(ch, WAIT_AFTER_HOLD, Schedule(feed_hold=((t_hold, t_hold + 1.0),)))
+    return run_task(ch, WAIT_AFTER_HOLD, inputs=StopThenStart(t_hold, 1.0))
+
+
+@pytest.mark.parametrize("how", ["hold", "stop"])
+def test_s2_1_1_after_a_hold_just_before_a_waiting_point_the_path_waits_there_for_z(
+    how: str,
+) -> None:
+    """§2.1.1 (the path waits for Z where the feed cannot be reduced enough): a feed hold or a
+    PLC STOP parks the path 0.1 mm before a synchronised M function inside the range, Z rises
+    to POS_LIMIT meanwhile; on release no crawl lets Z land at the M function. The path then
+    waits there beyond the acknowledgement until Z can land by LIFT_END, 10 mm on, and leaves
+    with Z still descending. Before, it left at the acknowledgement and passed LIFT_END at
+    F6000 with Z 9.2 mm above POS (bench_lift_safety --wide --stops seed 474: 0.48 mm)."""
+    ch = make_channel()
+    _, ref = run_task(ch, WAIT_AFTER_HOLD)
+    cruise = [s for s in ref if 0.1 < s.positions[0] < 0.14]  # at F6000, 10–50 mm before X150
+    probe = _held(ch, how, cruise[0].t)[1]
+    rest_x = next(s.positions[0] for s in probe if s.t > cruise[0].t + 0.5)
+    brake = rest_x - cruise[0].positions[0]  # what the hold takes from the cruise
+    t_hold = max(s.t for s in ref if s.positions[0] < 0.150 - brake - 1e-6)
+    task, snaps = _held(ch, how, t_hold)
+    held = next(s for s in snaps if s.t > t_hold + 0.5)
+    assert 0.1499 <= held.positions[0] < 0.150 and held.positions[2] == pytest.approx(80 * MM)
+    assert snaps[-1].state is ChannelState.READY and not events(snaps, "lift.late")
+    (rec,) = task.lift.records
+    assert rec.arrival_error <= LANDED
+    at_m = [s for s in snaps if s.t > t_hold + 0.9 and s.positions[0] == 0.150 and s.v_path == 0]
+    assert len(at_m) * ch.cycle_time > ACK + 0.03  # it waited beyond the acknowledgement
+    assert at_m[-1].positions[2] > 20 * MM  # and left with Z on its way down
+    assert rec.waits <= ACK + 2 * ch.cycle_time  # the program's wait: the M function's
+    assert rec.path_delay >= len(at_m) * ch.cycle_time - ACK - 2 * ch.cycle_time  # Z's

@@ -30,6 +30,7 @@ from liftd.cnc.lift.profile import ProfileError
 from liftd.cnc.lift.ranges import LiftRange
 from liftd.cnc.path.interpolator import Interpolator
 from liftd.cnc.plc import MAX_OVERRIDE
+from liftd.cnc.ruckig1 import Phases, travel_after
 from liftd.cnc.snapshot import LiftPhase
 
 INF = float("inf")
@@ -119,7 +120,12 @@ class LiftMotion(ABC):
     @abstractmethod
     def landing_time(self) -> float:
         """Time Z needs from its state now to be at POS: the descent in hand, or, while it
-        rises, the time-optimal one from here (`BoundaryActions.flush_may_go`)."""
+        rises, the time-optimal one from here (`BoundaryActions.z_lets_go`)."""
+
+    def travel_left(self) -> float:
+        """An upper bound of how far Z still moves before it is at rest at POS (inf where it
+        is not on its way there by a plan)."""
+        return INF
 
     @abstractmethod
     def resume_in_range(self, t: float) -> None: ...
@@ -249,6 +255,14 @@ class TimeBasedLift(LiftMotion):
             return gen.t_need
         plan = gen.plan
         return 0.0 if plan is None else max(0.0, gen.plan_t0 + plan.duration - gen.t)
+
+    def travel_left(self) -> float:
+        gen = self.gen
+        if gen.done:
+            return 0.0
+        if gen.phase is not DOWN or gen.plan is None:
+            return INF
+        return travel_after(Phases(gen.plan), gen.t - gen.plan_t0)
 
     def landing_time(self) -> float:
         gen = self.gen

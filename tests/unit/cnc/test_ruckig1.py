@@ -3,11 +3,12 @@ what ruckig's own `at_time` gives, bit for bit."""
 
 from __future__ import annotations
 
+import itertools
 import random
 
 from ruckig import Trajectory
 
-from liftd.cnc.ruckig1 import Evaluator, Phases, ProfileError, Ruckig1, state_at
+from liftd.cnc.ruckig1 import Evaluator, Phases, ProfileError, Ruckig1, state_at, travel_after
 
 
 def _profiles(n: int, seed: int = 1) -> list[Trajectory]:
@@ -58,6 +59,29 @@ def test_the_native_evaluation_is_ruckigs_own_bit_for_bit() -> None:
             p, v, a = traj.at_time(t)
             assert ph.at(t) == (p[0], v[0], a[0]), (t, dur)
     assert braked > 100  # profiles that start beyond the limits were among them
+
+
+def test_travel_after_bounds_what_is_left_of_a_profile_and_is_tight() -> None:
+    """`travel_after` (the lift's landing rule: Z stays within 1 µm of POS for what is left of
+    its descent) is an upper bound of the distance the profile still moves, brake pieces
+    included, and not far above it: each piece's largest |v| times its time, against the
+    path length summed over 400 samples."""
+    rng = random.Random(3)
+    ratios = []
+    for traj in _profiles(300, seed=4):
+        dur = traj.duration
+        t = rng.uniform(0.0, dur) if rng.random() < 0.8 else 0.0
+        ph = Phases(traj)
+        n = 400
+        times = [t + (dur - t) * i / n for i in range(n + 1)]
+        ps = [ph.at(x)[0] for x in times]
+        moved = sum(abs(b - a) for a, b in itertools.pairwise(ps))
+        bound = travel_after(ph, t)
+        assert bound >= moved * (1 - 1e-9) - 1e-15, (bound, moved)
+        if moved > 1e-6:
+            ratios.append(bound / moved)
+    assert travel_after(ph, dur) == 0.0 and travel_after(ph, dur + 1.0) == 0.0
+    assert ratios and sorted(ratios)[len(ratios) // 2] < 1.5  # a bound, but not a loose one
 
 
 def test_an_evaluator_answers_as_state_at_from_its_first_call_on() -> None:

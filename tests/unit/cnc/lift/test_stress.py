@@ -14,7 +14,7 @@ import liftd.cnc.geo_program as geo_program
 from liftd.cnc.params import LiftMethod
 from liftd.cnc.plc import Schedule
 from tests.support.channel import make_channel
-from tests.support.closed_loop import run_task
+from tests.support.closed_loop import events, run_task
 from tests.support.cycle_check import violations
 from tests.support.programs import nesting_program
 from tests.support.scenarios import describe, scenario, wide_scenario
@@ -173,3 +173,16 @@ def test_random_run_with_flushes_keeps_every_promise(seed: int, method: LiftMeth
     task, snaps = run_task(sc.channel, sc.text, sc.schedule, max_time=120)
     assert violations(sc, snaps, task.lift.records) == [], describe(sc)
     assert task.interp.plan_errors == 0, (task.interp.last_plan_error, describe(sc))
+
+
+def test_a_descent_that_crawls_within_a_micrometre_of_pos_is_a_landing() -> None:
+    """--flush seed 425: an override drop 8 ms before LIFT_END re-planned Z's descent from
+    0.23 µm above POS for the path's later arrival; the path then passed LIFT_END with Z
+    7e-18 m from POS, 1.07 ms and under 8 nm of that descent still to go. A landing (Z stays
+    within 1 µm of POS to the descent's end), not a late lift; it was reported late."""
+    sc = scenario(425, LiftMethod.ADVANCED, flush=True)
+    task, snaps = run_task(sc.channel, sc.text, sc.schedule, max_time=120)
+    assert not events(snaps, "lift.late"), describe(sc)
+    assert violations(sc, snaps, task.lift.records) == [], describe(sc)
+    (rec,) = task.lift.records
+    assert not rec.late and rec.arrival_error <= 1e-6
