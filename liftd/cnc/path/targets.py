@@ -36,6 +36,8 @@ from liftd.cnc.path.velocity import (
 )
 from liftd.cnc.ruckig1 import Evaluator, Phases, ProfileError, Ruckig1
 
+DIP_STEPS = 10  # `Targets._dip_through`: its velocity within 2^-10 of the cap (a ruckig solve each)
+DIP_FLOOR = 0.1  # ... and never below this fraction of the cap (a brake nearly to rest is a stop)
 BISECT_STEPS = 24  # `Targets._brake_first`: its velocity within 2^-24 of the interval searched
 BRAKE_CRUISE = 0.25  # share of the way `Targets._brake_through`'s cruise may take at most
 DIP_TOL = 1e-4  # relative: a profile this much below the lower of its ends' velocities dips
@@ -496,6 +498,46 @@ class Targets(Constraints):
             return False
         plan.serves, plan.soft_from = cands[k][0], cands[0][0]
         self.plan, self._soft_from = plan, cands[0][0]
+        return True
+
+    def _dip_through(
+        self, cands: list[tuple[int, float, float, bool]], first: tuple[int, float, float, bool],
+        a_max: float, j_max: float, w: int,
+    ) -> bool:  # fmt: skip
+        """A feed cap (the program's own, not an override drop's) that came into view too
+        late for the path to get down to it with zero acceleration there: the brake at once
+        to the highest velocity e below it from which the brake passes it below its cap, and
+        a cruise at e that keeps every other candidate (`SETTLE`, re-planned where the brake
+        ends). With a jerk limit the brake to rest is not the shortest way down to every
+        velocity (`brake_reach`): a look-ahead of 30 blocks of 0.1 mm (3 mm) at 141 mm/s lets
+        the path stop at its end in 2.65 mm, and the brake to a drop to F3600 at the window's
+        end takes 2.86 mm; the path passed the F3600 blocks at 141 mm/s (a review's program,
+        0.1 mm blocks, F12000 → F3600). The dip below the cap after it is the price of the
+        window: slower, never above a cap, never at rest (False where only a brake to rest
+        would pass it below)."""
+        cap = first[2]
+        others = [c for c in cands if c[0] != first[0]]
+
+        def passes_below(e: float) -> Plan | None:
+            plan = self._velocity_plan(e, SETTLE, w, a_max, j_max)
+            if plan is None or plan.dur <= 0.0 or self._passed_above(plan, [first], 1) >= 0:
+                return None
+            return plan if self._first_keeps(others, e, a_max, j_max) else None
+
+        good, bad = 0.0, cap
+        kept = passes_below(DIP_FLOOR * cap)
+        if kept is None:
+            return False
+        good = DIP_FLOOR * cap
+        for _ in range(DIP_STEPS):
+            mid = 0.5 * (good + bad)
+            plan = passes_below(mid)
+            if plan is not None:
+                good, kept = mid, plan
+            else:
+                bad = mid
+        kept.serves = kept.soft_from = first[0]  # it keeps that cap: passed below it, braking
+        self.plan, self._soft_from = kept, first[0]
         return True
 
     def _keep_below(

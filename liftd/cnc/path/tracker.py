@@ -318,12 +318,15 @@ class Tracker(Targets):
             and plan.goal == b
             and self._passed_above(plan, [first], 1) >= 0
             and not self._keep_below(passed, first, b, w)
-            and self._need(v, a, first[2], False, a_max, j_max) <= first[1] - s + SLACK_TOL
         ):
-            # the shift gave up a feed cap the path could still get below braking, and its
-            # profile passes it above: a brake at once instead (known deviation 12 of
-            # docs/geo-core.md, CAM seed 0)
-            self._brake_through([first, (b, s_c, cap, gate)], 1, target, a_max, j_max, w)
+            if self._need(v, a, first[2], False, a_max, j_max) <= first[1] - s + SLACK_TOL:
+                # the shift gave up a feed cap the path could still get below braking, and its
+                # profile passes it above: a brake at once instead (known deviation 12 of
+                # docs/geo-core.md, CAM seed 0)
+                self._brake_through([first, (b, s_c, cap, gate)], 1, target, a_max, j_max, w)
+            elif v_p <= ceiling * (1.0 + CAP_TOL) + V_ROUND:
+                # nor that (it came into view too late): below it braking through (issue 36)
+                self._dip_through(looked, first, a_max, j_max, w)
 
     def _rests_before(
         self, cands: list[tuple[int, float, float, bool]], s: float, v: float, a: float,

@@ -327,3 +327,28 @@ def test_a_lift_range_s_lower_feed_with_a_run_boundary_1_um_ahead_does_not_hang(
     sc = wide_scenario(879, LiftMethod.LIFTING)
     _, hard, _, errors = check(sc)
     assert hard == [] and errors == 0, (hard, describe(sc))
+
+
+@pytest.mark.parametrize("look_ahead", [30, 40])
+def test_a_feed_drop_that_comes_into_view_too_late_is_never_passed_above(look_ahead: int) -> None:
+    """0.1 mm blocks on one line, F12000 for 10 mm then F3600 (60 mm/s), no override change.
+    The look-ahead of 30 blocks (3 mm) lets the path stop at its end from 141 mm/s (2.65 mm),
+    but the brake to 60 mm/s with zero acceleration takes 2.86 mm: when the drop comes into
+    view it is out of reach. The path held 141 mm/s into the F3600 blocks (54 cycles above
+    their feed; a review found). It now brakes at once and passes the drop below 60 mm/s,
+    braking (a dip below the new feed, no stop); with 40 blocks the drop is in reach."""
+    ch = dataclasses.replace(shipped(), look_ahead_blocks=look_ahead, cycle_time=1e-3)
+    lines = ["G01 X1 Y0 F12000"] + [f"G01 X{1 + 0.1 * i:.3f} Y0" for i in range(1, 101)]
+    lines += ["G01 X11.100 Y0 F3600"] + [f"G01 X{11.1 + 0.1 * i:.3f} Y0" for i in range(1, 101)]
+    sc = Scenario(0, ch, "\n".join([*lines, "M30"]) + "\n", Schedule())
+    _, hard, _, errors = check(sc)
+    assert hard == [] and errors == 0, hard
+    task = GeoTask(sc.channel, sc.text)
+    after = [
+        s.v_path
+        for s in run_cycles(task, SimPlc(0.02), sc.schedule, 1e-3, 2.0)
+        if 0.0111 <= s.positions[0] < 0.015  # (the program ends at X21.1, at rest)
+    ]
+    assert max(after) <= 0.06 * (1 + 1e-9)  # never above the new feed in its blocks
+    assert min(after) >= 0.04  # no stop: a dip of at most a third, then the new feed
+    assert after[-1] == pytest.approx(0.06)
