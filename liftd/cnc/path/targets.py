@@ -441,13 +441,15 @@ class Targets(Constraints):
         )
 
     def _first_keeps(
-        self, cands: list[tuple[int, float, float, bool]], e: float, a_max: float, j_max: float
-    ) -> bool:
+        self, cands: list[tuple[int, float, float, bool]], e: float, a_max: float, j_max: float,
+        margin: float = SLACK_MARGIN,
+    ) -> bool:  # fmt: skip
         """The brake at once from the path's state to e (zero acceleration there) and a cruise
         at e keep every candidate: a run boundary or stop after the brake's end with room to
         get down to its cap from e; a feed cap the brake passes below it (it reaches any
         velocity sooner than the brake to it with zero acceleration there), or one after it
-        that the path gets down to from e. Within SLACK_MARGIN, as `_violated` reads them.
+        that the path gets down to from e. Within `margin` (SLACK_MARGIN: as `_violated`
+        reads them).
         Not the window's end where it is not a stop: it moves on with the path, and the steps
         keep it reachable as from any cruise (`_violated`, a forced re-plan toward it); read
         as fixed, rest or its floor there held the brake to 26 mm/s for a ceiling of 300 after
@@ -460,11 +462,11 @@ class Targets(Constraints):
                 continue  # the window's end moves on: the steps keep it (`_violated`)
             _, s_b, cap, gate = c
             room = s_b - s
-            if room - d_e < SLACK_MARGIN:
-                if gate or brake_distance(v, a, cap, a_max, j_max) > room - SLACK_MARGIN:
+            if room - d_e < margin:
+                if gate or brake_distance(v, a, cap, a_max, j_max) > room - margin:
                     return False
             elif (cap < e or gate) and (
-                room - d_e - self._need(e, 0.0, cap, gate, a_max, j_max) < SLACK_MARGIN
+                room - d_e - self._need(e, 0.0, cap, gate, a_max, j_max) < margin
             ):
                 return False
         return True
@@ -504,17 +506,21 @@ class Targets(Constraints):
         self, cands: list[tuple[int, float, float, bool]], first: tuple[int, float, float, bool],
         a_max: float, j_max: float, w: int,
     ) -> bool:  # fmt: skip
-        """A feed cap (the program's own, not an override drop's) that came into view too
-        late for the path to get down to it with zero acceleration there: the brake at once
-        to the highest velocity e below it from which the brake passes it below its cap, and
-        a cruise at e that keeps every other candidate (`SETTLE`, re-planned where the brake
-        ends). With a jerk limit the brake to rest is not the shortest way down to every
-        velocity (`brake_reach`): a look-ahead of 30 blocks of 0.1 mm (3 mm) at 141 mm/s lets
-        the path stop at its end in 2.65 mm, and the brake to a drop to F3600 at the window's
-        end takes 2.86 mm; the path passed the F3600 blocks at 141 mm/s (a review's program,
-        0.1 mm blocks, F12000 → F3600). The dip below the cap after it is the price of the
-        window: slower, never above a cap, never at rest (False where only a brake to rest
-        would pass it below)."""
+        """A feed cap that came into view too late for the path to get down to it with zero
+        acceleration there, where the path is not above its ceiling (a feed drop, also under
+        a lower override the path already rides below): the brake at once to the highest
+        velocity e below it from which the brake passes it below its cap, and a cruise at e
+        that keeps every other candidate with twice the step's margin (`SETTLE`, re-planned
+        where the brake ends; with the margin alone the step found another cap out of reach
+        the next cycle, and the forced re-plans toward it and the dip took turns, up to 16
+        re-plans a cycle: a review found). With a jerk limit the brake to rest is not the
+        shortest way down to every velocity (`brake_reach`): a look-ahead of 30 blocks of
+        0.1 mm (3 mm) at 141 mm/s lets the path stop at its end in 2.65 mm, and the brake to
+        a drop to F3600 at the window's end takes 2.86 mm; the path passed the F3600 blocks
+        at 141 mm/s (a review's program, 0.1 mm blocks, F12000 → F3600). The dip below the
+        cap after it is the price of the window: slower, never above a cap, never at rest
+        (False where only a brake to rest would pass it below). The plan is kept through the
+        boundaries before that cap (`Tracker._arrive`)."""
         cap = first[2]
         others = [c for c in cands if c[0] != first[0]]
 
@@ -522,7 +528,8 @@ class Targets(Constraints):
             plan = self._velocity_plan(e, SETTLE, w, a_max, j_max)
             if plan is None or plan.dur <= 0.0 or self._passed_above(plan, [first], 1) >= 0:
                 return None
-            return plan if self._first_keeps(others, e, a_max, j_max) else None
+            keeps = self._first_keeps(others, e, a_max, j_max, 2.0 * SLACK_MARGIN)
+            return plan if keeps else None
 
         good, bad = 0.0, cap
         kept = passes_below(DIP_FLOOR * cap)
@@ -536,7 +543,20 @@ class Targets(Constraints):
                 good, kept = mid, plan
             else:
                 bad = mid
-        kept.serves = kept.soft_from = first[0]  # it keeps that cap: passed below it, braking
+        # it keeps that cap, passed below it braking, and the feed caps after it up to the
+        # first one below e or a run boundary (below them braking, `_first_keeps`, or at e):
+        # the steps check those by their hard caps only. Read by `_violated` as caps to reach
+        # with zero acceleration, one of them was out of reach from inside the brake the next
+        # step, and the forced re-plans toward it and the dip took turns, 16 re-plans and 88
+        # ruckig solves in a cycle (a review found: F6000, F5400, F540 on 0.2 mm blocks)
+        serves = first[0]
+        for b, s_b, c, gate in sorted(others, key=lambda o: o[1]):
+            if s_b <= first[1]:
+                continue
+            if gate or c < good:
+                break
+            serves = b
+        kept.serves, kept.soft_from = serves, first[0]
         self.plan, self._soft_from = kept, first[0]
         return True
 

@@ -38,7 +38,7 @@ from liftd.cnc.path.constraints import (
     SLACK_TOL,
     V_ROUND,
 )
-from liftd.cnc.path.plan import CRUISE, EPS_S, Crossing, Plan
+from liftd.cnc.path.plan import CRUISE, EPS_S, SETTLE, Crossing, Plan
 from liftd.cnc.path.table import PathTable
 from liftd.cnc.path.targets import Targets
 from liftd.cnc.path.velocity import (
@@ -325,7 +325,8 @@ class Tracker(Targets):
                 # docs/geo-core.md, CAM seed 0)
                 self._brake_through([first, (b, s_c, cap, gate)], 1, target, a_max, j_max, w)
             elif v_p <= ceiling * (1.0 + CAP_TOL) + V_ROUND:
-                # nor that (it came into view too late): below it braking through (issue 36)
+                # nor that (it came into view too late): below it braking through (known
+                # deviation 13)
                 self._dip_through(looked, first, a_max, j_max, w)
 
     def _rests_before(
@@ -484,7 +485,7 @@ class Tracker(Targets):
         self.plan = None
         if (
             plan is not None
-            and plan.goal > b
+            and (plan.goal > b or (plan.goal == SETTLE and plan.serves > b))
             and a < 0.0
             and not tb.gate[b]
             and not self.is_stop(b)
@@ -495,7 +496,10 @@ class Tracker(Targets):
             # ceiling): the profile in hand is still the time-optimal one, and a new one from
             # inside its brake, which has no slack left, may find the exact brake a few 10 nm
             # too long and dip below the goal's velocity (ruckig brakes below it and comes
-            # back: issue 36, 5 mm/s after a brake from 141 mm/s went down to 3)
+            # back: issue 36, 5 mm/s after a brake from 141 mm/s went down to 3). So is the
+            # brake below a feed cap beyond b (`Targets._dip_through`): dropped at a higher
+            # feed drop before it, the re-plan from inside that brake was refused and the
+            # path braked to rest (a review found: F24000 -> F7200 -> F2400 on 0.1 mm blocks)
             self.plan = plan
         if self.is_stop(b):
             if v > CAP_TOL:
