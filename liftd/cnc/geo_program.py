@@ -40,7 +40,9 @@ class GeoProgram:
     error: NcError | None  # first decode error: execution stops at the end of `path`
     warnings: tuple[NcError, ...]
     first_line: int
-    stops: tuple[tuple[int, ...], ...]  # per range: waiting points strictly inside it
+    # per range: its waiting points inside it (LIFT_START's boundary where a wait follows the
+    # LIFT_START there, `_waits_after_start`)
+    stops: tuple[tuple[int, ...], ...]
     # per range: boundaries strictly inside it where the path stops only for a #FLUSH / #FLUSH
     # WAIT (not waiting points of the lift: vendor §2.1.3 case 3, `LiftAhead.horizon`)
     flushes: tuple[tuple[int, ...], ...]

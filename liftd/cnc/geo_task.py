@@ -265,7 +265,12 @@ class GeoTask:
         if m is not None:
             ip = self.interp
             t_rem, refine = 0.0, None
-            if m.uses_time:
+            if m.uses_time and self.lift.ending:
+                # past LIFT_END, Z within 1 µm of POS on what is left of its descent: it
+                # follows that descent to its end (the path resting at a later boundary read
+                # as unknown time would have made it rise again; a review found)
+                t_rem = m.needed_time()
+            elif m.uses_time:
                 t_rem, refine = self.ahead.lift_time(t, m.t, self.ov_eff)
             self.lift.step(t, ip.s, ip.v, ip.a, t_rem, self.ov_eff, refine)
             for finding in self.lift.findings:

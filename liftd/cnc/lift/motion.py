@@ -15,6 +15,7 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 
 from liftd.cnc.lift.advanced import (
+    DIRECT,
     DONE,
     DOWN,
     HOLD_LIMIT,
@@ -260,9 +261,12 @@ class TimeBasedLift(LiftMotion):
         gen = self.gen
         if gen.done:
             return 0.0
-        if gen.phase is not DOWN or gen.plan is None:
-            return INF
-        return travel_after(Phases(gen.plan), gen.t - gen.plan_t0)
+        plan = gen.plan
+        if (gen.phase is not DOWN and gen.phase is not DIRECT) or plan is None:
+            return INF  # (a DIRECT plan also ends at rest at POS)
+        ev = gen.plan_ev
+        phases = ev.phases if ev.traj is plan and ev.phases is not None else Phases(plan)
+        return travel_after(phases, gen.t - gen.plan_t0)
 
     def landing_time(self) -> float:
         gen = self.gen
