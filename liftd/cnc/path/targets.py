@@ -20,12 +20,11 @@ from liftd.cnc.path.constraints import (
     CAP_TOL,
     GATE_TOL,
     INF,
-    SLACK_MARGIN,
     SLACK_TOL,
     V_ROUND,
     Constraints,
 )
-from liftd.cnc.path.plan import BRAKE, CRUISE, EPS_S, SETTLE, Plan
+from liftd.cnc.path.plan import BRAKE, EPS_S, Plan
 from liftd.cnc.path.table import PathTable
 from liftd.cnc.path.velocity import (
     brake_distance,
@@ -36,10 +35,6 @@ from liftd.cnc.path.velocity import (
 )
 from liftd.cnc.ruckig1 import Evaluator, Phases, ProfileError, Ruckig1
 
-DIP_STEPS = 10  # `Targets._dip_through`: its velocity within 2^-10 of the cap (a ruckig solve each)
-DIP_FLOOR = 0.1  # ... and never below this fraction of the cap (a brake nearly to rest is a stop)
-BISECT_STEPS = 24  # `Targets._brake_first`: its velocity within 2^-24 of the interval searched
-BRAKE_CRUISE = 0.25  # share of the way `Targets._brake_through`'s cruise may take at most
 DIP_TOL = 1e-4  # relative: a profile this much below the lower of its ends' velocities dips
 
 
@@ -357,228 +352,6 @@ class Targets(Constraints):
         except ProfileError:
             return None
         return Plan(traj, self.t, goal, w, None, e)
-
-    def _brake_first(
-        self, cands: list[tuple[int, float, float, bool]], ceiling: float, a_max: float,
-        j_max: float, w: int,
-    ) -> bool:  # fmt: skip
-        """Above a lowered ceiling (an override drop): a brake at once (ruckig's velocity
-        interface) down to the ceiling, then a cruise at it, where that keeps every candidate
-        ahead (`_first_keeps`); the steps re-plan toward the first candidate whose slack runs
-        out, as from any cruise. A CNC brakes from the velocity it has at once; the
-        time-optimal profile toward the binding candidate holds that velocity above F ×
-        override and brakes late (known deviation 10 of docs/geo-core.md: wide seed 79, 150
-        mm/s for 1.4 ms after an override drop to 10 mm/s). Else the brake at once to the
-        highest velocity below the ceiling from which a cruise keeps them (a stop or a low
-        cap near ahead: narrow seed 426, override 100 → 70 % at 100 mm/s 1.8 mm before a
-        stop), re-planned where it ends (`SETTLE`: a cruise below the ceiling is never
-        re-planned as the window moves on, and crawled to the program's end, a review found),
-        never below the lowest cap ahead (with a jerk limit a brake to a lower velocity can be
-        the shorter: CAM seed 956, on the exact brake to 2.68 mm/s at the drop, a brake to
-        2.45 fitted and dipped). False where none keeps them (a feed cap it can no longer get
-        below, a run boundary inside the brake: `_brake_into`)."""
-        e, goal = ceiling, CRUISE
-        if not self._first_keeps(cands, e, a_max, j_max):
-            good = min((c[2] for c in cands if not self._moves_on(c)), default=0.0)
-            if good >= ceiling or not self._first_keeps(cands, good, a_max, j_max):
-                # nothing between (path-based Lifting, wide seed 879: a run boundary 1 µm
-                # ahead above the ceiling, a brake of no length planned again and again)
-                return False
-            bad = ceiling
-            for _ in range(BISECT_STEPS):
-                mid = 0.5 * (good + bad)
-                if self._first_keeps(cands, mid, a_max, j_max):
-                    good = mid
-                else:
-                    bad = mid
-            if good <= 0.0:
-                return False  # never a brake to rest where no stop is
-            e, goal = good, SETTLE
-        plan = self._velocity_plan(e, goal, w, a_max, j_max)
-        if plan is None or (goal == SETTLE and plan.dur <= 0.0):
-            return False  # refused, or a brake of no length, re-planned at its end without end
-        self.plan = plan
-        return True
-
-    def _brake_into(
-        self, cands: list[tuple[int, float, float, bool]], v_p: float, s_c: float,
-        target: float, ceiling: float, v_max: float, a_max: float, j_max: float, b: int,
-        w: int,
-    ) -> bool:  # fmt: skip
-        """Above a lowered ceiling, where the brake at once to it is not enough
-        (`_brake_first`): the target profile with ruckig's v_max at the ceiling, or lower, at
-        the lowest cap of the candidates before b that the path can still get down to with
-        zero acceleration there (a profile held at the ceiling passes them above); ruckig then
-        brakes from outside its limits at once (its brake profile) before the profile to the
-        target. After an override drop to 40 % at 360 mm/s over 0.1 mm blocks whose feed
-        caps it could no longer get down to, the profile with v_max = v held 360 mm/s for
-        22 ms. Kept where ruckig accepts it and it does not dip below the target; else (False)
-        the target profile with v_max = v stays (known deviation 10 of docs/geo-core.md)."""
-        s, v, a = self.s, self.v, self.a
-        top = ceiling
-        for _, s_j, cap, _ in cands:
-            if s_j < s_c and cap < top and brake_distance(v, a, cap, a_max, j_max) <= s_j - s:
-                top = cap
-        top = max(top, target)
-        if top >= v_max or not self._try_target(s, v, a, s_c, target, top, a_max, j_max, b, w):
-            return False
-        if self._dips(min(v, v_p, target)):
-            return False
-        # from above its v_max the profile only brakes: ruckig's brake into its limits is not
-        # a brake to v_max with zero acceleration, and the profile after it can brake to rest
-        # and start again (a review found: override 100 → 30 % at 200 mm/s 5.1 mm before an
-        # M00, at rest 0.7 mm before it; a dip below a target of 0 is no dip). Its pieces were
-        # read by `_dips`.
-        assert self.plan is not None and self.plan.ev.phases is not None
-        return only_brakes(self.plan.ev.phases)
-
-    def _moves_on(self, cand: tuple[int, float, float, bool]) -> bool:
-        """`cand` is the window's end (rest there, or its floor) where that is not a stop: the
-        window moves on with the path, block by block."""
-        w = self.window_end
-        return (
-            cand[0] == w and w < self.tb.n and not self.is_stop(w) and self._window_floor(w) > 0.0
-        )
-
-    def _first_keeps(
-        self, cands: list[tuple[int, float, float, bool]], e: float, a_max: float, j_max: float,
-        margin: float = SLACK_MARGIN,
-    ) -> bool:  # fmt: skip
-        """The brake at once from the path's state to e (zero acceleration there) and a cruise
-        at e keep every candidate: a run boundary or stop after the brake's end with room to
-        get down to its cap from e; a feed cap the brake passes below it (it reaches any
-        velocity sooner than the brake to it with zero acceleration there), or one after it
-        that the path gets down to from e. Within `margin` (SLACK_MARGIN: as `_violated`
-        reads them).
-        Not the window's end where it is not a stop: it moves on with the path, and the steps
-        keep it reachable as from any cruise (`_violated`, a forced re-plan toward it); read
-        as fixed, rest or its floor there held the brake to 26 mm/s for a ceiling of 300 after
-        an override drop on a line of 0.1 mm blocks (look-ahead 120, 12 mm: the brake to the
-        ceiling took 6.2 of them, the window moving on by as much; a review found)."""
-        s, v, a = self.s, self.v, self.a
-        d_e = brake_distance(v, a, e, a_max, j_max)
-        for c in cands:
-            if self._moves_on(c):
-                continue  # the window's end moves on: the steps keep it (`_violated`)
-            _, s_b, cap, gate = c
-            room = s_b - s
-            if room - d_e < margin:
-                if gate or brake_distance(v, a, cap, a_max, j_max) > room - margin:
-                    return False
-            elif (cap < e or gate) and (
-                room - d_e - self._need(e, 0.0, cap, gate, a_max, j_max) < margin
-            ):
-                return False
-        return True
-
-    def _brake_through(
-        self, cands: list[tuple[int, float, float, bool]], k: int, e: float, a_max: float,
-        j_max: float, w: int,
-    ) -> bool:  # fmt: skip
-        """A brake at once to e, candidate k's target, then a cruise at it (ruckig's velocity
-        interface), kept where it gets there before k and passes every candidate before k
-        below its cap: braking toward the lowest, it is below the brake toward each of them
-        (`Constraints._target_cap`), which keeps that one where its own cap is in reach. Where
-        the time-optimal profile toward k holds the velocity and passes a feed drop above its
-        cap (CAM seed 0: boundary 52 at 34.19 for 33.09 mm/s 0.2 mm before a run boundary of
-        25.82, its target at zero acceleration out of reach, its cap not; the shift of
-        `_replan` dropped that cap, known deviation 12 of docs/geo-core.md). Slower than a
-        late brake, never above a cap. Not toward rest or the window's end (a cruise at 0 is
-        never re-planned: a review found the path stand still for good before an M00), and
-        only where the cruise after the brake takes at most BRAKE_CRUISE of the way (one to a
-        corner of 0.43 mm/s 4.8 mm early crawled there, 12 % of the program's time)."""
-        b, s_k = cands[k][0], cands[k][1]
-        if e <= 0.0 or self.is_stop(b) or b == w:
-            return False
-        plan = self._velocity_plan(e, CRUISE, w, a_max, j_max)
-        if (
-            plan is None
-            or plan.p_end > s_k
-            or s_k - plan.p_end > BRAKE_CRUISE * (s_k - self.s)
-            or self._passed_above(plan, cands, k) >= 0
-        ):
-            return False
-        plan.serves, plan.soft_from = cands[k][0], cands[0][0]
-        self.plan, self._soft_from = plan, cands[0][0]
-        return True
-
-    def _dip_through(
-        self, cands: list[tuple[int, float, float, bool]], first: tuple[int, float, float, bool],
-        a_max: float, j_max: float, w: int,
-    ) -> bool:  # fmt: skip
-        """A feed cap that came into view too late for the path to get down to it with zero
-        acceleration there, where the path is not above its ceiling (a feed drop, also under
-        a lower override the path already rides below): the brake at once to the highest
-        velocity e below it from which the brake passes it below its cap, and a cruise at e
-        that keeps every other candidate with twice the step's margin (`SETTLE`, re-planned
-        where the brake ends; with the margin alone the step found another cap out of reach
-        the next cycle, and the forced re-plans toward it and the dip took turns, up to 16
-        re-plans a cycle: a review found). With a jerk limit the brake to rest is not the
-        shortest way down to every velocity (`brake_reach`): a look-ahead of 30 blocks of
-        0.1 mm (3 mm) at 141 mm/s lets the path stop at its end in 2.65 mm, and the brake to
-        a drop to F3600 at the window's end takes 2.86 mm; the path passed the F3600 blocks
-        at 141 mm/s (a review's program, 0.1 mm blocks, F12000 → F3600). The dip below the
-        cap after it is the price of the window: slower, never above a cap, never at rest
-        (False where only a brake to rest would pass it below). The plan is kept through the
-        boundaries before that cap (`Tracker._arrive`)."""
-        cap = first[2]
-        others = [c for c in cands if c[0] != first[0]]
-
-        def passes_below(e: float) -> Plan | None:
-            plan = self._velocity_plan(e, SETTLE, w, a_max, j_max)
-            if plan is None or plan.dur <= 0.0 or self._passed_above(plan, [first], 1) >= 0:
-                return None
-            keeps = self._first_keeps(others, e, a_max, j_max, 2.0 * SLACK_MARGIN)
-            return plan if keeps else None
-
-        good, bad = 0.0, cap
-        kept = passes_below(DIP_FLOOR * cap)
-        if kept is None:
-            return False
-        good = DIP_FLOOR * cap
-        for _ in range(DIP_STEPS):
-            mid = 0.5 * (good + bad)
-            plan = passes_below(mid)
-            if plan is not None:
-                good, kept = mid, plan
-            else:
-                bad = mid
-        # it keeps that cap, passed below it braking, and the feed caps after it up to the
-        # first one below e or a run boundary (below them braking, `_first_keeps`, or at e):
-        # the steps check those by their hard caps only. Read by `_violated` as caps to reach
-        # with zero acceleration, one of them was out of reach from inside the brake the next
-        # step, and the forced re-plans toward it and the dip took turns, 16 re-plans and 88
-        # ruckig solves in a cycle (a review found: F6000, F5400, F540 on 0.2 mm blocks)
-        serves = first[0]
-        for b, s_b, c, gate in sorted(others, key=lambda o: o[1]):
-            if s_b <= first[1]:
-                continue
-            if gate or c < good:
-                break
-            serves = b
-        kept.serves, kept.soft_from = serves, first[0]
-        self.plan, self._soft_from = kept, first[0]
-        return True
-
-    def _keep_below(
-        self, passed: Plan | None, first: tuple[int, float, float, bool], b: int, w: int
-    ) -> bool:
-        """The shift's new profile toward b passes `first` above its feed cap, and the one that
-        brought the path to the boundary it just passed, toward the same goal, passes it below:
-        that one is kept (True). As the window moves on, the goal's target rises and each
-        re-plan brakes later; one that gives up a cap the profile in hand still keeps is the
-        step that loses it (known deviation 12 of docs/geo-core.md, CAM seed 956: boundary 93,
-        114.8 mm/s, passed at 113.8 by the profile in hand, at 120.9 by the new one)."""
-        if (
-            passed is None
-            or passed.goal != b
-            or passed.t0 > self.t
-            or self._passed_above(passed, [first], 1) >= 0
-        ):
-            return False
-        passed.window = w
-        self.plan = passed
-        return True
 
     @staticmethod
     def _passed_above(plan: Plan, cands: list[tuple[int, float, float, bool]], k: int) -> int:

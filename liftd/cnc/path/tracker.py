@@ -29,6 +29,7 @@ answered with a brake (never expected; the closed-loop tests count them).
 
 from __future__ import annotations
 
+from liftd.cnc.path.brakes import Brakes
 from liftd.cnc.path.constraints import (
     CAP_TOL,
     CHAIN_MARGIN,
@@ -40,7 +41,6 @@ from liftd.cnc.path.constraints import (
 )
 from liftd.cnc.path.plan import CRUISE, EPS_S, SETTLE, Crossing, Plan
 from liftd.cnc.path.table import PathTable
-from liftd.cnc.path.targets import Targets
 from liftd.cnc.path.velocity import (
     brake_distance,
     projected_velocity,
@@ -62,7 +62,7 @@ class Primed:
         self.last_error = last_error
 
 
-class Tracker(Targets):
+class Tracker(Brakes):
     """Path state (t, s, v, a, seg) over one table; drive with `advance(t, dt)`."""
 
     def __init__(
@@ -238,7 +238,7 @@ class Tracker(Targets):
         # this one (a feed drop 5 mm before a corner: stress seed 1777, lifting). Then the path
         # aims at the next candidate, passing this one as it brakes (only its hard cap kept).
         first = cands[best_i]  # the candidate the shift, if any, passes first
-        looked = list(cands)  # every candidate the shift looks at (`Targets._brake_into`)
+        looked = list(cands)  # every candidate the shift looks at (`Brakes._brake_into`)
         while not gate:
             own = cands[best_i][2]
             hard = min(tb.point_cap[b], tb.cap[b])
@@ -497,7 +497,7 @@ class Tracker(Targets):
             # inside its brake, which has no slack left, may find the exact brake a few 10 nm
             # too long and dip below the goal's velocity (ruckig brakes below it and comes
             # back: issue 36, 5 mm/s after a brake from 141 mm/s went down to 3). So is the
-            # brake below a feed cap beyond b (`Targets._dip_through`): dropped at a higher
+            # brake below a feed cap beyond b (`Brakes._dip_through`): dropped at a higher
             # feed drop before it, the re-plan from inside that brake was refused and the
             # path braked to rest (a review found: F24000 -> F7200 -> F2400 on 0.1 mm blocks)
             self.plan = plan

@@ -50,7 +50,7 @@ def test_random_lift_runs_rest_only_where_a_rule_says(seed: int) -> None:
 def test_an_override_drop_brakes_at_once() -> None:
     """Wide seed 79: override 150 → 10 % at 150 mm/s. The path held 150 mm/s for 1.4 ms
     (the time-optimal profile toward the next constraint) before it braked: known deviation
-    10 of docs/geo-core.md until `Targets._brake_first`. The check fails a brake that pauses
+    10 of docs/geo-core.md until `Brakes._brake_first`. The check fails a brake that pauses
     above the new ceiling; the velocity falls in the cycle after the drop."""
     sc = wide_scenario(79)
     task = GeoTask(sc.channel, sc.text)
@@ -371,7 +371,7 @@ def test_a_feed_drop_that_comes_into_view_too_late_is_never_passed_above(
 
 def test_two_feed_drops_in_a_row_seen_too_late_keep_the_path_moving() -> None:
     """F24000, then F7200 for 4 blocks of 0.1 mm, then F2400 (40 mm/s), look-ahead 30: the
-    brake below the second drop (`Targets._dip_through`) was dropped at the first drop's
+    brake below the second drop (`Brakes._dip_through`) was dropped at the first drop's
     boundary, the re-plan from inside it was refused (a tracker error) and the path braked
     to 0.011 mm/s (a review found). The brake is kept through the first drop."""
     ch = dataclasses.replace(shipped(), look_ahead_blocks=30, cycle_time=1e-3)

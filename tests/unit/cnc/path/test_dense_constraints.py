@@ -93,7 +93,7 @@ def test_an_override_drop_on_dense_feed_drops_keeps_every_stop_and_limit(
     """The 0.1 mm programs held ~360 mm/s for 22 ms after the drop to 40 % (ceilings 160–400
     mm/s) before they braked, and passed 60 boundaries above feed caps they could have got
     down to (known deviation 10 of docs/geo-core.md). They now brake at once
-    (`Targets._brake_first`, `_brake_into`); what remains is the end of that brake: in the
+    (`Brakes._brake_first`, `_brake_into`); what remains is the end of that brake: in the
     blocks of 400 mm/s between those of 160 the path is below its ceiling and the re-plans
     there ease the brake, so up to four boundaries whose 160 mm/s cap the brake from the drop
     reaches with 0.2 mm to spare are passed up to 1.8 % above it."""

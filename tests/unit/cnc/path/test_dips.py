@@ -60,7 +60,7 @@ def test_an_event_planned_while_decelerating_ramps_the_deceleration_out_first(se
     (expected 42.6 and 98.0 mm/s); it now starts where the deceleration is ramped out.
     (Seed 138 also held 81.96 and 65.43 mm/s above its new ceilings of 75 and 50 for ~2.5 ms
     after 200 → 150 % and 150 → 100 % before it braked on: known deviation 10 of
-    docs/geo-core.md, fixed by `Targets._brake_first`.)"""
+    docs/geo-core.md, fixed by `Brakes._brake_first`.)"""
     sc = wide_scenario(seed)
     _, hard, slow, errors = check(sc)
     assert hard == [] and errors == 0, (hard, describe(sc))
@@ -171,7 +171,7 @@ def test_the_lowest_velocity_of_a_profile_that_brakes_into_its_limits_first() ->
     """From 150 mm/s and −1 m/s² with v_max 100 mm/s, ruckig brakes into its limits first with
     a brake of one piece; the second piece's velocity, never written, reads 0, and the
     lowest velocity read 0 where the profile never goes below its target of 10 mm/s (a review
-    found: 242 of 266 profiles of `Targets._brake_into` refused as dips that were none)."""
+    found: 242 of 266 profiles of `Brakes._brake_into` refused as dips that were none)."""
     traj = Ruckig1().position(0.0, 0.15, -1.0, 0.01, 0.01, 0.1, 8.0, 400.0)
     ph = Phases(traj)
     assert ph.b_dur > 0.0 and ph.b_t0 == ph.b_dur  # a brake of one piece
