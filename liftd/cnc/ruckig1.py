@@ -183,16 +183,25 @@ class Phases:
         return _integrate(t, self.p[i], self.v[i], self.a[i], self.j[i])
 
 
+def brake_pieces(ph: Phases) -> list[tuple[float, float, float, float, float]]:
+    """(start, duration, v, a, j) of each piece of ruckig's brake into its limits that lasts:
+    a brake of one piece leaves its second unwritten (all zeros, ruckig's BrakeProfile),
+    which read as a velocity of 0 made the tracker refuse profiles that do not dip (a review
+    found, issue 36)."""
+    if ph.b_dur <= 0.0:
+        return []
+    starts, durs = (0.0, ph.b_t0), (ph.b_t0, ph.b_dur - ph.b_t0)
+    return [
+        (starts[i], durs[i], ph.b_v[i], ph.b_a[i], ph.b_j[i]) for i in range(2) if durs[i] > 0.0
+    ]
+
+
 def travel_after(ph: Phases, time: float) -> float:
     """An upper bound of the distance the profile moves from `time` (from its start) to its
     end: over each piece left, its largest |v| times the time left in it (v is quadratic in a
     piece: its extremes are at the ends or where a = 0)."""
-    pieces: list[tuple[float, float, float, float, float]] = []  # (t0, t1, v, a, j)
-    t0 = 0.0
-    if ph.b_dur > 0.0:
-        pieces.append((0.0, ph.b_t0, ph.b_v[0], ph.b_a[0], ph.b_j[0]))
-        pieces.append((ph.b_t0, ph.b_dur, ph.b_v[1], ph.b_a[1], ph.b_j[1]))
-        t0 = ph.b_dur
+    pieces = [(t0, t0 + dur, v, a, j) for t0, dur, v, a, j in brake_pieces(ph)]
+    t0 = ph.b_dur
     for i in range(7):
         t1 = ph.b_dur + ph.t_sum[i]
         pieces.append((t0, t1, ph.v[i], ph.a[i], ph.j[i]))

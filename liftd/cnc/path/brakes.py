@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from liftd.cnc.path.constraints import SLACK_MARGIN
 from liftd.cnc.path.plan import CRUISE, SETTLE, Plan
-from liftd.cnc.path.targets import Targets, only_brakes
+from liftd.cnc.path.targets import Targets, highest, only_brakes
 from liftd.cnc.path.velocity import brake_distance
 
 DIP_STEPS = 10  # `Brakes._dip_through`: its velocity within 2^-10 of the cap (a ruckig solve each)
@@ -51,13 +51,9 @@ class Brakes(Targets):
                 # nothing between (path-based Lifting, wide seed 879: a run boundary 1 µm
                 # ahead above the ceiling, a brake of no length planned again and again)
                 return False
-            bad = ceiling
-            for _ in range(BISECT_STEPS):
-                mid = 0.5 * (good + bad)
-                if self._first_keeps(cands, mid, a_max, j_max):
-                    good = mid
-                else:
-                    bad = mid
+            good = highest(
+                good, ceiling, BISECT_STEPS, lambda e: self._first_keeps(cands, e, a_max, j_max)
+            )
             if good <= 0.0:
                 return False  # never a brake to rest where no stop is
             e, goal = good, SETTLE
@@ -191,25 +187,21 @@ class Brakes(Targets):
         cap = first[2]
         others = [c for c in cands if c[0] != first[0]]
 
-        def passes_below(e: float) -> Plan | None:
+        found: list[Plan] = []  # the plan of the last velocity that passes below
+
+        def passes_below(e: float) -> bool:
             plan = self._velocity_plan(e, SETTLE, w, a_max, j_max)
             if plan is None or plan.dur <= 0.0 or self._passed_above(plan, [first], 1) >= 0:
-                return None
-            keeps = self._first_keeps(others, e, a_max, j_max, 2.0 * SLACK_MARGIN)
-            return plan if keeps else None
+                return False
+            if not self._first_keeps(others, e, a_max, j_max, 2.0 * SLACK_MARGIN):
+                return False
+            found.append(plan)
+            return True
 
-        good, bad = 0.0, cap
-        kept = passes_below(DIP_FLOOR * cap)
-        if kept is None:
+        if not passes_below(DIP_FLOOR * cap):
             return False
-        good = DIP_FLOOR * cap
-        for _ in range(DIP_STEPS):
-            mid = 0.5 * (good + bad)
-            plan = passes_below(mid)
-            if plan is not None:
-                good, kept = mid, plan
-            else:
-                bad = mid
+        good = highest(DIP_FLOOR * cap, cap, DIP_STEPS, passes_below)
+        kept = found[-1]
         # it keeps that cap, passed below it braking, and the feed caps after it up to the
         # first one below e or a run boundary (below them braking, `_first_keeps`, or at e):
         # the steps check those by their hard caps only. Read by `_violated` as caps to reach

@@ -16,6 +16,8 @@ only when nothing else is accepted.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 from liftd.cnc.path.constraints import (
     CAP_TOL,
     GATE_TOL,
@@ -33,19 +35,9 @@ from liftd.cnc.path.velocity import (
     ramp_distance,
     reach_from,
 )
-from liftd.cnc.ruckig1 import Evaluator, Phases, ProfileError, Ruckig1
+from liftd.cnc.ruckig1 import Evaluator, Phases, ProfileError, Ruckig1, brake_pieces
 
 DIP_TOL = 1e-4  # relative: a profile this much below the lower of its ends' velocities dips
-
-
-def _brake_pieces(ph: Phases) -> list[tuple[float, float, float, float]]:
-    """(v, a, j, duration) of each piece of ruckig's brake into its limits that lasts: a brake
-    of one piece leaves its second unwritten (all zeros, ruckig's BrakeProfile), which read
-    as a velocity of 0 made `_dips` refuse profiles that do not dip (a review found)."""
-    if ph.b_dur <= 0.0:
-        return []
-    durs = (ph.b_t0, ph.b_dur - ph.b_t0)
-    return [(ph.b_v[i], ph.b_a[i], ph.b_j[i], durs[i]) for i in range(2) if durs[i] > 0.0]
 
 
 def lowest_velocity(ph: Phases) -> float:
@@ -60,16 +52,29 @@ def lowest_velocity(ph: Phases) -> float:
         if a < 0.0 < j and -a / j < end - start:
             low = min(low, ph.v[i] - a * a / (2.0 * j))
         start = end
-    for v, a, j, dur in _brake_pieces(ph):
+    for _, dur, v, a, j in brake_pieces(ph):
         low = min(low, v)
         if a < 0.0 < j and -a / j < dur:
             low = min(low, v - a * a / (2.0 * j))
     return low
 
 
+def highest(good: float, bad: float, steps: int, fits: Callable[[float], bool]) -> float:
+    """The highest value from `good` (one that fits) toward `bad` (one that does not) for
+    which `fits` holds, within 2^-steps of the interval between them: bisection. `fits` is
+    last called true for the value returned, where the search moved from `good` at all."""
+    for _ in range(steps):
+        mid = 0.5 * (good + bad)
+        if fits(mid):
+            good = mid
+        else:
+            bad = mid
+    return good
+
+
 def only_brakes(ph: Phases) -> bool:
     """The profile's acceleration is nowhere positive (it is linear in each piece: its ends)."""
-    return max(ph.a) <= GATE_TOL and all(a <= GATE_TOL for _, a, _, _ in _brake_pieces(ph))
+    return max(ph.a) <= GATE_TOL and all(p[3] <= GATE_TOL for p in brake_pieces(ph))
 
 
 class Targets(Constraints):
@@ -251,13 +256,11 @@ class Targets(Constraints):
     ) -> None:  # fmt: skip
         """From `good` (a target ruckig accepts) toward `bad` (one it refuses), 14 bisection
         steps; the last one accepted is planned."""
-        for _ in range(14):
-            mid = 0.5 * (good + bad)
-            if self._try_target(s, v, a, s_c, mid, max(v_max, mid), a_max, j_max, b, w):
-                good = mid
-            else:
-                bad = mid
-        self._try_target(s, v, a, s_c, good, max(v_max, good), a_max, j_max, b, w)
+
+        def accepted(e: float) -> bool:
+            return self._try_target(s, v, a, s_c, e, max(v_max, e), a_max, j_max, b, w)
+
+        accepted(highest(good, bad, 14, accepted))
 
     def _dips(self, floor: float) -> bool:
         """The profile just chosen goes below `floor` (the lower of the velocity it starts
