@@ -105,14 +105,17 @@ class Brakes(Targets):
 
     def _first_keeps(
         self, cands: list[tuple[int, float, float, bool]], e: float, a_max: float, j_max: float,
-        margin: float = SLACK_MARGIN,
+        margin: float = SLACK_MARGIN, brake: Plan | None = None,
     ) -> bool:  # fmt: skip
         """The brake at once from the path's state to e (zero acceleration there) and a cruise
         at e keep every candidate: a run boundary or stop after the brake's end with room to
         get down to its cap from e; a feed cap the brake passes below it (it reaches any
-        velocity sooner than the brake to it with zero acceleration there), or one after it
-        that the path gets down to from e. Within `margin` (SLACK_MARGIN: as `_violated`
-        reads them).
+        velocity sooner than the brake to it with zero acceleration there; where `brake`, that
+        brake's profile, is given, its own velocity there: a feed drop 20 µm too near for the
+        brake to its cap with zero acceleration, passed 10 mm/s below it by the brake to a
+        lower drop after it, made that one be passed 80 mm/s above it, known deviation 14 of
+        docs/geo-core.md), or one after it that the path gets down to from e. Within `margin`
+        (SLACK_MARGIN: as `_violated` reads them).
         Not the window's end where it is not a stop: it moves on with the path, and the steps
         keep it reachable as from any cruise (`_violated`, a forced re-plan toward it); read
         as fixed, rest or its floor there held the brake to 26 mm/s for a ceiling of 300 after
@@ -126,7 +129,10 @@ class Brakes(Targets):
             _, s_b, cap, gate = c
             room = s_b - s
             if room - d_e < margin:
-                if gate or brake_distance(v, a, cap, a_max, j_max) > room - margin:
+                if gate or (
+                    brake_distance(v, a, cap, a_max, j_max) > room - margin
+                    and (brake is None or self._passed_above(brake, [c], 1) >= 0)
+                ):
                     return False
             elif (cap < e or gate) and (
                 room - d_e - self._need(e, 0.0, cap, gate, a_max, j_max) < margin
@@ -193,7 +199,7 @@ class Brakes(Targets):
             plan = self._velocity_plan(e, SETTLE, w, a_max, j_max)
             if plan is None or plan.dur <= 0.0 or self._passed_above(plan, [first], 1) >= 0:
                 return False
-            if not self._first_keeps(others, e, a_max, j_max, 2.0 * SLACK_MARGIN):
+            if not self._first_keeps(others, e, a_max, j_max, 2.0 * SLACK_MARGIN, plan):
                 return False
             found.append(plan)
             return True
