@@ -312,29 +312,33 @@ class Tracker(Brakes):
             self._settle(s, v, a, v_p, s_c, target, cap, v_max, a_max, j_max, b, w,
                          self._hard(b, w), passed, held, event)  # fmt: skip
         plan = self.plan
-        if not shifted or plan is None or plan.goal != b:
+        if plan is None:
+            return
+        if not self.hold and plan.goal >= 0 and v_p <= ceiling * (1.0 + CAP_TOL) + V_ROUND:
+            lost = self._kept_by_window_end(looked, plan, a_max, j_max, w)
+            if lost is not None and self._dip_through(looked, lost, a_max, j_max, w):
+                return  # known deviation 14 of docs/geo-core.md
+        if not shifted or plan.goal != b:
             return
         in_reach = self._need(v, a, first[2], False, a_max, j_max) <= first[1] - s + SLACK_TOL
         below = ceiling * (1.0 + CAP_TOL) + V_ROUND >= v_p
         if self._passed_above(plan, [first], 1) >= 0:
             if self._keep_below(passed, first, b, w):
                 return
-            if in_reach:
+            if in_reach and self._brake_through(
+                [first, (b, s_c, cap, gate)], 1, target, a_max, j_max, w
+            ):
                 # the shift gave up a feed cap the path could still get below braking, and its
                 # profile passes it above: a brake at once instead (known deviation 12 of
                 # docs/geo-core.md, CAM seed 0)
-                self._brake_through([first, (b, s_c, cap, gate)], 1, target, a_max, j_max, w)
-            elif below:
-                # nor that (it came into view too late): below it braking through (known
-                # deviation 13)
+                return
+            if below:
+                # nor that (it came into view too late, or the shift's goal is the window's
+                # end, toward which a cruise is no plan): below it braking through (known
+                # deviations 13 and 14; 0.1 mm blocks, look-ahead 10, F8110 -> F1740: the
+                # profile to rest at the window's end, 0.3 mm after the drop, passed it at
+                # 63.4 mm/s for 29 with 2 µm of slack left)
                 self._dip_through(looked, first, a_max, j_max, w)
-        elif not in_reach and below and b == w and self._moves_on(cands[best_i]):
-            # passed below it only by the rest at the window's end just after it, which moves
-            # on with the path: the next profile, to rest farther on, brakes later and passes
-            # it above, and by then it is out of reach braking through too (known deviation
-            # 14: a drop to F3289 0.2 mm before the window's end, dipped to 25.8 mm/s two
-            # cycles on where at once the dip is to 52)
-            self._dip_through(looked, first, a_max, j_max, w)
 
     def _rests_before(
         self, cands: list[tuple[int, float, float, bool]], s: float, v: float, a: float,
