@@ -325,12 +325,14 @@ class Tracker(Brakes):
         if self._passed_above(plan, [first], 1) >= 0:
             if self._keep_below(passed, first, b, w):
                 return
-            if in_reach and self._brake_through(
-                [first, (b, s_c, cap, gate)], 1, target, a_max, j_max, w
+            if in_reach and (
+                self._brake_through([first, (b, s_c, cap, gate)], 1, target, a_max, j_max, w)
+                or b != w
             ):
                 # the shift gave up a feed cap the path could still get below braking, and its
                 # profile passes it above: a brake at once instead (known deviation 12 of
-                # docs/geo-core.md, CAM seed 0)
+                # docs/geo-core.md, CAM seed 0); where that is refused, the steps re-plan
+                # toward the cap (a dip there instead slowed falling feeds, gen2 seed 394)
                 return
             if below:
                 # nor that (it came into view too late, or the shift's goal is the window's
