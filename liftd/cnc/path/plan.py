@@ -74,6 +74,12 @@ class Plan:
         self.p_end = p_goal if p_goal is not None and abs(p_end - p_goal) <= 1e-9 else p_end
         self.v_end = v_goal if abs(v_end - v_goal) <= 1e-9 else max(v_end, 0.0)
 
+    @property
+    def keeps(self) -> int:
+        """The end of the boundaries it passes only by their hard caps from `soft_from` on:
+        its goal, or for a brake at once (goal < 0) the last cap it serves."""
+        return max(self.goal, self.serves)
+
     def at(self, t: float) -> tuple[float, float, float]:
         local = t - self.t0
         if local >= self.dur:

@@ -321,26 +321,53 @@ class Tracker(Brakes):
         if not shifted or plan.goal != b:
             return
         in_reach = self._need(v, a, first[2], False, a_max, j_max) <= first[1] - s + SLACK_TOL
-        below = ceiling * (1.0 + CAP_TOL) + V_ROUND >= v_p
-        if self._passed_above(plan, [first], 1) >= 0:
-            if self._keep_below(passed, first, b, w):
+        if self._passed_above(plan, [first], 1) < 0 or self._keep_below(passed, first, b, w):
+            return
+        # the shift's profile passes `first` above its cap
+        if in_reach:
+            # a feed cap the path could still get below braking: a brake at once instead
+            # (known deviation 12 of docs/geo-core.md, CAM seed 0)
+            if self._brake_through([first, (b, s_c, cap, gate)], 1, target, a_max, j_max, w):
                 return
-            if in_reach and (
-                self._brake_through([first, (b, s_c, cap, gate)], 1, target, a_max, j_max, w)
-                or b != w
-            ):
-                # the shift gave up a feed cap the path could still get below braking, and its
-                # profile passes it above: a brake at once instead (known deviation 12 of
-                # docs/geo-core.md, CAM seed 0); where that is refused, the steps re-plan
-                # toward the cap (a dip there instead slowed falling feeds, gen2 seed 394)
-                return
-            if below:
-                # nor that (it came into view too late, or the shift's goal is the window's
-                # end, toward which a cruise is no plan): below it braking through (known
-                # deviations 13 and 14; 0.1 mm blocks, look-ahead 10, F8110 -> F1740: the
-                # profile to rest at the window's end, 0.3 mm after the drop, passed it at
-                # 63.4 mm/s for 29 with 2 µm of slack left)
-                self._dip_through(looked, first, a_max, j_max, w)
+            # or, where its cruise is refused (a stop, the window's end, a long cruise), the
+            # same target profile with ruckig's v_max at that cap: a brake at once to it, then
+            # the late brake to b (gen2 seed 4: 108.6 mm/s for a drop to 100 0.5 mm before an
+            # M00, passed by the late brake to rest there). A dip first, with its cruise after
+            # the brake, went to half the cap (gen2 seed 394, falling feeds: 25.2 for 48.6).
+            if self._brake_into([first], v_p, s_c, target, first[2], v_max, a_max, j_max, b, w):
+                brake = self.plan
+                if brake is not None and self._passed_above(brake, [first], 1) < 0:
+                    return
+            self.plan = plan
+        if ceiling * (1.0 + CAP_TOL) + V_ROUND < v_p:
+            return  # above the ceiling: the override-drop brakes of the steps (deviation 10)
+        # below it braking through (it came into view too late, or neither of those is a
+        # plan): known deviations 13 and 14 (0.1 mm blocks, look-ahead 10, F8110 -> F1740:
+        # the profile to rest at the window's end, 0.3 mm after the drop, passed it at
+        # 63.4 mm/s for 29 with 2 µm of slack left)
+        if self._dip_through(looked, first, a_max, j_max, w) or in_reach:
+            return
+        # nothing passes it below: the hardest brake passes it as low as the path can, where
+        # that keeps the stops and the caps it can still get below (after an override drop
+        # to 30 % 1.7 mm before a drop to F6000 and an M00, gen2 seed 192: the late brake
+        # to rest at the M00 passed the drop at 75.9 mm/s for 30, the hardest brake at 67)
+        keep = [
+            c for c in looked
+            if c[3] or self._need(v, a, c[2], False, a_max, j_max) <= c[1] - s + SLACK_TOL
+        ]  # fmt: skip
+        given_up = [c for c in looked if c not in keep]
+        low = min(c[2] for c in given_up)  # toward the lowest: every one of them passed lowest
+        if not self._brake_first(keep, low, a_max, j_max, w):
+            self.plan = plan
+            return
+        brake = self.plan
+        assert brake is not None
+        # re-planned where it ends (`SETTLE`); the caps it gives up are its own (`Plan.keeps`):
+        # read by the steps as caps to keep, they forced four re-plans a step toward the
+        # first, each ending in the last-resort brake (16 tracker errors)
+        brake.goal, brake.serves = SETTLE, max(c[0] for c in given_up)
+        brake.soft_from = min(c[0] for c in given_up)
+        self._soft_from = brake.soft_from
 
     def _rests_before(
         self, cands: list[tuple[int, float, float, bool]], s: float, v: float, a: float,
@@ -427,7 +454,7 @@ class Tracker(Brakes):
                 if (
                     cut >= 0
                     and cut != plan.serves
-                    and not self._passable(cut, v1, a1, w, plan.soft_from <= cut < plan.goal)
+                    and not self._passable(cut, v1, a1, w, plan.soft_from <= cut < plan.keeps)
                 ):
                     violated = cut  # the step ends on a constraint it does not keep
                 if violated is None:
@@ -503,7 +530,7 @@ class Tracker(Brakes):
             and not tb.gate[b]
             and not self.is_stop(b)
             and b != w
-            and self._passable(b, v, a, w)
+            and self._passable(b, v, a, w, plan.soft_from <= b < plan.keeps)
         ):
             # braking toward a goal beyond a boundary it keeps (a feed change, a higher
             # ceiling): the profile in hand is still the time-optimal one, and a new one from
