@@ -97,10 +97,17 @@ class Brakes(Targets):
 
     def _moves_on(self, cand: tuple[int, float, float, bool]) -> bool:
         """`cand` is the window's end (rest there, or its floor) where that is not a stop: the
-        window moves on with the path, block by block."""
+        window moves on with the path, block by block. Not a feed cap at the same boundary,
+        which stays when the window moves on (read as the window's end, a dip to 76 mm/s
+        passed a drop to 46 mm/s there above it, the steps forced a re-plan toward it, and
+        the dip was made again: 157 ruckig calls in a cycle, a review found)."""
         w = self.window_end
         return (
-            cand[0] == w and w < self.tb.n and not self.is_stop(w) and self._window_floor(w) > 0.0
+            cand[0] == w
+            and cand[3]
+            and w < self.tb.n
+            and not self.is_stop(w)
+            and self._window_floor(w) > 0.0
         )
 
     def _first_keeps(
@@ -116,16 +123,23 @@ class Brakes(Targets):
         lower drop after it, made that one be passed 80 mm/s above it, known deviation 14 of
         docs/geo-core.md), or one after it that the path gets down to from e. Within `margin`
         (SLACK_MARGIN: as `_violated` reads them).
-        Not the window's end where it is not a stop: it moves on with the path, and the steps
-        keep it reachable as from any cruise (`_violated`, a forced re-plan toward it); read
-        as fixed, rest or its floor there held the brake to 26 mm/s for a ceiling of 300 after
-        an override drop on a line of 0.1 mm blocks (look-ahead 120, 12 mm: the brake to the
-        ceiling took 6.2 of them, the window moving on by as much; a review found)."""
+        The window's end where it is not a stop is read by the boundary's own cap: it moves
+        on with the path, and the steps keep it reachable as from any cruise (`_violated`, a
+        forced re-plan toward it); read as fixed, rest or its floor there held the brake to
+        26 mm/s for a ceiling of 300 after an override drop on a line of 0.1 mm blocks
+        (look-ahead 120, 12 mm: the brake to the ceiling took 6.2 of them, the window moving
+        on by as much; a review found)."""
         s, v, a = self.s, self.v, self.a
         d_e = brake_distance(v, a, e, a_max, j_max)
-        for c in cands:
+        for cand in cands:
+            c = cand
             if self._moves_on(c):
-                continue  # the window's end moves on: the steps keep it (`_violated`)
+                # the window's end moves on: what stays there is the boundary's own cap (a
+                # feed drop at the window's end, read as rest there and left out, was out of
+                # reach from the dip's velocity the cycle after: the steps and the dip took
+                # turns, 157 ruckig calls in a cycle, a review found)
+                b = c[0]
+                c = (b, c[1], self.tb.entry_cap(b, self.ov), self.tb.gate[b])
             _, s_b, cap, gate = c
             room = s_b - s
             if room - d_e < margin:
@@ -221,8 +235,13 @@ class Brakes(Targets):
             if gate or c < good:
                 break
             serves = b
-        kept.serves, kept.soft_from = serves, first[0]
-        self.plan, self._soft_from = kept, first[0]
+        # and the feed caps before it that the brake passes below (`_first_keeps` reads them
+        # off the brake): read by the steps as caps to reach with zero acceleration, the one
+        # before a drop at the window's end forced re-plans, and the dip was made again
+        soft = min((o[0] for o in others if not o[3] and o[1] < kept.p_end), default=first[0])
+        soft = min(soft, first[0])
+        kept.serves, kept.soft_from = serves, soft
+        self.plan, self._soft_from = kept, soft
         return True
 
     def _kept_by_window_end(

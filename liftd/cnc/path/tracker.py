@@ -175,6 +175,7 @@ class Tracker(Brakes):
         passed, self._passed = self._passed, None
         # the profile in hand, where only the window moved on (`Targets._undip`)
         held = self.plan if force is None else None
+        forced = force is not None
         tb = self.tb
         s, v, a, seg = self.s, self.v, self.a, self.seg
         a_max, j_max = self._limits(seg)
@@ -314,7 +315,12 @@ class Tracker(Brakes):
         plan = self.plan
         if plan is None:
             return
-        if not self.hold and plan.goal >= 0 and v_p <= ceiling * (1.0 + CAP_TOL) + V_ROUND:
+        if (
+            not self.hold
+            and not forced  # a step found the dip losing something: not the dip again
+            and plan.goal >= 0
+            and v_p <= ceiling * (1.0 + CAP_TOL) + V_ROUND
+        ):
             lost = self._kept_by_window_end(looked, plan, a_max, j_max, w)
             if lost is not None and self._dip_through(looked, lost, a_max, j_max, w):
                 return  # known deviation 14 of docs/geo-core.md
@@ -347,21 +353,30 @@ class Tracker(Brakes):
         # 63.4 mm/s for 29 with 2 µm of slack left)
         if self._dip_through(looked, first, a_max, j_max, w) or in_reach:
             return
-        # nothing passes it below: the hardest brake passes it as low as the path can, where
-        # that keeps the stops and the caps it can still get below (after an override drop
-        # to 30 % 1.7 mm before a drop to F6000 and an M00, gen2 seed 192: the late brake
-        # to rest at the M00 passed the drop at 75.9 mm/s for 30, the hardest brake at 67)
-        keep = [
+        # no dip passes it below: the hardest brake passes the caps that not even the brake to
+        # rest gets below as low as the path can, where that keeps the stops and passes the
+        # other caps below (after an override drop to 30 % 1.7 mm before a drop to F6000 and
+        # an M00, feeds seed 192: the late brake to rest at the M00 passed the drop at
+        # 75.9 mm/s for 30, the hardest brake at 67). Given up by the zero-acceleration
+        # distance instead, a cap the plan in hand passed at 16 mm/s was passed at 29.4 for
+        # 28.2 (a review found).
+        rest = self._velocity_plan(0.0, SETTLE, w, a_max, j_max)
+        given_up = [
             c for c in looked
-            if c[3] or self._need(v, a, c[2], False, a_max, j_max) <= c[1] - s + SLACK_TOL
+            if rest is not None and not c[3] and self._passed_above(rest, [c], 1) >= 0
         ]  # fmt: skip
-        given_up = [c for c in looked if c not in keep]
-        low = min(c[2] for c in given_up)  # toward the lowest: every one of them passed lowest
-        if not self._brake_first(keep, low, a_max, j_max, w):
+        if not given_up:
             self.plan = plan
             return
-        brake = self.plan
-        assert brake is not None
+        keep = [c for c in looked if c not in given_up]
+        low = min(c[2] for c in given_up)  # toward the lowest: every one of them passed lowest
+        brake = self.plan if self._brake_first(keep, low, a_max, j_max, w) else None
+        if brake is None or any(
+            not c[3] and c[1] <= brake.p_end and self._passed_above(brake, [c], 1) >= 0
+            for c in keep
+        ):
+            self.plan = plan
+            return
         # re-planned where it ends (`SETTLE`); the caps it gives up are its own (`Plan.keeps`):
         # read by the steps as caps to keep, they forced four re-plans a step toward the
         # first, each ending in the last-resort brake (16 tracker errors)
@@ -521,7 +536,7 @@ class Tracker(Brakes):
         w = self.window_end
         plan = self.plan
         # a target beyond b: kept in case no new profile from here is accepted (`_replan`)
-        self._passed = plan if plan is not None and plan.goal > b else None
+        self._passed = plan if plan is not None and plan.keeps > b else None
         self.plan = None
         if (
             plan is not None
