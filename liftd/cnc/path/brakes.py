@@ -123,9 +123,9 @@ class Brakes(Targets):
         lower drop after it, made that one be passed 80 mm/s above it, known deviation 14 of
         docs/geo-core.md), or one after it that the path gets down to from e. Within `margin`
         (SLACK_MARGIN: as `_violated` reads them).
-        The window's end where it is not a stop is read by the boundary's own cap: it moves
-        on with the path, and the steps keep it reachable as from any cruise (`_violated`, a
-        forced re-plan toward it); read as fixed, rest or its floor there held the brake to
+        The window's end where it is not a stop moves on with the path (read by its feed cap
+        alone): the steps keep it reachable as from any cruise (`_violated`, a forced
+        re-plan toward it); read as fixed, rest or its floor there held the brake to
         26 mm/s for a ceiling of 300 after an override drop on a line of 0.1 mm blocks
         (look-ahead 120, 12 mm: the brake to the ceiling took 6.2 of them, the window moving
         on by as much; a review found)."""
@@ -134,12 +134,15 @@ class Brakes(Targets):
         for cand in cands:
             c = cand
             if self._moves_on(c):
-                # the window's end moves on: what stays there is the boundary's own cap (a
-                # feed drop at the window's end, read as rest there and left out, was out of
-                # reach from the dip's velocity the cycle after: the steps and the dip took
-                # turns, 157 ruckig calls in a cycle, a review found)
+                # the window's end moves on: the steps keep it reachable (`_violated`) where
+                # it is a run boundary; a feed drop there stays a feed cap (read as rest there
+                # and left out, it was out of reach from the dip's velocity the cycle after:
+                # the steps and the dip took turns, 157 ruckig calls in a cycle, a review
+                # found)
                 b = c[0]
-                c = (b, c[1], self.tb.entry_cap(b, self.ov), self.tb.gate[b])
+                if self.tb.gate[b]:
+                    continue
+                c = (b, c[1], self.tb.entry_cap(b, self.ov), False)
             _, s_b, cap, gate = c
             room = s_b - s
             if room - d_e < margin:
