@@ -431,3 +431,37 @@ def test_a_feed_cap_the_shift_passes_above_is_kept_or_passed_as_low_as_it_can(se
     assert hard == [] and errors == 0, hard
     if seed == 394:
         assert slow == []
+
+
+def test_the_hardest_brake_gives_up_only_caps_no_brake_passes_below() -> None:
+    """0.1 mm blocks, F12000 → F8715 → F2420, look-ahead 40, 2 ms, override 70 % for 62 ms:
+    a first version of the hardest brake gave up the F2420 cap by its zero-acceleration
+    distance, although the profile in hand passed it at 16 mm/s, and passed it at 29.4 mm/s
+    for 28.2 (a review found; b2e7dbb kept it)."""
+    ch = dataclasses.replace(shipped(), look_ahead_blocks=40, cycle_time=2e-3)
+    schedule = Schedule(tuple(parse_override_spec("0.0745:70,0.1365:100")), ())
+    _, hard, _, errors = check(
+        Scenario(0, ch, _drops((12000, 8715, 2420), (100, 12, 24)), schedule)
+    )
+    assert hard == [] and errors == 0, hard
+
+
+def test_a_dip_before_a_drop_at_the_window_end_costs_a_bounded_cycle() -> None:
+    """0.1 mm blocks, F12000, one block at F4569, five at F2785, an M00, look-ahead 30: the
+    drop to F2785 sat at the window's end, read there as the window's end and left out of
+    the dip's test; the dip passed it above, the steps forced a re-plan toward it and the dip
+    was made again, four times a step: 157 ruckig solves in one cycle (a review found; 16 on
+    b2e7dbb, which passed the drops 8 times above their caps). No overrun, and a cycle's
+    solves stay within the four forced re-plans a step allows."""
+    text = _drops((12000, 4569, 2785), (100, 1, 5)).replace("M30\n", "M00\n")
+    x = 1.0 + 0.1 * 106
+    text += "".join(f"G01 X{x + 0.1 * (i + 1):.3f} Y0\n" for i in range(20)) + "M30\n"
+    ch = dataclasses.replace(shipped(), look_ahead_blocks=30, cycle_time=1e-3)
+    _, hard, _, errors = check(Scenario(0, ch, text, Schedule()))
+    assert hard == [] and errors == 0, hard
+    task = GeoTask(ch, text)
+    calc = task.interp.prod.calc
+    last, worst = calc.calls, 0
+    for _ in run_cycles(task, SimPlc(0.02), Schedule(), 1e-3, 2.0):
+        worst, last = max(worst, calc.calls - last), calc.calls
+    assert worst <= 40, worst
