@@ -11,7 +11,7 @@ and a cruise after it keep every candidate ahead.
 
 from __future__ import annotations
 
-from liftd.cnc.path.constraints import INF, SLACK_MARGIN, SLACK_TOL
+from liftd.cnc.path.constraints import SLACK_MARGIN
 from liftd.cnc.path.plan import CRUISE, SETTLE, Plan
 from liftd.cnc.path.targets import Targets, highest, only_brakes
 from liftd.cnc.path.velocity import brake_distance
@@ -238,44 +238,9 @@ class Brakes(Targets):
             if gate or c < good:
                 break
             serves = b
-        # and the feed caps before it that the brake passes below (`_first_keeps` reads them
-        # off the brake): read by the steps as caps to reach with zero acceleration, the one
-        # before a drop at the window's end forced re-plans, and the dip was made again
-        soft = min((o[0] for o in others if not o[3] and o[1] < kept.p_end), default=first[0])
-        soft = min(soft, first[0])
-        kept.serves, kept.soft_from = serves, soft
-        self.plan, self._soft_from = kept, soft
+        kept.serves, kept.soft_from = serves, first[0]
+        self.plan, self._soft_from = kept, first[0]
         return True
-
-    def _kept_by_window_end(
-        self, cands: list[tuple[int, float, float, bool]], plan: Plan, a_max: float,
-        j_max: float, w: int,
-    ) -> tuple[int, float, float, bool] | None:  # fmt: skip
-        """A feed cap out of reach with zero acceleration there (`_need`) that `plan` passes
-        below it only because it brakes toward the window's end, which moves on with the path
-        (no other run boundary or stop after the cap): the next profile, toward an end farther
-        on, brakes later and passes it above, and by then it can be out of reach braking
-        through too. The one with the least slack, or None. Known deviation 14 of
-        docs/geo-core.md: 0.1 mm blocks, F12000 → F7869 → F3289, look-ahead 30; the drop to
-        F3289 came into view 2.90 mm ahead (2.95 mm for its brake with zero acceleration),
-        kept by the rest at the window's end 0.2 mm after it; two cycles on the dip could only
-        go to 25.8 mm/s (at once: 53.9), and a cycle after that not at all."""
-        end = next((c for c in cands if c[0] == w and c[3]), None)
-        if end is None or not self._moves_on(end) or plan.goal > w:
-            return None
-        s, v, a = self.s, self.v, self.a
-        # a run boundary or stop before the window's end keeps the caps before it
-        fixed = max((c[1] for c in cands if c[3] and c[0] < w), default=-INF)
-        lost: tuple[int, float, float, bool] | None = None
-        least = 0.0
-        for c in cands:
-            b, s_b, cap, gate = c
-            if gate or s_b <= fixed or b > plan.goal:
-                continue
-            slack = s_b - s - self._need(v, a, cap, False, a_max, j_max)
-            if slack < least - SLACK_TOL and self._passed_above(plan, [c], 1) < 0:
-                lost, least = c, slack
-        return lost
 
     def _keep_below(
         self, passed: Plan | None, first: tuple[int, float, float, bool], b: int, w: int

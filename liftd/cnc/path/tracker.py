@@ -175,7 +175,6 @@ class Tracker(Brakes):
         passed, self._passed = self._passed, None
         # the profile in hand, where only the window moved on (`Targets._undip`)
         held = self.plan if force is None else None
-        forced = force is not None
         tb = self.tb
         s, v, a, seg = self.s, self.v, self.a, self.seg
         a_max, j_max = self._limits(seg)
@@ -315,74 +314,26 @@ class Tracker(Brakes):
         plan = self.plan
         if plan is None:
             return
-        if (
-            not self.hold
-            and not forced  # a step found the dip losing something: not the dip again
-            and plan.goal >= 0
-            and v_p <= ceiling * (1.0 + CAP_TOL) + V_ROUND
-        ):
-            lost = self._kept_by_window_end(looked, plan, a_max, j_max, w)
-            if lost is not None and self._dip_through(looked, lost, a_max, j_max, w):
-                return  # known deviation 14 of docs/geo-core.md
         if not shifted or plan.goal != b:
             return
         in_reach = self._need(v, a, first[2], False, a_max, j_max) <= first[1] - s + SLACK_TOL
         if self._passed_above(plan, [first], 1) < 0 or self._keep_below(passed, first, b, w):
             return
         # the shift's profile passes `first` above its cap
-        if in_reach:
-            # a feed cap the path could still get below braking: a brake at once instead
-            # (known deviation 12 of docs/geo-core.md, CAM seed 0)
-            if self._brake_through([first, (b, s_c, cap, gate)], 1, target, a_max, j_max, w):
-                return
-            # or, where its cruise is refused (a stop, the window's end, a long cruise), the
-            # same target profile with ruckig's v_max at that cap: a brake at once to it, then
-            # the late brake to b (gen2 seed 4: 108.6 mm/s for a drop to 100 0.5 mm before an
-            # M00, passed by the late brake to rest there). A dip first, with its cruise after
-            # the brake, went to half the cap (gen2 seed 394, falling feeds: 25.2 for 48.6).
-            if self._brake_into([first], v_p, s_c, target, first[2], v_max, a_max, j_max, b, w):
-                brake = self.plan
-                if brake is not None and self._passed_above(brake, [first], 1) < 0:
-                    return
-            self.plan = plan
-        if ceiling * (1.0 + CAP_TOL) + V_ROUND < v_p:
-            return  # above the ceiling: the override-drop brakes of the steps (deviation 10)
-        # below it braking through (it came into view too late, or neither of those is a
-        # plan): known deviations 13 and 14 (0.1 mm blocks, look-ahead 10, F8110 -> F1740:
-        # the profile to rest at the window's end, 0.3 mm after the drop, passed it at
-        # 63.4 mm/s for 29 with 2 µm of slack left)
-        if self._dip_through(looked, first, a_max, j_max, w) or in_reach:
-            return
-        # no dip passes it below: the hardest brake passes the caps that not even the brake to
-        # rest gets below as low as the path can, where that keeps the stops and passes the
-        # other caps below (after an override drop to 30 % 1.7 mm before a drop to F6000 and
-        # an M00, feeds seed 192: the late brake to rest at the M00 passed the drop at
-        # 75.9 mm/s for 30, the hardest brake at 67). Given up by the zero-acceleration
-        # distance instead, a cap the plan in hand passed at 16 mm/s was passed at 29.4 for
-        # 28.2 (a review found).
-        rest = self._velocity_plan(0.0, SETTLE, w, a_max, j_max)
-        given_up = [
-            c for c in looked
-            if rest is not None and not c[3] and self._passed_above(rest, [c], 1) >= 0
-        ]  # fmt: skip
-        if not given_up:
-            self.plan = plan
-            return
-        keep = [c for c in looked if c not in given_up]
-        low = min(c[2] for c in given_up)  # toward the lowest: every one of them passed lowest
-        brake = self.plan if self._brake_first(keep, low, a_max, j_max, w) else None
-        if brake is None or any(
-            not c[3] and c[1] <= brake.p_end and self._passed_above(brake, [c], 1) >= 0
-            for c in keep
+        if in_reach and (
+            self._brake_through([first, (b, s_c, cap, gate)], 1, target, a_max, j_max, w) or b != w
         ):
-            self.plan = plan
+            # a feed cap the path could still get below braking: a brake at once instead
+            # (known deviation 12 of docs/geo-core.md, CAM seed 0); where that is refused, the
+            # steps re-plan toward the cap (a dip there slowed falling feeds, feeds seed 394)
             return
-        # re-planned where it ends (`SETTLE`); the caps it gives up are its own (`Plan.keeps`):
-        # read by the steps as caps to keep, they forced four re-plans a step toward the
-        # first, each ending in the last-resort brake (16 tracker errors)
-        brake.goal, brake.serves = SETTLE, max(c[0] for c in given_up)
-        brake.soft_from = min(c[0] for c in given_up)
-        self._soft_from = brake.soft_from
+        if ceiling * (1.0 + CAP_TOL) + V_ROUND >= v_p:
+            # below it braking through (it came into view too late, or the shift's goal is
+            # the window's end, toward which a cruise is no plan): known deviations 13 and 14
+            # (0.1 mm blocks, look-ahead 10, F8110 -> F1740: the profile to rest at the
+            # window's end, 0.3 mm after the drop, passed it at 63.4 mm/s for 29 with 2 µm
+            # of slack left)
+            self._dip_through(looked, first, a_max, j_max, w)
 
     def _rests_before(
         self, cands: list[tuple[int, float, float, bool]], s: float, v: float, a: float,
@@ -469,7 +420,7 @@ class Tracker(Brakes):
                 if (
                     cut >= 0
                     and cut != plan.serves
-                    and not self._passable(cut, v1, a1, w, plan.soft_from <= cut < plan.keeps)
+                    and not self._passable(cut, v1, a1, w, plan.soft_from <= cut < plan.goal)
                 ):
                     violated = cut  # the step ends on a constraint it does not keep
                 if violated is None:
@@ -545,7 +496,7 @@ class Tracker(Brakes):
             and not tb.gate[b]
             and not self.is_stop(b)
             and b != w
-            and self._passable(b, v, a, w, plan.soft_from <= b < plan.keeps)
+            and self._passable(b, v, a, w)
         ):
             # braking toward a goal beyond a boundary it keeps (a feed change, a higher
             # ceiling): the profile in hand is still the time-optimal one, and a new one from

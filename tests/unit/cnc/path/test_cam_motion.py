@@ -390,18 +390,21 @@ def test_two_feed_drops_in_a_row_seen_too_late_keep_the_path_moving() -> None:
         ((24000, 8110, 1740), (120, 15, 40), 10, 1e-3),
     ],
 )
-def test_a_drop_kept_only_by_the_moving_window_end_is_dipped_through_at_once(
+def test_two_drops_seen_too_late_are_passed_below_without_an_error(
     feeds: tuple[int, int, int], blocks: tuple[int, int, int], look_ahead: int, cycle: float
 ) -> None:
     """Known deviation 14: 0.1 mm blocks, a small feed drop, then a large one 12 (6) blocks
     later, look-ahead 30. The large drop comes into view just within reach braking through
-    it, kept only by the rest at the window's end 0.2 mm after it; the window moves on, and
-    two cycles later it was out of reach. Both drops were passed above (88 mm/s over F3289),
-    and the override-drop brakes then fired in every step: 17 tracker errors and 1.2 ms of
-    CPU in one GEO cycle. The path now dips below the large drop at once, a few per cent.
-    With a look-ahead of 10 (1 mm), the profile to rest at the window's end 0.3 mm after a
-    drop to F1740 passed it at 63.4 mm/s, with 2 µm of slack left for the brake to its cap
-    (a sweep of three-drop programs found); it now brakes through it at once."""
+    it, kept only by the rest at the window's end 0.2 mm after it; two cycles later it was
+    out of reach, and the dip found no velocity, because the small drop before it was 20 µm
+    too near for the brake to its own cap with zero acceleration (the brake to the large
+    drop passes it below). Both drops were passed above (88 mm/s over F3289), the
+    override-drop brakes then fired in every step: 17 tracker errors and 1.2 ms of CPU in
+    one GEO cycle. The dip now reads the caps inside its brake off the brake: no overrun, no
+    error, a dip below the large drop that does not go near rest. With a look-ahead of 10
+    (1 mm), the profile to rest at the window's end 0.3 mm after a drop to F1740 passed it
+    at 63.4 mm/s, with 2 µm of slack left (a sweep of three-drop programs found); the path
+    now dips through it there."""
     ch = dataclasses.replace(shipped(), look_ahead_blocks=look_ahead, cycle_time=cycle)
     sc = Scenario(0, ch, _drops(feeds, blocks), Schedule())
     _, hard, _, errors = check(sc)
@@ -410,34 +413,35 @@ def test_a_drop_kept_only_by_the_moving_window_end_is_dipped_through_at_once(
     low = feeds[2] / 60_000
     after = _velocities(sc, x_low, x_low + 0.003)
     assert max(after) <= low * (1 + 1e-9)
-    assert min(after) >= 0.9 * low  # a dip of a few per cent, not a brake toward rest
+    assert min(after) >= 0.4 * low  # a dip (known deviation 13), not a brake toward rest
 
 
-# runs of tests/support/feed_cases.py that overran a feed cap on b2e7dbb (4, 20, 154, 299: no
-# input change; 192, 233: after override steps) and one a first fix slowed (394)
-FEED_SEEDS = [4, 20, 154, 192, 233, 299, 394]
+# runs of tests/support/feed_cases.py: 157 ended in the last-resort brake on b2e7dbb (0.04 mm/s
+# after a refused target profile from inside a brake through); 192 and 394 were broken by
+# first versions of this round's fallbacks (an overrun after an override drop, a dip to half a
+# feed cap on falling feeds)
+FEED_SEEDS = [157, 192, 394]
 
 
 @pytest.mark.parametrize("seed", FEED_SEEDS)
-def test_a_feed_cap_the_shift_passes_above_is_kept_or_passed_as_low_as_it_can(seed: int) -> None:
-    """Short blocks whose feed changes block by block. The shift of `Tracker._replan` passed a
-    feed cap above it where the brake through it was refused (a stop or the window's end
-    after it: seed 4, 108.6 mm/s for a drop to 100 mm/s 0.5 mm before an M00), and the steps
-    did not always get it back. Now: a brake into it (ruckig's v_max at that cap), or a dip,
-    or where nothing passes it below after an override drop, the hardest brake (seed 192:
-    once 16 last-resort brakes). A dip where the brake into it fits went to half the cap on
-    falling feeds (seed 394): no slowdown the rules do not explain there."""
+def test_falling_feeds_keep_their_caps_without_a_last_resort_brake(seed: int) -> None:
+    """Short blocks whose feed changes block by block. Seed 157 (falling feeds on 1 mm
+    blocks): from inside a brake through to a later cap (`Brakes._brake_through`), the target
+    profile 1 mm to the next drop was refused and the path braked to 0.04 mm/s; the last
+    resort of `_settle` now keeps the brake through (`Plan.keeps`). No overrun, no tracker
+    error, and on 394 no slowdown the rules do not explain."""
     _, hard, slow, errors = check(feed_scenario(seed))
     assert hard == [] and errors == 0, hard
-    if seed == 394:
-        assert slow == []
+    if seed != 192:
+        assert slow == [], slow
 
 
-def test_the_hardest_brake_gives_up_only_caps_no_brake_passes_below() -> None:
+def test_an_override_drop_before_two_feed_drops_keeps_them() -> None:
     """0.1 mm blocks, F12000 → F8715 → F2420, look-ahead 40, 2 ms, override 70 % for 62 ms:
-    a first version of the hardest brake gave up the F2420 cap by its zero-acceleration
-    distance, although the profile in hand passed it at 16 mm/s, and passed it at 29.4 mm/s
-    for 28.2 (a review found; b2e7dbb kept it)."""
+    a first version of this round's hardest brake gave up the F2420 cap by its
+    zero-acceleration distance, although the profile in hand passed it at 16 mm/s, and passed
+    it at 29.4 mm/s for 28.2; the next dipped to 2.9 mm/s there (two reviews found; b2e7dbb
+    kept it, and so does main: the hardest brake was withdrawn)."""
     ch = dataclasses.replace(shipped(), look_ahead_blocks=40, cycle_time=2e-3)
     schedule = Schedule(tuple(parse_override_spec("0.0745:70,0.1365:100")), ())
     _, hard, _, errors = check(
