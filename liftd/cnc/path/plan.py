@@ -76,8 +76,9 @@ class Plan:
 
     @property
     def keeps(self) -> int:
-        """The end of the boundaries it passes only by their hard caps from `soft_from` on:
-        its goal, or for a brake at once (goal < 0) the last cap it serves."""
+        """The last boundary it keeps: its goal, or for a brake at once (a goal < 0) the cap
+        it serves (`Brakes._brake_through`, `_dip_through`; `Targets._settle`'s last resort
+        keeps it past the boundaries before that one)."""
         return max(self.goal, self.serves)
 
     def at(self, t: float) -> tuple[float, float, float]:

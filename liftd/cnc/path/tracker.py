@@ -312,9 +312,7 @@ class Tracker(Brakes):
             self._settle(s, v, a, v_p, s_c, target, cap, v_max, a_max, j_max, b, w,
                          self._hard(b, w), passed, held, event)  # fmt: skip
         plan = self.plan
-        if plan is None:
-            return
-        if not shifted or plan.goal != b:
+        if plan is None or not shifted or plan.goal != b:
             return
         in_reach = self._need(v, a, first[2], False, a_max, j_max) <= first[1] - s + SLACK_TOL
         if self._passed_above(plan, [first], 1) < 0 or self._keep_below(passed, first, b, w):
@@ -486,7 +484,8 @@ class Tracker(Brakes):
         t, v, a = self.t, self.v, self.a
         w = self.window_end
         plan = self.plan
-        # a target beyond b: kept in case no new profile from here is accepted (`_replan`)
+        # a plan that keeps a boundary beyond b (a target, a brake through): kept in case no
+        # new profile from here is accepted (`_replan`, `Targets._settle`'s last resort)
         self._passed = plan if plan is not None and plan.keeps > b else None
         self.plan = None
         if (
