@@ -97,36 +97,59 @@ class Brakes(Targets):
 
     def _moves_on(self, cand: tuple[int, float, float, bool]) -> bool:
         """`cand` is the window's end (rest there, or its floor) where that is not a stop: the
-        window moves on with the path, block by block."""
+        window moves on with the path, block by block. Not a feed cap at the same boundary,
+        which stays when the window moves on (read as the window's end, a dip to 76 mm/s
+        passed a drop to 46 mm/s there above it, the steps forced a re-plan toward it, and
+        the dip was made again: 157 ruckig calls in a cycle, a review found)."""
         w = self.window_end
         return (
-            cand[0] == w and w < self.tb.n and not self.is_stop(w) and self._window_floor(w) > 0.0
+            cand[0] == w
+            and cand[3]
+            and w < self.tb.n
+            and not self.is_stop(w)
+            and self._window_floor(w) > 0.0
         )
 
     def _first_keeps(
         self, cands: list[tuple[int, float, float, bool]], e: float, a_max: float, j_max: float,
-        margin: float = SLACK_MARGIN,
+        margin: float = SLACK_MARGIN, brake: Plan | None = None,
     ) -> bool:  # fmt: skip
         """The brake at once from the path's state to e (zero acceleration there) and a cruise
         at e keep every candidate: a run boundary or stop after the brake's end with room to
         get down to its cap from e; a feed cap the brake passes below it (it reaches any
-        velocity sooner than the brake to it with zero acceleration there), or one after it
-        that the path gets down to from e. Within `margin` (SLACK_MARGIN: as `_violated`
-        reads them).
-        Not the window's end where it is not a stop: it moves on with the path, and the steps
-        keep it reachable as from any cruise (`_violated`, a forced re-plan toward it); read
-        as fixed, rest or its floor there held the brake to 26 mm/s for a ceiling of 300 after
-        an override drop on a line of 0.1 mm blocks (look-ahead 120, 12 mm: the brake to the
-        ceiling took 6.2 of them, the window moving on by as much; a review found)."""
+        velocity sooner than the brake to it with zero acceleration there; where `brake`, that
+        brake's profile, is given, its own velocity there: a feed drop 20 µm too near for the
+        brake to its cap with zero acceleration, passed 10 mm/s below it by the brake to a
+        lower drop after it, made that one be passed 80 mm/s above it, known deviation 14 of
+        docs/geo-core.md), or one after it that the path gets down to from e. Within `margin`
+        (SLACK_MARGIN: as `_violated` reads them).
+        The window's end where it is not a stop moves on with the path (read by its feed cap
+        alone): the steps keep it reachable as from any cruise (`_violated`, a forced
+        re-plan toward it); read as fixed, rest or its floor there held the brake to
+        26 mm/s for a ceiling of 300 after an override drop on a line of 0.1 mm blocks
+        (look-ahead 120, 12 mm: the brake to the ceiling took 6.2 of them, the window moving
+        on by as much; a review found)."""
         s, v, a = self.s, self.v, self.a
         d_e = brake_distance(v, a, e, a_max, j_max)
-        for c in cands:
+        for cand in cands:
+            c = cand
             if self._moves_on(c):
-                continue  # the window's end moves on: the steps keep it (`_violated`)
+                # the window's end moves on: the steps keep it reachable (`_violated`) where
+                # it is a run boundary; a feed drop there stays a feed cap (read as rest there
+                # and left out, it was out of reach from the dip's velocity the cycle after:
+                # the steps and the dip took turns, 157 ruckig calls in a cycle, a review
+                # found)
+                b = c[0]
+                if self.tb.gate[b]:
+                    continue
+                c = (b, c[1], self.tb.entry_cap(b, self.ov), False)
             _, s_b, cap, gate = c
             room = s_b - s
             if room - d_e < margin:
-                if gate or brake_distance(v, a, cap, a_max, j_max) > room - margin:
+                if gate or (
+                    brake_distance(v, a, cap, a_max, j_max) > room - margin
+                    and (brake is None or self._passed_above(brake, [c], 1) >= 0)
+                ):
                     return False
             elif (cap < e or gate) and (
                 room - d_e - self._need(e, 0.0, cap, gate, a_max, j_max) < margin
@@ -193,7 +216,7 @@ class Brakes(Targets):
             plan = self._velocity_plan(e, SETTLE, w, a_max, j_max)
             if plan is None or plan.dur <= 0.0 or self._passed_above(plan, [first], 1) >= 0:
                 return False
-            if not self._first_keeps(others, e, a_max, j_max, 2.0 * SLACK_MARGIN):
+            if not self._first_keeps(others, e, a_max, j_max, 2.0 * SLACK_MARGIN, plan):
                 return False
             found.append(plan)
             return True

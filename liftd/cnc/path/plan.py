@@ -74,6 +74,13 @@ class Plan:
         self.p_end = p_goal if p_goal is not None and abs(p_end - p_goal) <= 1e-9 else p_end
         self.v_end = v_goal if abs(v_end - v_goal) <= 1e-9 else max(v_end, 0.0)
 
+    @property
+    def keeps(self) -> int:
+        """The last boundary it keeps: its goal, or for a brake at once (a goal < 0) the cap
+        it serves (`Brakes._brake_through`, `_dip_through`; `Targets._settle`'s last resort
+        keeps it past the boundaries before that one)."""
+        return max(self.goal, self.serves)
+
     def at(self, t: float) -> tuple[float, float, float]:
         local = t - self.t0
         if local >= self.dur:

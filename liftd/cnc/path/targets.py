@@ -223,14 +223,17 @@ class Targets(Constraints):
         for kept in (passed, held):
             if (
                 kept is not None
-                and kept.goal > b
+                and kept.keeps > b
                 and kept.t0 <= self.t
                 and not self.tb.gate[b]
                 and self._passed_above(kept, [(b, s_c, cap, False)], 1) < 0
             ):
                 # the profile in hand, toward a goal beyond b, passes b below its cap, braking
                 # (a re-plan from inside a brake at once, `_brake_into`, 0.5 mm before a feed
-                # drop at 116.6 mm/s and −3.3 m/s²: nothing toward b itself was accepted)
+                # drop at 116.6 mm/s and −3.3 m/s²: nothing toward b itself was accepted); so
+                # does a brake through to a cap beyond b (`Plan.keeps`: falling feeds on 1 mm
+                # blocks, the target profile 1 mm to the next drop refused from inside it,
+                # the last-resort brake went to 0.04 mm/s, feeds seed 157)
                 kept.window = w
                 self.plan = kept
                 return

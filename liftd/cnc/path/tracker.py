@@ -312,22 +312,26 @@ class Tracker(Brakes):
             self._settle(s, v, a, v_p, s_c, target, cap, v_max, a_max, j_max, b, w,
                          self._hard(b, w), passed, held, event)  # fmt: skip
         plan = self.plan
-        if (
-            shifted
-            and plan is not None
-            and plan.goal == b
-            and self._passed_above(plan, [first], 1) >= 0
-            and not self._keep_below(passed, first, b, w)
+        if plan is None or not shifted or plan.goal != b:
+            return
+        in_reach = self._need(v, a, first[2], False, a_max, j_max) <= first[1] - s + SLACK_TOL
+        if self._passed_above(plan, [first], 1) < 0 or self._keep_below(passed, first, b, w):
+            return
+        # the shift's profile passes `first` above its cap
+        if in_reach and (
+            self._brake_through([first, (b, s_c, cap, gate)], 1, target, a_max, j_max, w) or b != w
         ):
-            if self._need(v, a, first[2], False, a_max, j_max) <= first[1] - s + SLACK_TOL:
-                # the shift gave up a feed cap the path could still get below braking, and its
-                # profile passes it above: a brake at once instead (known deviation 12 of
-                # docs/geo-core.md, CAM seed 0)
-                self._brake_through([first, (b, s_c, cap, gate)], 1, target, a_max, j_max, w)
-            elif v_p <= ceiling * (1.0 + CAP_TOL) + V_ROUND:
-                # nor that (it came into view too late): below it braking through (known
-                # deviation 13)
-                self._dip_through(looked, first, a_max, j_max, w)
+            # a feed cap the path could still get below braking: a brake at once instead
+            # (known deviation 12 of docs/geo-core.md, CAM seed 0); where that is refused, the
+            # steps re-plan toward the cap (a dip there slowed falling feeds, feeds seed 394)
+            return
+        if ceiling * (1.0 + CAP_TOL) + V_ROUND >= v_p:
+            # below it braking through (it came into view too late, or the shift's goal is
+            # the window's end, toward which a cruise is no plan): known deviations 13 and 14
+            # (0.1 mm blocks, look-ahead 10, F8110 -> F1740: the profile to rest at the
+            # window's end, 0.3 mm after the drop, passed it at 63.4 mm/s for 29 with 2 µm
+            # of slack left)
+            self._dip_through(looked, first, a_max, j_max, w)
 
     def _rests_before(
         self, cands: list[tuple[int, float, float, bool]], s: float, v: float, a: float,
@@ -480,8 +484,9 @@ class Tracker(Brakes):
         t, v, a = self.t, self.v, self.a
         w = self.window_end
         plan = self.plan
-        # a target beyond b: kept in case no new profile from here is accepted (`_replan`)
-        self._passed = plan if plan is not None and plan.goal > b else None
+        # a plan that keeps a boundary beyond b (a target, a brake through): kept in case no
+        # new profile from here is accepted (`_replan`, `Targets._settle`'s last resort)
+        self._passed = plan if plan is not None and plan.keeps > b else None
         self.plan = None
         if (
             plan is not None

@@ -1,0 +1,100 @@
+"""Seeded random programs of short blocks whose feed changes block by block (issue 36): falling
+feeds (each block 2–20 % below the last, now and then back up), a saw of feeds between F3000
+and F60000, and drops to F1200–F6000 every 12 blocks before a corner or an M00; blocks of
+0.1–2 mm along a line that bends a little, a look-ahead of 3–200 blocks, cycles of 0.5–2 ms,
+and in most runs an override step sequence (10–200 %) or a feed hold where the short blocks
+are. The shapes the cold reviews of the seventh and eighth rounds wrote their programs in
+(their generator, seed for seed); the look-ahead meets the feed drops at every distance, late
+ones included (known deviations 13 and 14 of docs/geo-core.md).
+
+Each program starts with a 316 mm line from the origin at F3000 (6.3 s), so the short blocks
+and the input changes come after a corner. Used by bench/bench_cam_motion.py (--kind feeds)
+and, with the seeds fixed so far, by tests/unit/cnc/path/test_cam_motion.py."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import random
+
+from liftd.cnc.plc import Schedule, parse_override_spec
+from tests.support.channel import make_channel
+from tests.support.scenarios import Scenario
+
+KINDS = ("fall", "fall", "dropcorner", "dropm00", "saw")
+HIGH = (12000, 24000, 30000, 45000, 60000)  # mm/min
+LOOK_AHEAD = (3, 8, 30, 60, 120, 200)
+# override steps, in seconds after the short blocks begin (T0) : percent
+OVERRIDES = (
+    "", "", "0.05:150,0.12:40,0.2:200", "0.03:60,0.06:180,0.3:100", "0.08:30,0.1:200",
+    "0.02:10,0.2:100", "0.1:200,0.15:20,0.4:120",
+)  # fmt: skip
+CYCLES = (1e-3, 2e-3, 5e-4)  # s
+
+
+def _feed(rng: random.Random, kind: str, f: int, i: int) -> int:
+    if kind == "fall":
+        f = max(600, int(f * rng.uniform(0.8, 0.98)))
+        if rng.random() < 0.05:
+            f = rng.choice(HIGH[:4])
+        return f
+    if kind == "saw":
+        return rng.choice((3000, 6000, *HIGH))
+    if i % 12 == 10:
+        return rng.choice((1200, 3000, 6000))
+    if i % 12 == 0:
+        return rng.choice(HIGH)
+    return f
+
+
+def feed_program(rng: random.Random) -> tuple[str, str]:
+    """(kind, program text)."""
+    lines = ["G01 X100 Y300 F3000"]
+    x, y = 100.0, 300.0
+    n = rng.choice((40, 80, 150))
+    step = rng.choice((0.1, 0.2, 0.5, 1.0, 2.0))
+    f = rng.choice(HIGH)
+    kind = rng.choice(KINDS)
+    ang = 0.0
+    for i in range(n):
+        f = _feed(rng, kind, f, i)
+        if kind == "dropcorner" and i % 12 == 11:
+            ang = max(-1.4, min(1.4, ang + rng.choice((0.5, 1.2, 1.57, -0.8, 0.05, -1.5))))
+        elif rng.random() < 0.1:
+            ang += rng.uniform(-0.05, 0.05)
+        x += step * math.cos(ang)
+        y += step * math.sin(ang)
+        fword = f" F{f}" if rng.random() < 0.9 else ""
+        if rng.random() < 0.1 and fword:
+            lines.append(f"F{f}")  # the new feed in an F-only block
+            fword = ""
+        lines.append(f"G01 X{x:.4f} Y{y:.4f}{fword}")
+        if kind == "dropm00" and i % 12 == 11:
+            lines.append("M00")
+    lines.append("M30")
+    return kind, "\n".join(lines) + "\n"
+
+
+def feed_scenario(seed: int) -> Scenario:
+    """A program of `feed_program` on the shipped machine's path axes (Y 8 m/s², 400 m/s³)."""
+    rng = random.Random(seed)
+    _, text = feed_program(rng)
+    look_ahead = rng.choice(LOOK_AHEAD)
+    spec = rng.choice(OVERRIDES)
+    held = rng.random() < 0.2  # a feed hold of 50 ms
+    t0 = 6.3 + rng.uniform(0.0, 0.3)  # the short blocks begin after about 6.3 s
+    holds: tuple[tuple[float, float], ...] = ((0.1 + t0, 0.15 + t0),) if held else ()
+    if spec:
+        steps = (p.split(":") for p in spec.split(","))
+        spec = ",".join(f"{float(t) + t0:.4f}:{pc}" for t, pc in steps)
+    cycle = rng.choice(CYCLES)
+    ch = make_channel()
+    y = dataclasses.replace(ch.axes[1], a_max=8.0, j_max=400.0)
+    ch = dataclasses.replace(
+        ch, axes=(ch.axes[0], y, ch.axes[2]), look_ahead_blocks=look_ahead, cycle_time=cycle
+    )
+    overrides = tuple(parse_override_spec(spec)) if spec else ()
+    return Scenario(seed, ch, text, Schedule(overrides, holds))
+
+
+__all__ = ["feed_program", "feed_scenario"]
