@@ -37,6 +37,13 @@ def make_channel(
     )
 
 
+def shipped() -> ChannelParams:
+    """The shipped machine's path axes (config/cnc: X 10 m/s², 500 m/s³; Y 8 m/s², 400 m/s³)."""
+    ch = make_channel()
+    y = dataclasses.replace(ch.axes[1], a_max=8.0, j_max=400.0)
+    return dataclasses.replace(ch, axes=(ch.axes[0], y, ch.axes[2]))
+
+
 def make_second_channel(
     method: LiftMethod = LiftMethod.LIFTING, channel_id: int = 2, first_axis: int = 4
 ) -> ChannelParams:

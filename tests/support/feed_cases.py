@@ -18,7 +18,7 @@ import math
 import random
 
 from liftd.cnc.plc import Schedule, parse_override_spec
-from tests.support.channel import make_channel
+from tests.support.channel import shipped
 from tests.support.scenarios import Scenario
 
 KINDS = ("fall", "fall", "dropcorner", "dropm00", "saw")
@@ -88,11 +88,7 @@ def feed_scenario(seed: int) -> Scenario:
         steps = (p.split(":") for p in spec.split(","))
         spec = ",".join(f"{float(t) + t0:.4f}:{pc}" for t, pc in steps)
     cycle = rng.choice(CYCLES)
-    ch = make_channel()
-    y = dataclasses.replace(ch.axes[1], a_max=8.0, j_max=400.0)
-    ch = dataclasses.replace(
-        ch, axes=(ch.axes[0], y, ch.axes[2]), look_ahead_blocks=look_ahead, cycle_time=cycle
-    )
+    ch = dataclasses.replace(shipped(), look_ahead_blocks=look_ahead, cycle_time=cycle)
     overrides = tuple(parse_override_spec(spec)) if spec else ()
     return Scenario(seed, ch, text, Schedule(overrides, holds))
 

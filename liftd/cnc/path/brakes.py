@@ -98,9 +98,7 @@ class Brakes(Targets):
     def _moves_on(self, cand: tuple[int, float, float, bool]) -> bool:
         """`cand` is the window's end (rest there, or its floor) where that is not a stop: the
         window moves on with the path, block by block. Not a feed cap at the same boundary,
-        which stays when the window moves on (read as the window's end, a dip to 76 mm/s
-        passed a drop to 46 mm/s there above it, the steps forced a re-plan toward it, and
-        the dip was made again: 157 ruckig calls in a cycle, a review found)."""
+        which stays when the window moves on (`_first_keeps`)."""
         w = self.window_end
         return (
             cand[0] == w
@@ -131,24 +129,21 @@ class Brakes(Targets):
         on by as much; a review found)."""
         s, v, a = self.s, self.v, self.a
         d_e = brake_distance(v, a, e, a_max, j_max)
-        for cand in cands:
-            c = cand
+        for c in cands:
+            b, s_b, cap, gate = c
             if self._moves_on(c):
                 # the window's end moves on: the steps keep it reachable (`_violated`) where
                 # it is a run boundary; a feed drop there stays a feed cap (read as rest there
-                # and left out, it was out of reach from the dip's velocity the cycle after:
-                # the steps and the dip took turns, 157 ruckig calls in a cycle, a review
-                # found)
-                b = c[0]
+                # and left out, a dip to 76 mm/s passed a drop to 46 there above it, and the
+                # steps and the dip took turns: 157 ruckig calls in a cycle, a review found)
                 if self.tb.gate[b]:
                     continue
-                c = (b, c[1], self.tb.entry_cap(b, self.ov), False)
-            _, s_b, cap, gate = c
+                cap, gate = self.tb.entry_cap(b, self.ov), False
             room = s_b - s
             if room - d_e < margin:
                 if gate or (
                     brake_distance(v, a, cap, a_max, j_max) > room - margin
-                    and (brake is None or self._passed_above(brake, [c], 1) >= 0)
+                    and (brake is None or self._passed_above(brake, [(b, s_b, cap, gate)], 1) >= 0)
                 ):
                     return False
             elif (cap < e or gate) and (

@@ -24,10 +24,10 @@ from liftd.cnc.plc import Schedule, SimPlc, parse_override_spec
 from liftd.sim.simulate import run_cycles
 from tests.support.cam_cases import X_RANGE, Y_RANGE, cam_scenario
 from tests.support.cam_runs import check, core_time, time_limit
+from tests.support.channel import shipped
 from tests.support.feed_cases import feed_scenario
 from tests.support.motion_check import reach_from as check_reach_from
 from tests.support.scenarios import Scenario, describe, scenario, wide_scenario
-from tests.unit.cnc.path.test_no_invented_stops import shipped
 
 # every 17th seed of the first 340: a spread over look-ahead sizes, cycle times and shapes
 CAM_SEEDS = list(range(0, 340, 17))

@@ -24,9 +24,10 @@ from liftd.cnc.path.velocity import brake_reach
 from liftd.cnc.plc import Schedule, parse_override_spec
 from tests.support.cam_cases import cam_scenario
 from tests.support.cam_runs import apart, check, core_time
+from tests.support.channel import shipped
 from tests.support.reference_bound import lower_bound_time
 from tests.support.scenarios import Scenario, describe
-from tests.unit.cnc.path.test_no_invented_stops import lowest_between, run, shipped
+from tests.unit.cnc.path.test_no_invented_stops import lowest_between, run
 
 
 def program(blocks: int, step_mm: float, feeds: tuple[int, ...], m00_after: int = -1,

@@ -13,9 +13,9 @@ from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.params import ChannelParams
 from tests.support.cam_cases import cam_scenario
 from tests.support.cam_runs import check
+from tests.support.channel import shipped
 from tests.support.motion_check import Expected, check_motion
 from tests.support.motion_rules import PathRules, Sample
-from tests.unit.cnc.path.test_no_invented_stops import shipped
 
 MM = 1e-3
 

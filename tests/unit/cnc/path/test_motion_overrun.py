@@ -10,10 +10,10 @@ import dataclasses
 from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.plc import Schedule, SimPlc, parse_override_spec
 from liftd.sim.simulate import run_cycles
+from tests.support.channel import shipped
 from tests.support.motion_check import Recorder, Sample, check_motion
 from tests.unit.cnc.path.test_dense_constraints import poisoned
 from tests.unit.cnc.path.test_motion_check import at, drive
-from tests.unit.cnc.path.test_no_invented_stops import shipped
 
 MM = 1e-3
 DT = 1e-3

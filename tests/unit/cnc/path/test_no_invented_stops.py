@@ -15,17 +15,10 @@ from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.params import ChannelParams
 from liftd.cnc.plc import Schedule, SimPlc, parse_override_spec
 from liftd.sim.simulate import run_cycles
-from tests.support.channel import make_channel
+from tests.support.channel import shipped
 from tests.support.motion_check import Recorder, Sample
 
 MM = 1e-3
-
-
-def shipped() -> ChannelParams:
-    """The shipped machine's path axes (config/cnc: X 10 m/s², 500 m/s³; Y 8 m/s², 400 m/s³)."""
-    ch = make_channel()
-    y = dataclasses.replace(ch.axes[1], a_max=8.0, j_max=400.0)
-    return dataclasses.replace(ch, axes=(ch.axes[0], y, ch.axes[2]))
 
 
 def run(text: str, ch: ChannelParams | None = None, override: str = "") -> Recorder:

@@ -17,9 +17,9 @@ from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.plc import Schedule
 from tests.support.cam_cases import cam_scenario
 from tests.support.cam_runs import check, core_time
+from tests.support.channel import shipped
 from tests.support.reference_bound import lower_bound_time
 from tests.support.scenarios import Scenario
-from tests.unit.cnc.path.test_no_invented_stops import shipped
 
 
 def falling_feeds(step_mm: float, feeds: tuple[int, ...], end: str) -> str:
