@@ -11,15 +11,16 @@ and a cruise after it keep every candidate ahead.
 
 from __future__ import annotations
 
-from liftd.cnc.path.constraints import SLACK_MARGIN
+from liftd.cnc.path.constraints import CAP_TOL, INF, SLACK_MARGIN, SLACK_TOL, V_ROUND
 from liftd.cnc.path.plan import CRUISE, SETTLE, Plan
-from liftd.cnc.path.targets import Targets, highest, only_brakes
+from liftd.cnc.path.targets import Targets, highest, lowest_rise, only_brakes
 from liftd.cnc.path.velocity import brake_distance
 
 DIP_STEPS = 10  # `Brakes._dip_through`: its velocity within 2^-10 of the cap (a ruckig solve each)
 DIP_FLOOR = 0.1  # ... and never below this fraction of the cap (a brake nearly to rest is a stop)
 BISECT_STEPS = 24  # `Brakes._brake_first`: its velocity within 2^-24 of the interval searched
 BRAKE_CRUISE = 0.25  # share of the way `Brakes._brake_through`'s cruise may take at most
+UNDER_RISE = 0.95  # `Brakes._brake_under`: its profile speeds up again from at least this × v_max
 
 
 class Brakes(Targets):
@@ -94,6 +95,51 @@ class Brakes(Targets):
         # read by `_dips`.
         assert self.plan is not None and self.plan.ev.phases is not None
         return only_brakes(self.plan.ev.phases)
+
+    def _brake_under(
+        self, looked: list[tuple[int, float, float, bool]], v_p: float, s_c: float,
+        target: float, v_max: float, a_max: float, j_max: float, b: int, w: int,
+    ) -> bool:  # fmt: skip
+        """The shift's profile toward b (`Tracker._replan`) passes a feed cap the path can
+        still get below above it, and the brake through to b's target is refused (b a stop,
+        or the cruise after the brake too long): the target profile toward b with ruckig's
+        v_max at the lowest feed cap before b that the path can still get down to with zero
+        acceleration there; from above it ruckig brakes at once (its brake into its limits),
+        then holds it and brakes late for b. Kept (True) where ruckig accepts it, it passes
+        each of those caps below it, it does not dip below its ends, and it speeds up again
+        only from at least UNDER_RISE of v_max (ruckig's brake ends still braking: from 145
+        mm/s toward v_max 100 it went down to 49 and came back); else the shift's profile
+        stays. The steps do not get such a cap back (they check the caps the shift passes by
+        their hard caps only): 0.5 mm blocks at F45000, then F6000 for 1 mm and an M00,
+        look-ahead 30 (feeds seed 4): the profile to rest at the M00, time-optimal, passed
+        the F6000 boundary at 108.7 mm/s (known deviation 15 of docs/geo-core.md). Slower
+        than the late brake, never above a cap."""
+        s, v, a = self.s, self.v, self.a
+        kept = [
+            c for c in looked
+            if c[1] < s_c and not c[3]
+            and brake_distance(v, a, c[2], a_max, j_max) <= c[1] - s + SLACK_TOL
+        ]  # fmt: skip
+        if not kept:
+            return False
+        top = max(min(c[2] for c in kept), target)
+        if top >= v_max:
+            return False
+        shift = self.plan
+        accepted = self._try_target(s, v, a, s_c, target, top, a_max, j_max, b, w)
+        if not accepted or self._dips(min(v, v_p, target)):
+            self.plan = shift
+            return False
+        plan = self.plan
+        assert plan is not None and plan.ev.phases is not None
+        kept.sort(key=lambda c: c[1])
+        if (
+            lowest_rise(plan.ev.phases) < UNDER_RISE * top
+            or self._passed_above(plan, kept, len(kept)) >= 0
+        ):
+            self.plan = shift
+            return False
+        return True
 
     def _moves_on(self, cand: tuple[int, float, float, bool]) -> bool:
         """`cand` is the window's end (rest there, or its floor) where that is not a stop: the
@@ -238,18 +284,23 @@ class Brakes(Targets):
         return True
 
     def _keep_below(
-        self, passed: Plan | None, first: tuple[int, float, float, bool], b: int, w: int
-    ) -> bool:
+        self, passed: Plan | None, first: tuple[int, float, float, bool], b: int, w: int,
+        target: float = INF,
+    ) -> bool:  # fmt: skip
         """The shift's new profile toward b passes `first` above its feed cap, and the one that
         brought the path to the boundary it just passed, toward the same goal, passes it below:
         that one is kept (True). As the window moves on, the goal's target rises and each
         re-plan brakes later; one that gives up a cap the profile in hand still keeps is the
         step that loses it (known deviation 12 of docs/geo-core.md, CAM seed 956: boundary 93,
-        114.8 mm/s, passed at 113.8 by the profile in hand, at 120.9 by the new one)."""
+        114.8 mm/s, passed at 113.8 by the profile in hand, at 120.9 by the new one). So is
+        the profile in hand where only the window moved on, if it ends at most at b's
+        `target` now (a brake under the cap, `_brake_under`, re-planned from inside its brake
+        at each block lost the cap again: feeds seed 4)."""
         if (
             passed is None
             or passed.goal != b
             or passed.t0 > self.t
+            or passed.v_end > target * (1.0 + CAP_TOL) + V_ROUND
             or self._passed_above(passed, [first], 1) >= 0
         ):
             return False

@@ -315,23 +315,49 @@ class Tracker(Brakes):
         if plan is None or not shifted or plan.goal != b:
             return
         in_reach = self._need(v, a, first[2], False, a_max, j_max) <= first[1] - s + SLACK_TOL
-        if self._passed_above(plan, [first], 1) < 0 or self._keep_below(passed, first, b, w):
+        if (
+            self._passed_above(plan, [first], 1) < 0
+            or self._keep_below(passed, first, b, w)
+            or self._keep_below(held, first, b, w, target)
+        ):
             return
         # the shift's profile passes `first` above its cap
         if in_reach and (
-            self._brake_through([first, (b, s_c, cap, gate)], 1, target, a_max, j_max, w) or b != w
+            self._brake_through([first, (b, s_c, cap, gate)], 1, target, a_max, j_max, w)
+            or self._brake_under(looked, v_p, s_c, target, v_max, a_max, j_max, b, w)
+            or (b != w and not gate)
         ):
             # a feed cap the path could still get below braking: a brake at once instead
             # (known deviation 12 of docs/geo-core.md, CAM seed 0); where that is refused, the
             # steps re-plan toward the cap (a dip there slowed falling feeds, feeds seed 394)
             return
-        if ceiling * (1.0 + CAP_TOL) + V_ROUND >= v_p:
+        if ceiling * (1.0 + CAP_TOL) + V_ROUND >= v_p and self._dip_through(
+            looked, first, a_max, j_max, w
+        ):
             # below it braking through (it came into view too late, or the shift's goal is
             # the window's end, toward which a cruise is no plan): known deviations 13 and 14
             # (0.1 mm blocks, look-ahead 10, F8110 -> F1740: the profile to rest at the
             # window's end, 0.3 mm after the drop, passed it at 63.4 mm/s for 29 with 2 µm
             # of slack left)
-            self._dip_through(looked, first, a_max, j_max, w)
+            return
+        if not in_reach:
+            # `first` is lost, the blocks after it are not: the caps after it the path can
+            # still get below (the lists leave them out as kept by `first`, `_collect`: read
+            # again), else a brake at once to its cap (`_brake_first`: an override drop to
+            # 30 % lowered the F6000 blocks to 30 mm/s, their first boundary out of reach,
+            # the shift's profile passed the second, 0.5 mm on, at 75.9 mm/s: feeds seed 192)
+            after = self._collect(s, seg, s_c - s, first=first[0] + 1)
+            if self._brake_under(looked + after, v_p, s_c, target, v_max, a_max, j_max, b, w):
+                return
+            rest = [
+                c for c in looked + after
+                if c[1] > first[1]
+                and (c[3] or self._need(v, a, c[2], False, a_max, j_max) <= c[1] - s)
+            ]  # fmt: skip
+            if self._brake_first(rest, first[2], a_max, j_max, w):
+                # it keeps `first` as well as it can: the steps do not ask for it again
+                assert self.plan is not None
+                self.plan.serves = self.plan.soft_from = self._soft_from = first[0]
 
     def _rests_before(
         self, cands: list[tuple[int, float, float, bool]], s: float, v: float, a: float,
