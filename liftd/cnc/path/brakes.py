@@ -126,20 +126,23 @@ class Brakes(Targets):
         if top >= v_max:
             return False
         shift = self.plan
-        accepted = self._try_target(s, v, a, s_c, target, top, a_max, j_max, b, w)
-        if not accepted or self._dips(min(v, v_p, target)):
-            self.plan = shift
-            return False
-        plan = self.plan
-        assert plan is not None and plan.ev.phases is not None
         kept.sort(key=lambda c: c[1])
-        if (
-            lowest_rise(plan.ev.phases) < UNDER_RISE * top
-            or self._passed_above(plan, kept, len(kept)) >= 0
-        ):
-            self.plan = shift
-            return False
-        return True
+        if self._try_target(s, v, a, s_c, target, top, a_max, j_max, b, w):
+            plan = self.plan
+            assert plan is not None
+            if not self._dips(min(v, v_p, target)):
+                assert plan.ev.phases is not None
+                if (
+                    lowest_rise(plan.ev.phases) >= UNDER_RISE * top
+                    and self._passed_above(plan, kept, len(kept)) < 0
+                ):
+                    return True
+        self.plan = shift
+        # else the brake at once to it with zero acceleration there (ruckig's velocity
+        # interface), or to the highest velocity below it that keeps every candidate, and the
+        # steps from there (`_brake_first`; feeds seed 299: falling feeds on 2 mm blocks,
+        # ruckig's profile went down to 174.6 mm/s toward a v_max of 185.5)
+        return self._brake_first(looked, top, a_max, j_max, w)
 
     def _moves_on(self, cand: tuple[int, float, float, bool]) -> bool:
         """`cand` is the window's end (rest there, or its floor) where that is not a stop: the

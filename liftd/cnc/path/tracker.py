@@ -331,16 +331,15 @@ class Tracker(Brakes):
             # (known deviation 12 of docs/geo-core.md, CAM seed 0); where that is refused, the
             # steps re-plan toward the cap (a dip there slowed falling feeds, feeds seed 394)
             return
-        if ceiling * (1.0 + CAP_TOL) + V_ROUND >= v_p and self._dip_through(
-            looked, first, a_max, j_max, w
-        ):
+        below = ceiling * (1.0 + CAP_TOL) + V_ROUND >= v_p  # not after an override drop
+        if below and self._dip_through(looked, first, a_max, j_max, w):
             # below it braking through (it came into view too late, or the shift's goal is
             # the window's end, toward which a cruise is no plan): known deviations 13 and 14
             # (0.1 mm blocks, look-ahead 10, F8110 -> F1740: the profile to rest at the
             # window's end, 0.3 mm after the drop, passed it at 63.4 mm/s for 29 with 2 µm
             # of slack left)
             return
-        if not in_reach:
+        if below and not in_reach:
             # `first` is lost, the blocks after it are not: the caps after it the path can
             # still get below (the lists leave them out as kept by `first`, `_collect`: read
             # again), else a brake at once to its cap (`_brake_first`: an override drop to
