@@ -282,8 +282,14 @@ class Brakes(Targets):
             if gate or c < good:
                 break
             serves = b
-        kept.serves, kept.soft_from = serves, first[0]
-        self.plan, self._soft_from = kept, first[0]
+        # so are the caps before it it passes below (`_first_keeps` with the brake): read by
+        # `_violated` with zero acceleration there, the one before `first` was out of reach
+        # at each step, and a forced re-plan and the dip took turns until the dip's cap was
+        # lost too (feeds seed 223: falling feeds on 0.5 mm blocks, F8610 passed at 151 mm/s
+        # for 143.5)
+        soft = min(first[0], min(c[0] for c in cands))
+        kept.serves, kept.soft_from = serves, soft
+        self.plan, self._soft_from = kept, soft
         return True
 
     def _keep_below(
