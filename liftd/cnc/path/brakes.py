@@ -97,8 +97,9 @@ class Brakes(Targets):
         return only_brakes(self.plan.ev.phases)
 
     def _brake_under(
-        self, looked: list[tuple[int, float, float, bool]], v_p: float, s_c: float,
-        target: float, v_max: float, a_max: float, j_max: float, b: int, w: int,
+        self, looked: list[tuple[int, float, float, bool]], first: tuple[int, float, float, bool],
+        v_p: float, s_c: float, target: float, v_max: float, a_max: float, j_max: float, b: int,
+        w: int,
     ) -> bool:  # fmt: skip
         """The shift's profile toward b (`Tracker._replan`) passes a feed cap the path can
         still get below above it, and the brake through to b's target is refused (b a stop,
@@ -115,14 +116,20 @@ class Brakes(Targets):
         the F6000 boundary at 108.7 mm/s (known deviation 15 of docs/geo-core.md). Slower
         than the late brake, never above a cap."""
         s, v, a = self.s, self.v, self.a
-        kept = [
-            c for c in looked
-            if c[1] < s_c and not c[3]
-            and brake_distance(v, a, c[2], a_max, j_max) <= c[1] - s + SLACK_TOL
-        ]  # fmt: skip
-        if not kept:
+        kept: list[tuple[int, float, float, bool]] = []
+        lost: list[int] = []  # the caps before b it can no longer get down to
+        for c in looked:
+            if c[1] >= s_c or c[3]:
+                continue
+            if brake_distance(v, a, c[2], a_max, j_max) <= c[1] - s + SLACK_TOL:
+                kept.append(c)
+            else:
+                lost.append(c[0])
+        # where `first` is lost, no higher than its cap (its blocks are still ahead)
+        caps = [c[2] for c in kept] + ([first[2]] if first[0] in lost else [])
+        if not caps:
             return False
-        top = max(min(c[2] for c in kept), target)
+        top = max(min(caps), target)
         if top >= v_max:
             return False
         shift = self.plan
@@ -142,7 +149,48 @@ class Brakes(Targets):
         # interface), or to the highest velocity below it that keeps every candidate, and the
         # steps from there (`_brake_first`; feeds seed 299: falling feeds on 2 mm blocks,
         # ruckig's profile went down to 174.6 mm/s toward a v_max of 185.5)
-        return self._brake_first(looked, top, a_max, j_max, w)
+        rest = [c for c in looked if c[0] not in lost]
+        if not self._brake_first(rest, top, a_max, j_max, w):
+            return False
+        if lost:
+            # it passes the lost ones as well as it can: the steps do not ask for them again
+            # (read as caps to keep, their forced re-plans and the brake took turns, 203
+            # tracker errors after an override drop to 20 %: feeds seed 178)
+            plan = self.plan
+            assert plan is not None
+            plan.soft_from = self._soft_from = min(lost)
+            plan.serves = max(lost)
+        return True
+
+    def _brake_lost(
+        self, cands: list[tuple[int, float, float, bool]], i: int, a_max: float, j_max: float,
+        w: int,
+    ) -> bool:  # fmt: skip
+        """Candidate i, a feed cap, is out of reach (an override drop lowered it, or it came
+        into view too late), and the path is not above its own block's ceiling: a brake at
+        once to its cap, or to the highest velocity below it that keeps every candidate the
+        path can still keep (`_brake_first`). Its block is still ahead: the path is above its
+        feed until it is down to it, and the target at its boundary (the nearest velocity
+        above the cap with zero acceleration there) left the brake for the boundary, after
+        which the cap of the block after it was lost too (override 100 → 60 % 0.5 mm before
+        an F3000 block of 0.4 mm: 50 mm/s at its start, 35.3 at its end for 30; feeds seed
+        230). The lost caps are the plan's to keep as well as it can (`Plan.serves`,
+        `Plan.soft_from`): read by the steps, their forced re-plans and the brake take turns."""
+        s, v, a = self.s, self.v, self.a
+        lost = [
+            c[0] for c in cands
+            if not c[3] and brake_distance(v, a, c[2], a_max, j_max) > c[1] - s + SLACK_TOL
+        ]  # fmt: skip
+        if cands[i][0] not in lost:
+            return False
+        rest = [c for c in cands if c[0] not in lost]
+        if not self._brake_first(rest, cands[i][2], a_max, j_max, w):
+            return False
+        plan = self.plan
+        assert plan is not None
+        plan.soft_from = self._soft_from = min(lost)
+        plan.serves = max(lost)
+        return True
 
     def _moves_on(self, cand: tuple[int, float, float, bool]) -> bool:
         """`cand` is the window's end (rest there, or its floor) where that is not a stop: the
@@ -287,7 +335,7 @@ class Brakes(Targets):
         # at each step, and a forced re-plan and the dip took turns until the dip's cap was
         # lost too (feeds seed 223: falling feeds on 0.5 mm blocks, F8610 passed at 151 mm/s
         # for 143.5)
-        soft = min(first[0], min(c[0] for c in cands))
+        soft = min(first[0], *(c[0] for c in cands))
         kept.serves, kept.soft_from = serves, soft
         self.plan, self._soft_from = kept, soft
         return True

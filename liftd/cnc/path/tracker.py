@@ -270,6 +270,21 @@ class Tracker(Brakes):
             target = self._pick_target(v, a, v_p, d, cap, ceiling, a_max, j_max,
                                        self._hard(b, w))  # fmt: skip
             shifted = True
+        below = ceiling * (1.0 + CAP_TOL) + V_ROUND >= v_p  # not after an override drop
+        if (
+            not shifted
+            and not gate
+            and not self.hold
+            and target > cands[best_i][2] * (1.0 + CAP_TOL) + V_ROUND
+            and (
+                (below and self._dip_through(cands, cands[best_i], a_max, j_max, w))
+                or self._brake_lost(cands, best_i, a_max, j_max, w)
+            )
+        ):
+            # a feed cap out of reach and nothing after it to shift to (its block goes on
+            # past the horizon): below it braking through, else a brake at once to it
+            # (known deviation 15 of docs/geo-core.md)
+            return
         self._soft_from = soft_from
         top_b = min(cap, ceiling)
         kept = passed
@@ -324,14 +339,13 @@ class Tracker(Brakes):
         # the shift's profile passes `first` above its cap
         if in_reach and (
             self._brake_through([first, (b, s_c, cap, gate)], 1, target, a_max, j_max, w)
-            or self._brake_under(looked, v_p, s_c, target, v_max, a_max, j_max, b, w)
+            or self._brake_under(looked, first, v_p, s_c, target, v_max, a_max, j_max, b, w)
             or (b != w and not gate)
         ):
             # a feed cap the path could still get below braking: a brake at once instead
             # (known deviation 12 of docs/geo-core.md, CAM seed 0); where that is refused, the
             # steps re-plan toward the cap (a dip there slowed falling feeds, feeds seed 394)
             return
-        below = ceiling * (1.0 + CAP_TOL) + V_ROUND >= v_p  # not after an override drop
         if below and self._dip_through(looked, first, a_max, j_max, w):
             # below it braking through (it came into view too late, or the shift's goal is
             # the window's end, toward which a cruise is no plan): known deviations 13 and 14
@@ -340,23 +354,13 @@ class Tracker(Brakes):
             # of slack left)
             return
         if below and not in_reach:
-            # `first` is lost, the blocks after it are not: the caps after it the path can
-            # still get below (the lists leave them out as kept by `first`, `_collect`: read
-            # again), else a brake at once to its cap (`_brake_first`: an override drop to
-            # 30 % lowered the F6000 blocks to 30 mm/s, their first boundary out of reach,
-            # the shift's profile passed the second, 0.5 mm on, at 75.9 mm/s: feeds seed 192)
+            # `first` is lost, the blocks after it are not: a brake under their caps, the
+            # caps after it the path can still get below read again (the lists leave them
+            # out as kept by `first`, `_collect`): an override drop to 30 % lowered F6000
+            # blocks to 30 mm/s, their first boundary out of reach, and the shift's profile
+            # passed the second, 0.5 mm on, at 75.9 mm/s (feeds seed 192)
             after = self._collect(s, seg, s_c - s, first=first[0] + 1)
-            if self._brake_under(looked + after, v_p, s_c, target, v_max, a_max, j_max, b, w):
-                return
-            rest = [
-                c for c in looked + after
-                if c[1] > first[1]
-                and (c[3] or self._need(v, a, c[2], False, a_max, j_max) <= c[1] - s)
-            ]  # fmt: skip
-            if self._brake_first(rest, first[2], a_max, j_max, w):
-                # it keeps `first` as well as it can: the steps do not ask for it again
-                assert self.plan is not None
-                self.plan.serves = self.plan.soft_from = self._soft_from = first[0]
+            self._brake_under(looked + after, first, v_p, s_c, target, v_max, a_max, j_max, b, w)
 
     def _rests_before(
         self, cands: list[tuple[int, float, float, bool]], s: float, v: float, a: float,
