@@ -347,8 +347,11 @@ class Tracker(Brakes):
             or (b != w and not gate)
         ):
             # a feed cap the path could still get below braking: a brake at once instead
-            # (known deviation 12 of docs/geo-core.md, CAM seed 0); where that is refused, the
-            # steps re-plan toward the cap (a dip there slowed falling feeds, feeds seed 394)
+            # (known deviation 12 of docs/geo-core.md, CAM seed 0), or a brake under it
+            # (deviation 15); where both are refused, the steps re-plan toward the cap (a dip
+            # there slowed falling feeds, feeds seed 394), but not where the goal is a run
+            # boundary or a stop just after it: the dip follows (feeds seed 177, a corner of
+            # 4.5 mm/s 1 mm after a drop to F6000, passed at 106.7 mm/s)
             return
         if below and self._dip_through(looked, first, a_max, j_max, w):
             # below it braking through (it came into view too late, or the shift's goal is
