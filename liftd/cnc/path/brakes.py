@@ -247,14 +247,14 @@ class Brakes(Targets):
                     ):
                         return False
                 elif cap * (1.0 + CAP_TOL) + V_ROUND < e or (
-                    brake_distance(v, a, cap, a_max, j_max) > room + SLACK_TOL
+                    brake_distance(v, a, cap, a_max, j_max) > room - margin
                 ):
-                    # a cap below e inside the brake is passed above it; one at e or above
-                    # is passed below it by the brake at once to e no later than the brake
-                    # to it with zero acceleration there gets there, also where that one
-                    # fits only to a rounding (with SLACK_MARGIN asked of it, a cap 0.33 mm
-                    # ahead at the edge of its brake refused every brake at once, and the
-                    # shift passed the next one, F9117, at 160.2 mm/s: feeds seed 86)
+                    # a cap below e inside the brake is passed above it (accepted where its
+                    # own brake fitted until the tenth round); one at e or above is passed
+                    # below it by the brake at once to e no later than the brake to it with
+                    # zero acceleration there gets there, kept with `margin` to spare as
+                    # the steps read it (`_violated`: to a rounding only, a forced re-plan
+                    # toward such a cap from inside the brake was refused, feeds seed 3)
                     return False
             elif (cap < e or gate) and (
                 room - d_e - self._need(e, 0.0, cap, gate, a_max, j_max) < margin
