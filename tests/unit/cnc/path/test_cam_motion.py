@@ -14,6 +14,7 @@ import itertools
 import math
 import random
 import re
+from pathlib import Path
 
 import pytest
 
@@ -472,6 +473,35 @@ def test_a_feed_cap_lost_to_an_override_drop_is_braked_to_at_once(seed: int) -> 
     check allows (the brake from the drop on), no other, and no tracker error."""
     _, hard, _, errors = check(feed_scenario(seed))
     assert hard == [] and errors == 0, hard
+
+
+PROGRAMS = Path(__file__).parent / "programs"
+
+
+@pytest.mark.parametrize(
+    ("name", "look_ahead", "cycle", "override", "hold"),
+    [
+        ("override_drop_short_blocks", 5, 5e-4, "6.4045:60,6.6359:150", ()),
+        ("hold_in_falling_feeds", 200, 1e-3, "6.4028:30", ((6.49, 6.5817),)),
+    ],
+)
+def test_a_lost_cap_costs_no_dip_and_no_error(
+    name: str, look_ahead: int, cycle: float, override: str, hold: tuple[tuple[float, float], ...]
+) -> None:
+    """Programs of the tenth round's cold review (0.5 mm blocks). An override drop to 60 %
+    12 µm before an F300 block (3 mm/s now): in a first version of this round's fallbacks
+    the dip below its cap (`Brakes._dip_through`) went to 2.03 mm/s in it (67ef359 has no
+    dip there); after an input change the brake at once comes first now
+    (`Tracker._lost_cap`) and the block is entered braking, as the check allows. A feed hold
+    that came inside a brake at once to a feed cap: the target profile 0.18 mm on was
+    refused at the edge, and the hold's brake to rest counted as a tracker error (on 67ef359
+    the path passed a boundary at 49 mm/s under the hold)."""
+    ch = dataclasses.replace(shipped(), look_ahead_blocks=look_ahead, cycle_time=cycle)
+    text = (PROGRAMS / f"{name}.nc").read_text()
+    sc = Scenario(0, ch, text, Schedule(tuple(parse_override_spec(override)), hold))
+    _, hard, slow, errors = check(sc)
+    assert hard == [] and errors == 0, hard
+    assert slow == [], slow
 
 
 def test_an_override_drop_before_two_feed_drops_keeps_them() -> None:
