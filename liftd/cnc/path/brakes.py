@@ -363,14 +363,15 @@ class Brakes(Targets):
         re-plan brakes later; one that gives up a cap the profile in hand still keeps is the
         step that loses it (known deviation 12 of docs/geo-core.md, CAM seed 956: boundary 93,
         114.8 mm/s, passed at 113.8 by the profile in hand, at 120.9 by the new one). So is
-        the profile in hand where only the window moved on, if it ends at most at b's
-        `target` now (a brake under the cap, `_brake_under`, re-planned from inside its brake
-        at each block lost the cap again: feeds seed 4)."""
+        the profile in hand where only the window moved on, if it ends at b's `target` now
+        (a brake under the cap, `_brake_under`, re-planned from inside its brake at each block
+        lost the cap again: feeds seed 4; one toward rest at the window's end it planned for
+        is not kept once that end has moved on and b's target is above rest)."""
         if (
             passed is None
             or passed.goal != b
             or passed.t0 > self.t
-            or passed.v_end > target * (1.0 + CAP_TOL) + V_ROUND
+            or (target < INF and abs(passed.v_end - target) > CAP_TOL * target + V_ROUND)
             or self._passed_above(passed, [first], 1) >= 0
         ):
             return False
