@@ -11,15 +11,16 @@ and a cruise after it keep every candidate ahead.
 
 from __future__ import annotations
 
-from liftd.cnc.path.constraints import SLACK_MARGIN
+from liftd.cnc.path.constraints import CAP_TOL, INF, SLACK_MARGIN, SLACK_TOL, V_ROUND
 from liftd.cnc.path.plan import CRUISE, SETTLE, Plan
-from liftd.cnc.path.targets import Targets, highest, only_brakes
+from liftd.cnc.path.targets import Targets, highest, lowest_rise, only_brakes
 from liftd.cnc.path.velocity import brake_distance
 
 DIP_STEPS = 10  # `Brakes._dip_through`: its velocity within 2^-10 of the cap (a ruckig solve each)
 DIP_FLOOR = 0.1  # ... and never below this fraction of the cap (a brake nearly to rest is a stop)
 BISECT_STEPS = 24  # `Brakes._brake_first`: its velocity within 2^-24 of the interval searched
 BRAKE_CRUISE = 0.25  # share of the way `Brakes._brake_through`'s cruise may take at most
+UNDER_RISE = 0.95  # `Brakes._brake_under`: its profile speeds up again from at least this × v_max
 
 
 class Brakes(Targets):
@@ -95,6 +96,102 @@ class Brakes(Targets):
         assert self.plan is not None and self.plan.ev.phases is not None
         return only_brakes(self.plan.ev.phases)
 
+    def _brake_under(
+        self, looked: list[tuple[int, float, float, bool]], first: tuple[int, float, float, bool],
+        v_p: float, s_c: float, target: float, v_max: float, a_max: float, j_max: float, b: int,
+        w: int,
+    ) -> bool:  # fmt: skip
+        """The shift's profile toward b (`Tracker._replan`) passes a feed cap the path can
+        still get below above it, and the brake through to b's target is refused (b a stop,
+        or the cruise after the brake too long): the target profile toward b with ruckig's
+        v_max at the lowest feed cap before b that the path can still get down to with zero
+        acceleration there; from above it ruckig brakes at once (its brake into its limits),
+        then holds it and brakes late for b. Kept (True) where ruckig accepts it, it passes
+        each of those caps below it, it does not dip below its ends, and it speeds up again
+        only from at least UNDER_RISE of v_max (ruckig's brake ends still braking: from 145
+        mm/s toward v_max 100 it went down to 49 and came back); else the shift's profile
+        stays. The steps do not get such a cap back (they check the caps the shift passes by
+        their hard caps only): 0.5 mm blocks at F45000, then F6000 for 1 mm and an M00,
+        look-ahead 30 (feeds seed 4): the profile to rest at the M00, time-optimal, passed
+        the F6000 boundary at 108.7 mm/s (known deviation 15 of docs/geo-core.md). Slower
+        than the late brake, never above a cap."""
+        s, v, a = self.s, self.v, self.a
+        kept: list[tuple[int, float, float, bool]] = []
+        lost: list[int] = []  # the caps before b it can no longer get down to
+        for c in looked:
+            if c[1] >= s_c or c[3]:
+                continue
+            if brake_distance(v, a, c[2], a_max, j_max) <= c[1] - s + SLACK_TOL:
+                kept.append(c)
+            else:
+                lost.append(c[0])
+        # where `first` is lost, no higher than its cap (its blocks are still ahead)
+        caps = [c[2] for c in kept] + ([first[2]] if first[0] in lost else [])
+        if not caps:
+            return False
+        top = max(min(caps), target)
+        if top >= v_max:
+            return False
+        shift = self.plan
+        kept.sort(key=lambda c: c[1])
+        if self._try_target(s, v, a, s_c, target, top, a_max, j_max, b, w):
+            plan = self.plan
+            assert plan is not None
+            if not self._dips(min(v, v_p, target)):
+                assert plan.ev.phases is not None
+                if (
+                    lowest_rise(plan.ev.phases) >= UNDER_RISE * top
+                    and self._passed_above(plan, kept, len(kept)) < 0
+                ):
+                    return True
+        self.plan = shift
+        # else the brake at once to it with zero acceleration there (ruckig's velocity
+        # interface), or to the highest velocity below it that keeps every candidate, and the
+        # steps from there (`_brake_first`; feeds seed 299: falling feeds on 2 mm blocks,
+        # ruckig's profile went down to 174.6 mm/s toward a v_max of 185.5)
+        rest = [c for c in looked if c[0] not in lost]
+        if not self._brake_first(rest, top, a_max, j_max, w):
+            return False
+        if lost:
+            # it passes the lost ones as well as it can: the steps do not ask for them again
+            # (read as caps to keep, their forced re-plans and the brake took turns, 203
+            # tracker errors after an override drop to 20 %: feeds seed 178)
+            plan = self.plan
+            assert plan is not None
+            plan.soft_from = self._soft_from = min(lost)
+            plan.serves = max(lost)
+        return True
+
+    def _brake_lost(
+        self, cands: list[tuple[int, float, float, bool]], i: int, a_max: float, j_max: float,
+        w: int,
+    ) -> bool:  # fmt: skip
+        """Candidate i, a feed cap, is out of reach (an override drop lowered it, or it came
+        into view too late), and the path is not above its own block's ceiling: a brake at
+        once to its cap, or to the highest velocity below it that keeps every candidate the
+        path can still keep (`_brake_first`). Its block is still ahead: the path is above its
+        feed until it is down to it, and the target at its boundary (the nearest velocity
+        above the cap with zero acceleration there) left the brake for the boundary, after
+        which the cap of the block after it was lost too (override 100 → 60 % 0.5 mm before
+        an F3000 block of 0.4 mm: 50 mm/s at its start, 35.3 at its end for 30; feeds seed
+        230). The lost caps are the plan's to keep as well as it can (`Plan.serves`,
+        `Plan.soft_from`): read by the steps, their forced re-plans and the brake take turns."""
+        s, v, a = self.s, self.v, self.a
+        lost = [
+            c[0] for c in cands
+            if not c[3] and brake_distance(v, a, c[2], a_max, j_max) > c[1] - s + SLACK_TOL
+        ]  # fmt: skip
+        if cands[i][0] not in lost:
+            return False
+        rest = [c for c in cands if c[0] not in lost]
+        if not self._brake_first(rest, cands[i][2], a_max, j_max, w):
+            return False
+        plan = self.plan
+        assert plan is not None
+        plan.soft_from = self._soft_from = min(lost)
+        plan.serves = max(lost)
+        return True
+
     def _moves_on(self, cand: tuple[int, float, float, bool]) -> bool:
         """`cand` is the window's end (rest there, or its floor) where that is not a stop: the
         window moves on with the path, block by block. Not a feed cap at the same boundary,
@@ -141,10 +238,23 @@ class Brakes(Targets):
                 cap, gate = self.tb.entry_cap(b, self.ov), False
             room = s_b - s
             if room - d_e < margin:
-                if gate or (
+                if gate:
+                    return False
+                if brake is not None:
+                    if (
+                        brake_distance(v, a, cap, a_max, j_max) > room - margin
+                        and self._passed_above(brake, [(b, s_b, cap, gate)], 1) >= 0
+                    ):
+                        return False
+                elif cap * (1.0 + CAP_TOL) + V_ROUND < e or (
                     brake_distance(v, a, cap, a_max, j_max) > room - margin
-                    and (brake is None or self._passed_above(brake, [(b, s_b, cap, gate)], 1) >= 0)
                 ):
+                    # a cap below e inside the brake is passed above it (accepted where its
+                    # own brake fitted until the tenth round); one at e or above is passed
+                    # below it by the brake at once to e no later than the brake to it with
+                    # zero acceleration there gets there, kept with `margin` to spare as
+                    # the steps read it (`_violated`: to a rounding only, a forced re-plan
+                    # toward such a cap from inside the brake was refused, feeds seed 3)
                     return False
             elif (cap < e or gate) and (
                 room - d_e - self._need(e, 0.0, cap, gate, a_max, j_max) < margin
@@ -233,23 +343,35 @@ class Brakes(Targets):
             if gate or c < good:
                 break
             serves = b
-        kept.serves, kept.soft_from = serves, first[0]
-        self.plan, self._soft_from = kept, first[0]
+        # so are the caps before it it passes below (`_first_keeps` with the brake): read by
+        # `_violated` with zero acceleration there, the one before `first` was out of reach
+        # at each step, and a forced re-plan and the dip took turns until the dip's cap was
+        # lost too (feeds seed 223: falling feeds on 0.5 mm blocks, F8610 passed at 151 mm/s
+        # for 143.5)
+        soft = min(first[0], *(c[0] for c in cands))
+        kept.serves, kept.soft_from = serves, soft
+        self.plan, self._soft_from = kept, soft
         return True
 
     def _keep_below(
-        self, passed: Plan | None, first: tuple[int, float, float, bool], b: int, w: int
-    ) -> bool:
+        self, passed: Plan | None, first: tuple[int, float, float, bool], b: int, w: int,
+        target: float = INF,
+    ) -> bool:  # fmt: skip
         """The shift's new profile toward b passes `first` above its feed cap, and the one that
         brought the path to the boundary it just passed, toward the same goal, passes it below:
         that one is kept (True). As the window moves on, the goal's target rises and each
         re-plan brakes later; one that gives up a cap the profile in hand still keeps is the
         step that loses it (known deviation 12 of docs/geo-core.md, CAM seed 956: boundary 93,
-        114.8 mm/s, passed at 113.8 by the profile in hand, at 120.9 by the new one)."""
+        114.8 mm/s, passed at 113.8 by the profile in hand, at 120.9 by the new one). So is
+        the profile in hand where only the window moved on, if it ends at b's `target` now
+        (a brake under the cap, `_brake_under`, re-planned from inside its brake at each block
+        lost the cap again: feeds seed 4; one toward rest at the window's end it planned for
+        is not kept once that end has moved on and b's target is above rest)."""
         if (
             passed is None
             or passed.goal != b
             or passed.t0 > self.t
+            or (target < INF and abs(passed.v_end - target) > CAP_TOL * target + V_ROUND)
             or self._passed_above(passed, [first], 1) >= 0
         ):
             return False

@@ -221,10 +221,19 @@ class Tracker(Brakes):
         if (
             force is None
             and not self.hold
-            and v_p > ceiling * (1.0 + CAP_TOL) + V_ROUND
+            and (
+                v_p > ceiling * (1.0 + CAP_TOL) + V_ROUND
+                or (v > ceiling * (1.0 + CAP_TOL) + V_ROUND and v_p >= ceiling * (1.0 - CAP_TOL))
+            )
             and self._brake_first(cands, ceiling, a_max, j_max, w)
         ):
-            return  # an override drop: brake at once (known deviation 10 of docs/geo-core.md)
+            # an override drop: brake at once (known deviation 10 of docs/geo-core.md); also
+            # from inside such a brake to a block's cap, re-planned at the block, v_p at the
+            # cap (the target profile, with v_max = v there, braked below the cap and sped up
+            # again: 9.4 mm/s in a block of 5.56 after an override drop to 10 %, feeds seed
+            # 188), not where v_p is below it (the brake to it dipped: 2.03 mm/s in a block
+            # of 3, a review's program)
+            return
         cap = self._target_cap(cands, best_i)
         d = s_c - s
         over = self._gap_over(cands, best_i, min(cap, ceiling), w) if gate else 0.0
@@ -270,6 +279,15 @@ class Tracker(Brakes):
             target = self._pick_target(v, a, v_p, d, cap, ceiling, a_max, j_max,
                                        self._hard(b, w))  # fmt: skip
             shifted = True
+        below = ceiling * (1.0 + CAP_TOL) + V_ROUND >= v_p  # not after an override drop
+        if (
+            not shifted
+            and not gate
+            and not self.hold
+            and target > cands[best_i][2] * (1.0 + CAP_TOL) + V_ROUND
+            and self._lost_cap(cands, best_i, below, event, a_max, j_max, w)
+        ):
+            return
         self._soft_from = soft_from
         top_b = min(cap, ceiling)
         kept = passed
@@ -315,23 +333,58 @@ class Tracker(Brakes):
         if plan is None or not shifted or plan.goal != b:
             return
         in_reach = self._need(v, a, first[2], False, a_max, j_max) <= first[1] - s + SLACK_TOL
-        if self._passed_above(plan, [first], 1) < 0 or self._keep_below(passed, first, b, w):
+        if (
+            self._passed_above(plan, [first], 1) < 0
+            or self._keep_below(passed, first, b, w)
+            or self._keep_below(held, first, b, w, target)
+        ):
             return
         # the shift's profile passes `first` above its cap
         if in_reach and (
-            self._brake_through([first, (b, s_c, cap, gate)], 1, target, a_max, j_max, w) or b != w
+            self._brake_through([first, (b, s_c, cap, gate)], 1, target, a_max, j_max, w)
+            or self._brake_under(looked, first, v_p, s_c, target, v_max, a_max, j_max, b, w)
+            or (b != w and not gate)
         ):
             # a feed cap the path could still get below braking: a brake at once instead
-            # (known deviation 12 of docs/geo-core.md, CAM seed 0); where that is refused, the
-            # steps re-plan toward the cap (a dip there slowed falling feeds, feeds seed 394)
+            # (known deviation 12 of docs/geo-core.md, CAM seed 0), or a brake under it
+            # (deviation 15); where both are refused, the steps re-plan toward the cap (a dip
+            # there slowed falling feeds, feeds seed 394), but not where the goal is a run
+            # boundary or a stop just after it: the dip follows (feeds seed 177, a corner of
+            # 4.5 mm/s 1 mm after a drop to F6000, passed at 106.7 mm/s)
             return
-        if ceiling * (1.0 + CAP_TOL) + V_ROUND >= v_p:
+        if below and self._dip_through(looked, first, a_max, j_max, w):
             # below it braking through (it came into view too late, or the shift's goal is
             # the window's end, toward which a cruise is no plan): known deviations 13 and 14
             # (0.1 mm blocks, look-ahead 10, F8110 -> F1740: the profile to rest at the
             # window's end, 0.3 mm after the drop, passed it at 63.4 mm/s for 29 with 2 µm
             # of slack left)
-            self._dip_through(looked, first, a_max, j_max, w)
+            return
+        if below and not in_reach:
+            # `first` is lost, the blocks after it are not: a brake under their caps, the
+            # caps after it the path can still get below read again (the lists leave them
+            # out as kept by `first`, `_collect`): an override drop to 30 % lowered F6000
+            # blocks to 30 mm/s, their first boundary out of reach, and the shift's profile
+            # passed the second, 0.5 mm on, at 75.9 mm/s (feeds seed 192)
+            after = self._collect(s, seg, s_c - s, first=first[0] + 1)
+            self._brake_under(looked + after, first, v_p, s_c, target, v_max, a_max, j_max, b, w)
+
+    def _lost_cap(
+        self, cands: list[tuple[int, float, float, bool]], i: int, below: bool, event: bool,
+        a_max: float, j_max: float, w: int,
+    ) -> bool:  # fmt: skip
+        """Candidate i, a feed cap, is out of reach and nothing after it is in view to shift to
+        (its block goes on past the horizon): known deviation 15 of docs/geo-core.md. Where it
+        came into view too late, below it braking through (`_dip_through`, deviation 13), else
+        a brake at once to it (`_brake_lost`); where an input change put it out of reach, the
+        brake at once first, as the CNC brakes after an override drop (a dip there went to
+        2.03 mm/s in a block of 3 after an override drop to 60 % 12 µm before it, a review's
+        program; the check excuses passing it above as far as the brake from the change could
+        not avoid it)."""
+        if event and self._brake_lost(cands, i, a_max, j_max, w):
+            return True
+        if below and self._dip_through(cands, cands[i], a_max, j_max, w):
+            return True
+        return not event and self._brake_lost(cands, i, a_max, j_max, w)
 
     def _rests_before(
         self, cands: list[tuple[int, float, float, bool]], s: float, v: float, a: float,
