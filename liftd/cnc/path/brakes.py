@@ -109,12 +109,14 @@ class Brakes(Targets):
         then holds it and brakes late for b. Kept (True) where ruckig accepts it, it passes
         each of those caps below it, it does not dip below its ends, and it speeds up again
         only from at least UNDER_RISE of v_max (ruckig's brake ends still braking: from 145
-        mm/s toward v_max 100 it went down to 49 and came back); else the shift's profile
-        stays. The steps do not get such a cap back (they check the caps the shift passes by
-        their hard caps only): 0.5 mm blocks at F45000, then F6000 for 1 mm and an M00,
-        look-ahead 30 (feeds seed 4): the profile to rest at the M00, time-optimal, passed
-        the F6000 boundary at 108.7 mm/s (known deviation 15 of docs/geo-core.md). Slower
-        than the late brake, never above a cap."""
+        mm/s toward v_max 100 it went down to 49 and came back); else a brake at once to that
+        cap (below); else (False) the shift's profile stays. Where `first` is lost (the
+        caller's other case), v_max is at most its cap: its blocks are still ahead. The steps
+        do not get such a cap back (they check the caps the shift passes by their hard caps
+        only): 0.5 mm blocks at F45000, then F6000 for 1 mm and an M00, look-ahead 30 (feeds
+        seed 4): the profile to rest at the M00, time-optimal, passed the F6000 boundary at
+        108.7 mm/s (known deviation 15 of docs/geo-core.md). Slower than the late brake,
+        never above a cap it can still keep."""
         s, v, a = self.s, self.v, self.a
         kept: list[tuple[int, float, float, bool]] = []
         lost: list[int] = []  # the caps before b it can no longer get down to

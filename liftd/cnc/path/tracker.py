@@ -231,8 +231,8 @@ class Tracker(Brakes):
             # from inside such a brake to a block's cap, re-planned at the block, v_p at the
             # cap (the target profile, with v_max = v there, braked below the cap and sped up
             # again: 9.4 mm/s in a block of 5.56 after an override drop to 10 %, feeds seed
-            # 188), not where v_p is below it (the brake to it dipped: 2.03 mm/s in a block
-            # of 3, a review's program)
+            # 188), not where v_p is below it (from there a brake to the ceiling with zero
+            # acceleration goes below it first and comes back: the target profile stays)
             return
         cap = self._target_cap(cands, best_i)
         d = s_c - s
