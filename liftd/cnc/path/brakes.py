@@ -151,13 +151,19 @@ class Brakes(Targets):
         # interface), or to the highest velocity below it that keeps every candidate, and the
         # steps from there (`_brake_first`; feeds seed 299: falling feeds on 2 mm blocks,
         # ruckig's profile went down to 174.6 mm/s toward a v_max of 185.5)
-        rest = [c for c in looked if c[0] not in lost]
-        if not self._brake_first(rest, top, a_max, j_max, w):
+        return self._brake_past(looked, lost, top, a_max, j_max, w)
+
+    def _brake_past(
+        self, cands: list[tuple[int, float, float, bool]], lost: list[int], e: float,
+        a_max: float, j_max: float, w: int,
+    ) -> bool:  # fmt: skip
+        """`_brake_first` to e with the candidates the path can still keep; the lost ones (their
+        boundaries) the plan passes as well as it can (`Plan.serves`, `Plan.soft_from`): read
+        by the steps as caps to keep, their forced re-plans and the brake took turns, 203
+        tracker errors after an override drop to 20 % (feeds seed 178)."""
+        if not self._brake_first([c for c in cands if c[0] not in lost], e, a_max, j_max, w):
             return False
         if lost:
-            # it passes the lost ones as well as it can: the steps do not ask for them again
-            # (read as caps to keep, their forced re-plans and the brake took turns, 203
-            # tracker errors after an override drop to 20 %: feeds seed 178)
             plan = self.plan
             assert plan is not None
             plan.soft_from = self._soft_from = min(lost)
@@ -176,23 +182,13 @@ class Brakes(Targets):
         above the cap with zero acceleration there) left the brake for the boundary, after
         which the cap of the block after it was lost too (override 100 → 60 % 0.5 mm before
         an F3000 block of 0.4 mm: 50 mm/s at its start, 35.3 at its end for 30; feeds seed
-        230). The lost caps are the plan's to keep as well as it can (`Plan.serves`,
-        `Plan.soft_from`): read by the steps, their forced re-plans and the brake take turns."""
+        230). The lost caps are the plan's to pass as well as it can (`_brake_past`)."""
         s, v, a = self.s, self.v, self.a
         lost = [
             c[0] for c in cands
             if not c[3] and brake_distance(v, a, c[2], a_max, j_max) > c[1] - s + SLACK_TOL
         ]  # fmt: skip
-        if cands[i][0] not in lost:
-            return False
-        rest = [c for c in cands if c[0] not in lost]
-        if not self._brake_first(rest, cands[i][2], a_max, j_max, w):
-            return False
-        plan = self.plan
-        assert plan is not None
-        plan.soft_from = self._soft_from = min(lost)
-        plan.serves = max(lost)
-        return True
+        return cands[i][0] in lost and self._brake_past(cands, lost, cands[i][2], a_max, j_max, w)
 
     def _moves_on(self, cand: tuple[int, float, float, bool]) -> bool:
         """`cand` is the window's end (rest there, or its floor) where that is not a stop: the
