@@ -479,10 +479,15 @@ class Tracker(Brakes):
             v1 = max(v1, 0.0)
             if forced < 4:
                 violated = None
+                # the soft range as `_violated` reads it: up to the boundary the plan keeps
+                # (for a brake at once its `serves`: the caps a brake past lost caps passes,
+                # read as hard at the cut, forced re-plans toward them, each refused, a
+                # last-resort brake each: override 100 → 60 % at 172 mm/s 0.9 mm before a
+                # feed drop, feeds seed 928)
                 if (
                     cut >= 0
                     and cut != plan.serves
-                    and not self._passable(cut, v1, a1, w, plan.soft_from <= cut < plan.goal)
+                    and not self._passable(cut, v1, a1, w, plan.soft_from <= cut < plan.keeps)
                 ):
                     violated = cut  # the step ends on a constraint it does not keep
                 if violated is None:
@@ -550,7 +555,13 @@ class Tracker(Brakes):
         plan = self.plan
         # a plan that keeps a boundary beyond b (a target, a brake through): kept in case no
         # new profile from here is accepted (`_replan`, `Targets._settle`'s last resort)
-        self._passed = plan if plan is not None and plan.keeps > b else None
+        # (or a brake at once still braking: `Targets._settle`)
+        self._passed = (
+            plan
+            if plan is not None
+            and (plan.keeps > b or (plan.goal == SETTLE and t < plan.t0 + plan.dur))
+            else None
+        )
         self.plan = None
         if (
             plan is not None
