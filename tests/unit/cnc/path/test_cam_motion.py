@@ -481,6 +481,24 @@ def test_a_feed_cap_lost_to_an_override_drop_is_braked_to_at_once(seed: int) -> 
     assert hard == [] and errors == 0, hard
 
 
+# runs of tests/support/feed_cases.py that passed a feed cap above it on f089ba8 although a
+# brake at once keeps it on its own profile (no input change before; `_first_keeps` read it
+# by the brake to it with zero acceleration there): 86, 413, 810; 601 guards a first version
+# (a profile of 1.8e-16 s, read at its start, planned again without end)
+OWN_SEEDS = [86, 413, 601, 810]
+
+
+@pytest.mark.parametrize("seed", OWN_SEEDS)
+def test_a_brake_at_once_keeps_a_cap_its_own_profile_passes_below(seed: int) -> None:
+    """Seed 413: falling feeds on 1 mm blocks, look-ahead 8, 157 mm/s at −2.5 m/s² 1 mm
+    before F8900 (148.3 mm/s) and 3 mm before F7500 (125). The brake to 148.3 with zero
+    acceleration there takes 1.1 mm; the brake at once to 125 is at 131 mm/s after 1 mm.
+    Read by the former, no brake at once was found, and the target profile toward F7500
+    passed F8900 at 149.3 mm/s. No overrun and no tracker error now."""
+    _, hard, _, errors = check(feed_scenario(seed))
+    assert hard == [] and errors == 0, hard
+
+
 PROGRAMS = Path(__file__).parent / "programs"
 
 
