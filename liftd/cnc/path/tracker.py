@@ -49,6 +49,11 @@ from liftd.cnc.path.velocity import (
 )
 from liftd.cnc.ruckig1 import ProfileError
 
+# after an input change, a feed cap whose nearest reachable velocity below it (the jerk gap's
+# lower end, `Targets._pick_target`) is less than this fraction of it is out of reach
+# (`Tracker._lost_cap`)
+GAP_FLOOR = 0.5
+
 
 class Primed:
     """The profile a resting path will leave its stop with (`Tracker.plan_leaving`) and what
@@ -225,7 +230,10 @@ class Tracker(Brakes):
                 v_p > ceiling * (1.0 + CAP_TOL) + V_ROUND
                 or (v > ceiling * (1.0 + CAP_TOL) + V_ROUND and v_p >= ceiling * (1.0 - CAP_TOL))
             )
-            and self._brake_first(cands, ceiling, a_max, j_max, w)
+            and (
+                self._brake_first(cands, ceiling, a_max, j_max, w)
+                or self._brake_down(cands, ceiling, a_max, j_max, w)
+            )
         ):
             # an override drop: brake at once (known deviation 10 of docs/geo-core.md); also
             # from inside such a brake to a block's cap, re-planned at the block, v_p at the
@@ -280,16 +288,23 @@ class Tracker(Brakes):
                                        self._hard(b, w))  # fmt: skip
             shifted = True
         below = ceiling * (1.0 + CAP_TOL) + V_ROUND >= v_p  # not after an override drop
+        top_b = min(cap, ceiling)
         if (
             not shifted
             and not gate
             and not self.hold
-            and target > cands[best_i][2] * (1.0 + CAP_TOL) + V_ROUND
+            and (
+                target > cands[best_i][2] * (1.0 + CAP_TOL) + V_ROUND
+                # after an input change, the cap in the jerk gap (`_pick_target`) and the
+                # nearest velocity below it near rest: 1.25 mm/s for a cap of 8.44 after an
+                # override drop to 10 % at 117 mm/s 2 mm before it, the path went down to
+                # 1.06 mm/s (feeds seed 576); the brake at once passes it as the CNC does
+                or (event and v_p > top_b and target < GAP_FLOOR * top_b)
+            )
             and self._lost_cap(cands, best_i, below, event, a_max, j_max, w)
         ):
             return
         self._soft_from = soft_from
-        top_b = min(cap, ceiling)
         kept = passed
         if (
             kept is not None

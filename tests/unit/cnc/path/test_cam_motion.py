@@ -499,6 +499,24 @@ def test_a_brake_at_once_keeps_a_cap_its_own_profile_passes_below(seed: int) -> 
     assert hard == [] and errors == 0, hard
 
 
+# runs of tests/support/feed_cases.py and of a cold review's generator with override drops
+# that passed caps above them on f089ba8 beyond what the brake from the drop could not avoid:
+# the brake at once refused for a cap out of reach (60, 626, 644, 798, 907: now the brake
+# past it, `Brakes._brake_down`), the jerk gap's lower end taken near rest (576)
+DROP_SEEDS = [60, 576, 626, 644, 798, 907]
+
+
+@pytest.mark.parametrize("seed", DROP_SEEDS)
+def test_an_override_drop_brakes_at_once_past_a_cap_out_of_reach(seed: int) -> None:
+    """Seed 576: override 100 → 10 % at 117 mm/s 2 mm before an F5065 block (8.44 mm/s now),
+    in the jerk gap: the nearest velocity below the cap with zero acceleration there was
+    1.25 mm/s, and the path went down to 1.06 before speeding up again. The brake at once
+    passes the cap as the CNC does now: no overrun, no tracker error, no slowdown."""
+    _, hard, slow, errors = check(feed_scenario(seed))
+    assert hard == [] and errors == 0, hard
+    assert slow == [], slow
+
+
 PROGRAMS = Path(__file__).parent / "programs"
 
 
