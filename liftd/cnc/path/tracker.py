@@ -42,6 +42,7 @@ from liftd.cnc.path.constraints import (
 from liftd.cnc.path.plan import CRUISE, EPS_S, SETTLE, Crossing, Plan
 from liftd.cnc.path.table import PathTable
 from liftd.cnc.path.velocity import (
+    brake_crossing,
     brake_distance,
     projected_velocity,
     ramp_distance,
@@ -421,14 +422,27 @@ class Tracker(Brakes):
         harder than any profile to a boundary, it passes the others below their caps. Before
         them by SLACK_MARGIN: a brake that ends on a run boundary reaches it with the rounding
         of its last acceleration (−0.0004 m/s², wide seeds 81, 101, 369, 459, 693), where
-        the target profile to rest there has zero acceleration by construction."""
+        the target profile to rest there has zero acceleration by construction. Where s_b,
+        a feed cap, lies inside the brake, the feed caps there are read off the brake's own
+        profile."""
         if projected_velocity(v, a, j_max) > 0.0:
             stop = brake_distance(v, a, 0.0, a_max, j_max) + SLACK_MARGIN
         else:
             stop = ramp_distance(v, a, j_max) + SLACK_MARGIN
-        if stop > s_b - s:
+        if not all(not gate or stop <= s_c - s for _, s_c, _, gate in cands):
             return False
-        return all(not gate or stop <= s_c - s for _, s_c, _, gate in cands)
+        if stop <= s_b - s:
+            return True
+        # a feed cap inside the brake: read off the brake's own profile (`brake_crossing`,
+        # SLACK_MARGIN before it; the lowest velocity at b with zero acceleration there was
+        # 104.2 mm/s for a cap of 107.3, 1 mm ahead at 115.7 mm/s, look-ahead 3: the target
+        # profile toward it held 104.2 mm/s at b before the brake to rest went on, 95.3 at
+        # the next boundary, feeds seed 787)
+        return all(
+            brake_crossing(v, a, 0.0, cap, a_max, j_max) <= s_c - s - SLACK_MARGIN
+            for _, s_c, cap, _ in cands
+            if s_c - s < stop
+        )
 
     def _cruise(self, ceiling: float, a_max: float, j_max: float, w: int) -> None:
         try:

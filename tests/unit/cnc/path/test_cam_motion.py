@@ -517,6 +517,23 @@ def test_an_override_drop_brakes_at_once_past_a_cap_out_of_reach(seed: int) -> N
     assert slow == [], slow
 
 
+# runs of tests/support/feed_cases.py with a feed hold that passed a boundary above what the
+# hold's brake from its start allows on f089ba8 (look-ahead 8 and 3): the target profile to a
+# feed cap inside the brake to rest held its velocity at it
+HOLD_SEEDS = [261, 387, 490, 787]
+
+
+@pytest.mark.parametrize("seed", HOLD_SEEDS)
+def test_a_feed_hold_brakes_through_the_feed_caps_inside_its_brake(seed: int) -> None:
+    """Seed 787: a hold at 115.7 mm/s 1 mm before a feed boundary of 107.3 mm/s, look-ahead
+    3. The lowest velocity there with zero acceleration was 104.2 mm/s, and the target
+    profile toward it held that velocity at the boundary before the brake to rest went on:
+    95.3 mm/s at the next boundary. The brake to rest passes such caps below, read off its
+    own profile (`Tracker._rests_before`): no overrun, no tracker error."""
+    _, hard, _, errors = check(feed_scenario(seed))
+    assert hard == [] and errors == 0, hard
+
+
 PROGRAMS = Path(__file__).parent / "programs"
 
 
