@@ -279,8 +279,16 @@ class Tracker(Brakes):
             nb, ns, _, ngate = tail[0]
             ncap = self._target_cap(tail, 0)
             e = reach_velocity(ncap, max(ns - s_c - CHAIN_MARGIN, 0.0), a_max, j_max)
-            if self._need(v, a, e, False, a_max, j_max) <= d + SLACK_TOL:
-                break  # zero acceleration at b, at most e there, loses nothing after it
+            if (
+                self._need(v, a, e, False, a_max, j_max) <= d + SLACK_TOL
+                and self._need(v, a, hard, True, a_max, j_max) <= d + SLACK_TOL
+            ):
+                # zero acceleration at b, at most e there, loses nothing after it (where the
+                # path can have zero acceleration at b at all: an override drop to 40 % at
+                # 48.8 mm/s and +6.0 m/s², 0.32 mm before a feed cap, the ramp to zero
+                # acceleration 1.06 mm long; every target there was refused, 50 tracker
+                # errors, a review's program)
+                break
             cands, best_i = tail, 0
             looked += tail
             b, s_c, gate, cap = nb, ns, ngate, ncap

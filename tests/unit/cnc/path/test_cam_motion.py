@@ -542,6 +542,7 @@ PROGRAMS = Path(__file__).parent / "programs"
     [
         ("override_drop_short_blocks", 5, 5e-4, "6.4045:60,6.6359:150", ()),
         ("hold_in_falling_feeds", 200, 1e-3, "6.4028:30", ((6.49, 6.5817),)),
+        ("override_drop_accelerating", 20, 5e-4, "6.4638:40", ()),
     ],
 )
 def test_a_lost_cap_costs_no_dip_and_no_error(
@@ -554,7 +555,11 @@ def test_a_lost_cap_costs_no_dip_and_no_error(
     (`Tracker._lost_cap`) and the block is entered braking, as the check allows. A feed hold
     that came inside a brake at once to a feed cap: the target profile 0.18 mm on was
     refused at the edge, and the hold's brake to rest counted as a tracker error (on 67ef359
-    the path passed a boundary at 49 mm/s under the hold)."""
+    the path passed a boundary at 49 mm/s under the hold). The eleventh round's review
+    corpus (0.3 mm blocks): an override drop to 40 % at 48.8 mm/s and +6.0 m/s², 0.32 mm
+    before a feed cap it can no longer get down to; the ramp to zero acceleration alone is
+    1.06 mm, every target at that cap was refused, 50 tracker errors on f089ba8 (the path
+    aims past it at the next run boundary now)."""
     ch = dataclasses.replace(shipped(), look_ahead_blocks=look_ahead, cycle_time=cycle)
     text = (PROGRAMS / f"{name}.nc").read_text()
     sc = Scenario(0, ch, text, Schedule(tuple(parse_override_spec(override)), hold))
