@@ -14,7 +14,7 @@ from __future__ import annotations
 from liftd.cnc.path.constraints import CAP_TOL, INF, SLACK_MARGIN, SLACK_TOL, V_ROUND
 from liftd.cnc.path.plan import CRUISE, SETTLE, Plan
 from liftd.cnc.path.targets import Targets, highest, lowest_rise, only_brakes
-from liftd.cnc.path.velocity import brake_distance
+from liftd.cnc.path.velocity import brake_crossing, brake_distance
 
 DIP_STEPS = 10  # `Brakes._dip_through`: its velocity within 2^-10 of the cap (a ruckig solve each)
 DIP_FLOOR = 0.1  # ... and never below this fraction of the cap (a brake nearly to rest is a stop)
@@ -46,21 +46,31 @@ class Brakes(Targets):
         2.45 fitted and dipped). False where none keeps them (a feed cap it can no longer get
         below, a run boundary inside the brake: `_brake_into`)."""
         e, goal = ceiling, CRUISE
-        if not self._first_keeps(cands, e, a_max, j_max):
+        below: list[int] = []  # the feed caps its own velocity keeps (`_first_keeps`)
+        if not self._first_keeps(cands, e, a_max, j_max, below=below):
             good = min((c[2] for c in cands if not self._moves_on(c)), default=0.0)
-            if good >= ceiling or not self._first_keeps(cands, good, a_max, j_max):
+            if good >= ceiling or not self._first_keeps(cands, good, a_max, j_max, below=[]):
                 # nothing between (path-based Lifting, wide seed 879: a run boundary 1 µm
                 # ahead above the ceiling, a brake of no length planned again and again)
                 return False
             good = highest(
-                good, ceiling, BISECT_STEPS, lambda e: self._first_keeps(cands, e, a_max, j_max)
-            )
+                good, ceiling, BISECT_STEPS,
+                lambda e: self._first_keeps(cands, e, a_max, j_max, below=[]),
+            )  # fmt: skip
             if good <= 0.0:
                 return False  # never a brake to rest where no stop is
             e, goal = good, SETTLE
+            below = []
+            self._first_keeps(cands, e, a_max, j_max, below=below)
         plan = self._velocity_plan(e, goal, w, a_max, j_max)
         if plan is None or (goal == SETTLE and plan.dur <= 0.0):
             return False  # refused, or a brake of no length, re-planned at its end without end
+        if below:
+            # the steps read them by their hard caps (`_violated`: with zero acceleration
+            # there they are out of reach from inside the brake, a forced re-plan toward them
+            # was refused, feeds seed 3)
+            plan.soft_from, plan.serves = min(below), max(below)
+            self._soft_from = plan.soft_from
         self.plan = plan
         return True
 
@@ -166,8 +176,9 @@ class Brakes(Targets):
         if lost:
             plan = self.plan
             assert plan is not None
-            plan.soft_from = self._soft_from = min(lost)
-            plan.serves = max(lost)
+            soft = [plan.soft_from] if plan.soft_from >= 0 else []  # and the ones it keeps
+            plan.soft_from = self._soft_from = min([*lost, *soft])
+            plan.serves = max(plan.serves, *lost)
         return True
 
     def _brake_lost(
@@ -183,12 +194,37 @@ class Brakes(Targets):
         which the cap of the block after it was lost too (override 100 → 60 % 0.5 mm before
         an F3000 block of 0.4 mm: 50 mm/s at its start, 35.3 at its end for 30; feeds seed
         230). The lost caps are the plan's to pass as well as it can (`_brake_past`)."""
+        lost = self._lost(cands, a_max, j_max)
+        return cands[i][0] in lost and self._brake_past(cands, lost, cands[i][2], a_max, j_max, w)
+
+    def _brake_down(
+        self, cands: list[tuple[int, float, float, bool]], ceiling: float, a_max: float,
+        j_max: float, w: int,
+    ) -> bool:  # fmt: skip
+        """Above a lowered ceiling, where the brake at once to it (`_brake_first`) is refused
+        because a feed cap ahead is out of reach: the same brake past the lost caps
+        (`_brake_past`), rather than the target profile, which holds the velocity before it
+        brakes (override 100 → 30 % at 31.5 mm/s 0.19 mm before an F1734 block and 0.39 mm
+        before an F1332 one: the profile toward the second held 31.5 mm/s, known deviation
+        10 of docs/geo-core.md, a review's program)."""
+        lost = self._lost(cands, a_max, j_max)
+        if not lost:
+            return False
+        # down to the lowest of them at most: their blocks are still ahead (to the ceiling,
+        # an F3000 block 0.5 mm on under an override of 10 % was entered at 50 mm/s for 5:
+        # feeds seed 189)
+        e = min(ceiling, *(c[2] for c in cands if c[0] in lost))
+        return self._brake_past(cands, lost, e, a_max, j_max, w)
+
+    def _lost(
+        self, cands: list[tuple[int, float, float, bool]], a_max: float, j_max: float
+    ) -> list[int]:
+        """The feed caps of `cands` the path can no longer get down to."""
         s, v, a = self.s, self.v, self.a
-        lost = [
+        return [
             c[0] for c in cands
             if not c[3] and brake_distance(v, a, c[2], a_max, j_max) > c[1] - s + SLACK_TOL
         ]  # fmt: skip
-        return cands[i][0] in lost and self._brake_past(cands, lost, cands[i][2], a_max, j_max, w)
 
     def _moves_on(self, cand: tuple[int, float, float, bool]) -> bool:
         """`cand` is the window's end (rest there, or its floor) where that is not a stop: the
@@ -205,7 +241,7 @@ class Brakes(Targets):
 
     def _first_keeps(
         self, cands: list[tuple[int, float, float, bool]], e: float, a_max: float, j_max: float,
-        margin: float = SLACK_MARGIN, brake: Plan | None = None,
+        margin: float = SLACK_MARGIN, brake: Plan | None = None, below: list[int] | None = None,
     ) -> bool:  # fmt: skip
         """The brake at once from the path's state to e (zero acceleration there) and a cruise
         at e keep every candidate: a run boundary or stop after the brake's end with room to
@@ -221,7 +257,16 @@ class Brakes(Targets):
         re-plan toward it); read as fixed, rest or its floor there held the brake to
         26 mm/s for a ceiling of 300 after an override drop on a line of 0.1 mm blocks
         (look-ahead 120, 12 mm: the brake to the ceiling took 6.2 of them, the window moving
-        on by as much; a review found)."""
+        on by as much; a review found).
+        Where `below` is a list, a feed cap at e or above that the brake to it with zero
+        acceleration there no longer fits before is read on the brake's own profile (which
+        brakes on through it toward e: `brake_crossing`, closed form, no solve) `margin`
+        before it, and appended where kept: falling
+        feeds on 1 mm blocks, 157 mm/s at −2.5 m/s² 1 mm before F8900 (148.3 mm/s) and 3 mm
+        before F7500 (125): the brake to 148.3 with zero acceleration takes 1.1 mm, the brake
+        to 125 is at 131 mm/s after 1 mm; read by the zero-acceleration brake, no brake at
+        once was found and the target profile toward F7500 passed F8900 at 149.3 (feeds seed
+        413)."""
         s, v, a = self.s, self.v, self.a
         d_e = brake_distance(v, a, e, a_max, j_max)
         for c in cands:
@@ -244,16 +289,25 @@ class Brakes(Targets):
                         and self._passed_above(brake, [(b, s_b, cap, gate)], 1) >= 0
                     ):
                         return False
-                elif cap * (1.0 + CAP_TOL) + V_ROUND < e or (
-                    brake_distance(v, a, cap, a_max, j_max) > room - margin
-                ):
+                elif cap * (1.0 + CAP_TOL) + V_ROUND < e:
                     # a cap below e inside the brake is passed above it (accepted where its
-                    # own brake fitted until the tenth round); one at e or above is passed
-                    # below it by the brake at once to e no later than the brake to it with
-                    # zero acceleration there gets there, kept with `margin` to spare as
-                    # the steps read it (`_violated`: to a rounding only, a forced re-plan
-                    # toward such a cap from inside the brake was refused, feeds seed 3)
+                    # own brake fitted until the tenth round)
                     return False
+                elif brake_distance(v, a, cap, a_max, j_max) > room - margin:
+                    # one at e or above is passed below it by the brake at once to e no
+                    # later than the brake to it with zero acceleration there gets there,
+                    # kept with `margin` to spare as the steps read it (`_violated`: to a
+                    # rounding only, a forced re-plan toward such a cap from inside the
+                    # brake was refused, feeds seed 3); else its own profile decides
+                    # (not the window's end: the steps keep it, `_violated` reads it where
+                    # it is the plan's, a cold review found)
+                    if (
+                        below is None
+                        or self._moves_on(c)
+                        or brake_crossing(v, a, e, cap, a_max, j_max) > room - margin
+                    ):
+                        return False
+                    below.append(b)
             elif (cap < e or gate) and (
                 room - d_e - self._need(e, 0.0, cap, gate, a_max, j_max) < margin
             ):

@@ -83,7 +83,10 @@ class Plan:
 
     def at(self, t: float) -> tuple[float, float, float]:
         local = t - self.t0
-        if local >= self.dur:
+        # ended also where t0 + dur rounds to t0 (the steps' end time): a profile of 1.8e-16 s,
+        # 0.68 nm before its goal, was read at its start, never reached its goal and was
+        # planned again without end (feeds seed 601, `Tracker.advance` did not converge)
+        if local >= self.dur or t >= self.t0 + self.dur:
             return self.p_end + self.v_end * (local - self.dur), self.v_end, 0.0
         return self.ev.at(max(0.0, local))
 

@@ -26,7 +26,7 @@ from liftd.cnc.path.constraints import (
     V_ROUND,
     Constraints,
 )
-from liftd.cnc.path.plan import BRAKE, EPS_S, Plan
+from liftd.cnc.path.plan import BRAKE, EPS_S, SETTLE, Plan
 from liftd.cnc.path.table import PathTable
 from liftd.cnc.path.velocity import (
     brake_distance,
@@ -250,6 +250,23 @@ class Targets(Constraints):
                 kept.window = w
                 self.plan = kept
                 return
+        if (
+            passed is not None
+            and passed.goal == SETTLE
+            and passed.t0 <= self.t < passed.t0 + passed.dur
+            and not self.tb.gate[b]
+            and self._passed_above(passed, [(b, s_c, cap, False)], 1) < 0
+        ):
+            # the brake at once that brought the path to the boundary it just passed
+            # (`Brakes._brake_first`, checked against the candidates ahead) goes on to its
+            # end where it passes b below its cap: from inside it, zero acceleration at b,
+            # a feed cap, came too near (a
+            # feed change 0.2 mm before a drop, 46.6 mm/s at −1.9 m/s², the ramp to zero
+            # acceleration alone 0.209 mm: the last-resort brake went to 32 mm/s for 43.5,
+            # feeds seed 971)
+            passed.window = w
+            self.plan = passed
+            return
         if not self.hold:
             # under a feed hold the brake to rest from the path's state is the hold's own
             # motion, not a fallback (a hold that came inside a brake at once to a feed cap,

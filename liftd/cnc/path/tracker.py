@@ -42,12 +42,18 @@ from liftd.cnc.path.constraints import (
 from liftd.cnc.path.plan import CRUISE, EPS_S, SETTLE, Crossing, Plan
 from liftd.cnc.path.table import PathTable
 from liftd.cnc.path.velocity import (
+    brake_crossing,
     brake_distance,
     projected_velocity,
     ramp_distance,
     reach_velocity,
 )
 from liftd.cnc.ruckig1 import ProfileError
+
+# after an input change, a feed cap whose nearest reachable velocity below it (the jerk gap's
+# lower end, `Targets._pick_target`) is less than this fraction of it is out of reach
+# (`Tracker._lost_cap`)
+GAP_FLOOR = 0.5
 
 
 class Primed:
@@ -225,7 +231,10 @@ class Tracker(Brakes):
                 v_p > ceiling * (1.0 + CAP_TOL) + V_ROUND
                 or (v > ceiling * (1.0 + CAP_TOL) + V_ROUND and v_p >= ceiling * (1.0 - CAP_TOL))
             )
-            and self._brake_first(cands, ceiling, a_max, j_max, w)
+            and (
+                self._brake_first(cands, ceiling, a_max, j_max, w)
+                or self._brake_down(cands, ceiling, a_max, j_max, w)
+            )
         ):
             # an override drop: brake at once (known deviation 10 of docs/geo-core.md); also
             # from inside such a brake to a block's cap, re-planned at the block, v_p at the
@@ -270,8 +279,16 @@ class Tracker(Brakes):
             nb, ns, _, ngate = tail[0]
             ncap = self._target_cap(tail, 0)
             e = reach_velocity(ncap, max(ns - s_c - CHAIN_MARGIN, 0.0), a_max, j_max)
-            if self._need(v, a, e, False, a_max, j_max) <= d + SLACK_TOL:
-                break  # zero acceleration at b, at most e there, loses nothing after it
+            if (
+                self._need(v, a, e, False, a_max, j_max) <= d + SLACK_TOL
+                and self._need(v, a, hard, True, a_max, j_max) <= d + SLACK_TOL
+            ):
+                # zero acceleration at b, at most e there, loses nothing after it (where the
+                # path can have zero acceleration at b at all: an override drop to 40 % at
+                # 48.8 mm/s and +6.0 m/s², 0.32 mm before a feed cap, the ramp to zero
+                # acceleration 1.06 mm long; every target there was refused, 50 tracker
+                # errors, a review's program)
+                break
             cands, best_i = tail, 0
             looked += tail
             b, s_c, gate, cap = nb, ns, ngate, ncap
@@ -280,16 +297,23 @@ class Tracker(Brakes):
                                        self._hard(b, w))  # fmt: skip
             shifted = True
         below = ceiling * (1.0 + CAP_TOL) + V_ROUND >= v_p  # not after an override drop
+        top_b = min(cap, ceiling)
         if (
             not shifted
             and not gate
             and not self.hold
-            and target > cands[best_i][2] * (1.0 + CAP_TOL) + V_ROUND
+            and (
+                target > cands[best_i][2] * (1.0 + CAP_TOL) + V_ROUND
+                # after an input change, the cap in the jerk gap (`_pick_target`) and the
+                # nearest velocity below it near rest: 1.25 mm/s for a cap of 8.44 after an
+                # override drop to 10 % at 117 mm/s 2 mm before it, the path went down to
+                # 1.06 mm/s (feeds seed 576); the brake at once passes it as the CNC does
+                or (event and v_p > top_b and target < GAP_FLOOR * top_b)
+            )
             and self._lost_cap(cands, best_i, below, event, a_max, j_max, w)
         ):
             return
         self._soft_from = soft_from
-        top_b = min(cap, ceiling)
         kept = passed
         if (
             kept is not None
@@ -332,9 +356,20 @@ class Tracker(Brakes):
         plan = self.plan
         if plan is None or not shifted or plan.goal != b:
             return
+        # the first candidate before b the shift's profile passes above its cap: `first`, or
+        # one after it the path can still get down to (a cap between `first` and b, read by
+        # neither the shift nor the steps, passed at 24.6 mm/s for 24.2: feeds seed 232)
+        between = sorted(
+            (c for c in looked if first[1] < c[1] < s_c and not c[3]
+             and self._need(v, a, c[2], False, a_max, j_max) <= c[1] - s + SLACK_TOL),
+            key=lambda c: c[1],
+        )  # fmt: skip
+        j = self._passed_above(plan, [first, *between], 1 + len(between))
+        if j > 0:
+            first = between[j - 1]
         in_reach = self._need(v, a, first[2], False, a_max, j_max) <= first[1] - s + SLACK_TOL
         if (
-            self._passed_above(plan, [first], 1) < 0
+            j < 0
             or self._keep_below(passed, first, b, w)
             or self._keep_below(held, first, b, w, target)
         ):
@@ -395,14 +430,27 @@ class Tracker(Brakes):
         harder than any profile to a boundary, it passes the others below their caps. Before
         them by SLACK_MARGIN: a brake that ends on a run boundary reaches it with the rounding
         of its last acceleration (−0.0004 m/s², wide seeds 81, 101, 369, 459, 693), where
-        the target profile to rest there has zero acceleration by construction."""
+        the target profile to rest there has zero acceleration by construction. Where s_b,
+        a feed cap, lies inside the brake, the feed caps there are read off the brake's own
+        profile."""
         if projected_velocity(v, a, j_max) > 0.0:
             stop = brake_distance(v, a, 0.0, a_max, j_max) + SLACK_MARGIN
         else:
             stop = ramp_distance(v, a, j_max) + SLACK_MARGIN
-        if stop > s_b - s:
+        if not all(not gate or stop <= s_c - s for _, s_c, _, gate in cands):
             return False
-        return all(not gate or stop <= s_c - s for _, s_c, _, gate in cands)
+        if stop <= s_b - s:
+            return True
+        # a feed cap inside the brake: read off the brake's own profile (`brake_crossing`,
+        # SLACK_MARGIN before it; the lowest velocity at b with zero acceleration there was
+        # 104.2 mm/s for a cap of 107.3, 1 mm ahead at 115.7 mm/s, look-ahead 3: the target
+        # profile toward it held 104.2 mm/s at b before the brake to rest went on, 95.3 at
+        # the next boundary, feeds seed 787)
+        return all(
+            brake_crossing(v, a, 0.0, cap, a_max, j_max) <= s_c - s - SLACK_MARGIN
+            for _, s_c, cap, _ in cands
+            if s_c - s < stop
+        )
 
     def _cruise(self, ceiling: float, a_max: float, j_max: float, w: int) -> None:
         try:
@@ -468,10 +516,15 @@ class Tracker(Brakes):
             v1 = max(v1, 0.0)
             if forced < 4:
                 violated = None
+                # the soft range as `_violated` reads it: up to the boundary the plan keeps
+                # (for a brake at once its `serves`: the caps a brake past lost caps passes,
+                # read as hard at the cut, forced re-plans toward them, each refused, a
+                # last-resort brake each: override 100 → 60 % at 172 mm/s 0.9 mm before a
+                # feed drop, feeds seed 928)
                 if (
                     cut >= 0
                     and cut != plan.serves
-                    and not self._passable(cut, v1, a1, w, plan.soft_from <= cut < plan.goal)
+                    and not self._passable(cut, v1, a1, w, plan.soft_from <= cut < plan.keeps)
                 ):
                     violated = cut  # the step ends on a constraint it does not keep
                 if violated is None:
@@ -539,7 +592,13 @@ class Tracker(Brakes):
         plan = self.plan
         # a plan that keeps a boundary beyond b (a target, a brake through): kept in case no
         # new profile from here is accepted (`_replan`, `Targets._settle`'s last resort)
-        self._passed = plan if plan is not None and plan.keeps > b else None
+        # (or a brake at once still braking: `Targets._settle`)
+        self._passed = (
+            plan
+            if plan is not None
+            and (plan.keeps > b or (plan.goal == SETTLE and t < plan.t0 + plan.dur))
+            else None
+        )
         self.plan = None
         if (
             plan is not None

@@ -156,6 +156,46 @@ def brake_distance(v: float, a: float, v1: float, a_max: float, j_max: float) ->
     return d1 + d2 + d3
 
 
+def brake_crossing(v: float, a: float, v1: float, cap: float, a_max: float, j_max: float) -> float:
+    """Distance along the brake of `brake_distance` (from (v, a) down to v1, zero acceleration
+    there) until its velocity is at or below `cap` for good (v1 ≤ cap): 0 where it never is
+    above it, the whole brake where it gets there only at its end. Only meaningful where
+    projected_velocity(v, a) > v1 and the brake is not a mere ramp that overshoots v1 (then
+    `ramp_crossing`). The closed form of what the tracker read off ruckig's profile of that
+    brake (`Brakes._first_keeps`: a solve per bisection step, 31 in a cycle)."""
+    if v <= cap and (a <= 0.0 or v + a * a / (2.0 * j_max) <= cap):
+        return 0.0  # never above it
+    if j_max == INF:
+        return max(0.0, (v * v - cap * cap) / (2.0 * a_max))
+    drop = v - v1
+    peak_sq = 0.5 * a * a + j_max * drop
+    if a < 0.0 and peak_sq < a * a:
+        return ramp_crossing(v, a, cap, j_max)
+    a_p = -math.sqrt(max(peak_sq, 0.0))
+    t2 = 0.0
+    if a_p < -a_max:
+        a_p = -a_max
+        t2 = max((drop + (a * a - 2.0 * a_max * a_max) / (2.0 * j_max)) / a_max, 0.0)
+    t1 = (a - a_p) / j_max
+    t3 = -a_p / j_max
+    v_1 = v + (a * a - a_p * a_p) / (2.0 * j_max)
+    if v_1 <= cap:
+        # in the first piece (jerk −J): v + a t − J t²/2 = cap, the later root (falling)
+        t = (a + math.sqrt(max(a * a + 2.0 * j_max * (v - cap), 0.0))) / j_max
+        t = min(max(t, 0.0), t1)
+        return v * t + 0.5 * a * t * t - j_max * t * t * t / 6.0
+    d1 = v * t1 + 0.5 * a * t1 * t1 - j_max * t1 * t1 * t1 / 6.0
+    v_2 = v_1 + a_p * t2
+    if v_2 <= cap:
+        t = (cap - v_1) / a_p  # the hold at −A
+        return d1 + v_1 * t + 0.5 * a_p * t * t
+    d2 = v_1 * t2 + 0.5 * a_p * t2 * t2
+    # the last piece (jerk +J): v_2 + a_p t + J t²/2 = cap, the earlier root
+    disc = a_p * a_p - 2.0 * j_max * (v_2 - cap)
+    t = t3 if disc < 0.0 else min(max((-a_p - math.sqrt(disc)) / j_max, 0.0), t3)
+    return d1 + d2 + v_2 * t + 0.5 * a_p * t * t + j_max * t * t * t / 6.0
+
+
 def brake_reach(v: float, a: float, a_max: float, j_max: float) -> float:
     """The farthest the path can need to get from (v, a) to any one velocity below it with zero
     acceleration (an upper bound of brake_distance over the end velocity). Braking to rest is

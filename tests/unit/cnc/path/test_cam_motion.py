@@ -441,8 +441,11 @@ def test_falling_feeds_keep_their_caps_without_a_last_resort_brake(seed: int) ->
 # input change before (known deviation 15 of docs/geo-core.md): the shift's profile toward a
 # stop or a run boundary passed the drop before it above, the brake through refused (4, 20,
 # 177, 238), ruckig's brake into v_max went far below it (299), a dip and the steps' forced
-# re-plans took turns (223)
-SHIFT_SEEDS = [4, 20, 177, 223, 238, 299]
+# re-plans took turns (223), a cap between the shift's first and its goal was read by neither
+# (232); 971 guards the brake at once that keeps that cap: a re-plan from inside it at a feed
+# change 0.2 mm before the next boundary was refused, and the last-resort brake went to 32
+# mm/s for 43.5 (`Targets._settle` keeps the brake now)
+SHIFT_SEEDS = [4, 20, 177, 223, 232, 238, 299, 971]
 
 
 @pytest.mark.parametrize("seed", SHIFT_SEEDS)
@@ -459,8 +462,11 @@ def test_a_feed_drop_before_a_stop_is_passed_below_it(seed: int) -> None:
 
 # runs of tests/support/feed_cases.py with override drops that lowered the caps of blocks ahead
 # out of reach, all but 188 passed a cap they could still keep above it on 67ef359 (known
-# deviation 15); 188 guards against a first version of their fix (9.4 mm/s in a 5.56 block)
-LOST_SEEDS = [53, 178, 188, 189, 202, 229, 230, 322, 385]
+# deviation 15); 188 guards against a first version of their fix (9.4 mm/s in a 5.56 block);
+# 928 (override 100 → 60 % at 172 mm/s 0.9 mm before two feed drops it can no longer keep)
+# had 4 tracker errors on f089ba8: the brake past them read them as hard where a step ended
+# on one, and the forced re-plans toward them were refused
+LOST_SEEDS = [53, 178, 188, 189, 202, 229, 230, 322, 385, 928]
 
 
 @pytest.mark.parametrize("seed", LOST_SEEDS)
@@ -475,6 +481,59 @@ def test_a_feed_cap_lost_to_an_override_drop_is_braked_to_at_once(seed: int) -> 
     assert hard == [] and errors == 0, hard
 
 
+# runs of tests/support/feed_cases.py that passed a feed cap above it on f089ba8 although a
+# brake at once keeps it on its own profile (no input change before; `_first_keeps` read it
+# by the brake to it with zero acceleration there): 86, 413, 810; 601 guards a first version
+# (a profile of 1.8e-16 s, read at its start, planned again without end)
+OWN_SEEDS = [86, 413, 601, 810]
+
+
+@pytest.mark.parametrize("seed", OWN_SEEDS)
+def test_a_brake_at_once_keeps_a_cap_its_own_profile_passes_below(seed: int) -> None:
+    """Seed 413: falling feeds on 1 mm blocks, look-ahead 8, 157 mm/s at −2.5 m/s² 1 mm
+    before F8900 (148.3 mm/s) and 3 mm before F7500 (125). The brake to 148.3 with zero
+    acceleration there takes 1.1 mm; the brake at once to 125 is at 131 mm/s after 1 mm.
+    Read by the former, no brake at once was found, and the target profile toward F7500
+    passed F8900 at 149.3 mm/s. No overrun and no tracker error now."""
+    _, hard, _, errors = check(feed_scenario(seed))
+    assert hard == [] and errors == 0, hard
+
+
+# runs of tests/support/feed_cases.py and of a cold review's generator with override drops
+# that passed caps above them on f089ba8 beyond what the brake from the drop could not avoid:
+# the brake at once refused for a cap out of reach (60, 626, 644, 798, 907: now the brake
+# past it, `Brakes._brake_down`), the jerk gap's lower end taken near rest (576)
+DROP_SEEDS = [60, 576, 626, 644, 798, 907]
+
+
+@pytest.mark.parametrize("seed", DROP_SEEDS)
+def test_an_override_drop_brakes_at_once_past_a_cap_out_of_reach(seed: int) -> None:
+    """Seed 576: override 100 → 10 % at 117 mm/s 2 mm before an F5065 block (8.44 mm/s now),
+    in the jerk gap: the nearest velocity below the cap with zero acceleration there was
+    1.25 mm/s, and the path went down to 1.06 before speeding up again. The brake at once
+    passes the cap as the CNC does now: no overrun, no tracker error, no slowdown."""
+    _, hard, slow, errors = check(feed_scenario(seed))
+    assert hard == [] and errors == 0, hard
+    assert slow == [], slow
+
+
+# runs of tests/support/feed_cases.py with a feed hold that passed a boundary above what the
+# hold's brake from its start allows on f089ba8 (look-ahead 8 and 3): the target profile to a
+# feed cap inside the brake to rest held its velocity at it
+HOLD_SEEDS = [261, 387, 490, 787]
+
+
+@pytest.mark.parametrize("seed", HOLD_SEEDS)
+def test_a_feed_hold_brakes_through_the_feed_caps_inside_its_brake(seed: int) -> None:
+    """Seed 787: a hold at 115.7 mm/s 1 mm before a feed boundary of 107.3 mm/s, look-ahead
+    3. The lowest velocity there with zero acceleration was 104.2 mm/s, and the target
+    profile toward it held that velocity at the boundary before the brake to rest went on:
+    95.3 mm/s at the next boundary. The brake to rest passes such caps below, read off its
+    own profile (`Tracker._rests_before`): no overrun, no tracker error."""
+    _, hard, _, errors = check(feed_scenario(seed))
+    assert hard == [] and errors == 0, hard
+
+
 PROGRAMS = Path(__file__).parent / "programs"
 
 
@@ -483,6 +542,7 @@ PROGRAMS = Path(__file__).parent / "programs"
     [
         ("override_drop_short_blocks", 5, 5e-4, "6.4045:60,6.6359:150", ()),
         ("hold_in_falling_feeds", 200, 1e-3, "6.4028:30", ((6.49, 6.5817),)),
+        ("override_drop_accelerating", 20, 5e-4, "6.4638:40", ()),
     ],
 )
 def test_a_lost_cap_costs_no_dip_and_no_error(
@@ -495,7 +555,11 @@ def test_a_lost_cap_costs_no_dip_and_no_error(
     (`Tracker._lost_cap`) and the block is entered braking, as the check allows. A feed hold
     that came inside a brake at once to a feed cap: the target profile 0.18 mm on was
     refused at the edge, and the hold's brake to rest counted as a tracker error (on 67ef359
-    the path passed a boundary at 49 mm/s under the hold)."""
+    the path passed a boundary at 49 mm/s under the hold). The eleventh round's review
+    corpus (0.3 mm blocks): an override drop to 40 % at 48.8 mm/s and +6.0 m/s², 0.32 mm
+    before a feed cap it can no longer get down to; the ramp to zero acceleration alone is
+    1.06 mm, every target at that cap was refused, 50 tracker errors on f089ba8 (the path
+    aims past it at the next run boundary now)."""
     ch = dataclasses.replace(shipped(), look_ahead_blocks=look_ahead, cycle_time=cycle)
     text = (PROGRAMS / f"{name}.nc").read_text()
     sc = Scenario(0, ch, text, Schedule(tuple(parse_override_spec(override)), hold))

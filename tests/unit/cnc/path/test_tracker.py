@@ -6,7 +6,9 @@ import numpy as np
 
 from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.params import LiftMethod
+from liftd.cnc.path.plan import Plan
 from liftd.cnc.path.tracker import Tracker
+from liftd.cnc.ruckig1 import Ruckig1
 from liftd.settings import load_settings
 from tests.support.paths import REPO
 from tests.support.programs import nesting_program
@@ -62,3 +64,18 @@ def test_a_target_reached_from_a_kink_lands_on_the_next_one_without_a_position_s
         max(tb.run_j[tb.run[k]] for k in range(seg[n], seg[n + 3] + 1)) for n in range(len(jerk))
     ]
     assert float(np.max(np.abs(jerk) / np.array(limit))) <= 1.0 + 1e-6
+
+
+def test_a_profile_shorter_than_the_clocks_rounding_is_read_at_its_end() -> None:
+    """Feeds seed 601: a brake at once ended 0.68 nm before a feed boundary at its cap, and
+    the target profile from there lasts 1.8e-16 s, so t0 + dur rounds to t0. Read at that
+    time as at its start, the step never reached the goal and planned it again, 100 000
+    times in one cycle ("advance did not converge", 29 tracker errors). At its end time the
+    plan is at its goal."""
+    s, v, a = 0.3342277688276352, 0.09181006777942181, -7.016609515630989e-14
+    s_goal, v_goal = 0.33422776950933675, 0.09181006777938826
+    traj = Ruckig1().position(s, v, a, s_goal, v_goal, 0.108055, 8.0012, 400.06)
+    t0 = 6.512695552902414
+    plan = Plan(traj, t0, 10, 41, s_goal, v_goal)
+    assert plan.dur > 0.0 and t0 + plan.dur == t0  # the case: shorter than t0's rounding
+    assert plan.at(t0 + plan.dur) == (s_goal, v_goal, 0.0)

@@ -1,7 +1,8 @@
 """The closed forms of cnc/path/velocity.py, which decide every braking margin of the look-ahead,
 against ruckig's time-optimal velocity changes (an independent solver): a change from v0 to v1
 at zero acceleration takes `change_time` and covers `change_distance`; a brake from (v, a) to v1
-covers `brake_distance`; `reach_velocity` inverts `change_distance`; `lowest_reachable_from`
+covers `brake_distance`, and its velocity is down to a cap for good after `brake_crossing`;
+`reach_velocity` inverts `change_distance`; `lowest_reachable_from`
 finds a velocity the path can brake to within the length, and none much lower."""
 
 from __future__ import annotations
@@ -11,6 +12,7 @@ from hypothesis import strategies as st
 from ruckig import ControlInterface, InputParameter, Result, Ruckig, Trajectory
 
 from liftd.cnc.path.velocity import (
+    brake_crossing,
     brake_distance,
     change_distance,
     change_time,
@@ -67,6 +69,39 @@ def test_brake_distance_is_ruckigs_brake(
     assume(a >= 0.0 or 0.5 * a * a + j_max * (v - v1) >= a * a)
     _, d = ruckig_change(v, a, v1, a_max, j_max)
     assert close(brake_distance(v, a, v1, a_max, j_max), d, 1e-6)
+
+
+@given(speeds, st.floats(0.0, 1.0), speeds, st.floats(0.0, 1.0), a_maxes, j_maxes)
+def test_brake_crossing_is_where_ruckigs_brake_gets_below_the_cap(
+    v: float, a_share: float, v1_share: float, cap_share: float, a_max: float, j_max: float
+) -> None:
+    """The brake of `brake_distance` (same preconditions) read off ruckig's profile: after its
+    peak the velocity only falls, so the last moment above the cap is found by bisection, and
+    the distance covered until then is `brake_crossing`'s."""
+    a = (2.0 * a_share - 1.0) * a_max
+    v1 = v1_share * max(v - 1e-3, 0.0)
+    v_p = projected_velocity(v, a, j_max)
+    assume(v_p > v1 + 1e-6)
+    assume(a >= 0.0 or 0.5 * a * a + j_max * (v - v1) >= a * a)
+    top = v + a * a / (2.0 * j_max) if a > 0.0 else v
+    cap = v1 + cap_share * (top - v1)
+    inp = InputParameter(1)
+    inp.control_interface = ControlInterface.Velocity
+    inp.current_position, inp.current_velocity, inp.current_acceleration = [0.0], [v], [a]
+    inp.target_velocity, inp.target_acceleration = [v1], [0.0]
+    inp.max_velocity = [max(v, v1, 1e-9) * 2.0]
+    inp.max_acceleration, inp.max_jerk = [max(a_max, abs(a))], [j_max]
+    traj = Trajectory(1)
+    assert Ruckig(1).calculate(inp, traj) == Result.Working
+    want = 0.0  # never above the cap
+    if cap < top:
+        lo, hi = min(max(a, 0.0) / j_max, traj.duration), traj.duration  # falling from its peak
+        for _ in range(200):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if traj.at_time(mid)[1][0] > cap else (lo, mid)
+        want = traj.at_time(hi)[0][0]
+    got = brake_crossing(v, a, v1, cap, a_max, j_max)
+    assert close(got, want, 1e-6), (got, want)
 
 
 @given(speeds, st.floats(1e-4, 5.0), a_maxes, j_maxes)
