@@ -27,10 +27,8 @@ a_maxes = st.floats(0.2, 20.0)  # m/s²
 j_maxes = st.floats(5.0, 2000.0)  # m/s³
 
 
-def ruckig_change(
-    v0: float, a0: float, v1: float, a_max: float, j_max: float
-) -> tuple[float, float]:
-    """(duration, distance) of ruckig's time-optimal change from (v0, a0) to (v1, 0)."""
+def ruckig_velocity(v0: float, a0: float, v1: float, a_max: float, j_max: float) -> Trajectory:
+    """Ruckig's time-optimal change from (v0, a0) to (v1, 0), from position 0."""
     inp = InputParameter(1)
     inp.control_interface = ControlInterface.Velocity
     inp.current_position, inp.current_velocity, inp.current_acceleration = [0.0], [v0], [a0]
@@ -39,6 +37,14 @@ def ruckig_change(
     inp.max_acceleration, inp.max_jerk = [max(a_max, abs(a0))], [j_max]
     traj = Trajectory(1)
     assert Ruckig(1).calculate(inp, traj) == Result.Working
+    return traj
+
+
+def ruckig_change(
+    v0: float, a0: float, v1: float, a_max: float, j_max: float
+) -> tuple[float, float]:
+    """(duration, distance) of ruckig's time-optimal change from (v0, a0) to (v1, 0)."""
+    traj = ruckig_velocity(v0, a0, v1, a_max, j_max)
     pos, _, _ = traj.at_time(traj.duration)
     return traj.duration, pos[0]
 
@@ -85,14 +91,7 @@ def test_brake_crossing_is_where_ruckigs_brake_gets_below_the_cap(
     assume(a >= 0.0 or 0.5 * a * a + j_max * (v - v1) >= a * a)
     top = v + a * a / (2.0 * j_max) if a > 0.0 else v
     cap = v1 + cap_share * (top - v1)
-    inp = InputParameter(1)
-    inp.control_interface = ControlInterface.Velocity
-    inp.current_position, inp.current_velocity, inp.current_acceleration = [0.0], [v], [a]
-    inp.target_velocity, inp.target_acceleration = [v1], [0.0]
-    inp.max_velocity = [max(v, v1, 1e-9) * 2.0]
-    inp.max_acceleration, inp.max_jerk = [max(a_max, abs(a))], [j_max]
-    traj = Trajectory(1)
-    assert Ruckig(1).calculate(inp, traj) == Result.Working
+    traj = ruckig_velocity(v, a, v1, a_max, j_max)
     want = 0.0  # never above the cap
     if cap < top:
         lo, hi = min(max(a, 0.0) / j_max, traj.duration), traj.duration  # falling from its peak
