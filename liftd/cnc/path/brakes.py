@@ -261,12 +261,11 @@ class Brakes(Targets):
         Where `below` is a list, a feed cap at e or above that the brake to it with zero
         acceleration there no longer fits before is read on the brake's own profile (which
         brakes on through it toward e: `brake_crossing`, closed form, no solve) `margin`
-        before it, and appended where kept: falling
-        feeds on 1 mm blocks, 157 mm/s at −2.5 m/s² 1 mm before F8900 (148.3 mm/s) and 3 mm
-        before F7500 (125): the brake to 148.3 with zero acceleration takes 1.1 mm, the brake
-        to 125 is at 131 mm/s after 1 mm; read by the zero-acceleration brake, no brake at
-        once was found and the target profile toward F7500 passed F8900 at 149.3 (feeds seed
-        413)."""
+        before it, and appended where kept: falling feeds on 1 mm blocks, 157 mm/s at
+        −2.5 m/s² 1 mm before F8900 (148.3 mm/s) and 3 mm before F7500 (125): the brake to
+        148.3 with zero acceleration takes 1.1 mm, the brake to 125 is at 131 mm/s after
+        1 mm; read by the zero-acceleration brake, no brake at once was found and the target
+        profile toward F7500 passed F8900 at 149.3 (feeds seed 413)."""
         s, v, a = self.s, self.v, self.a
         d_e = brake_distance(v, a, e, a_max, j_max)
         for c in cands:

@@ -260,10 +260,9 @@ class Targets(Constraints):
             # the brake at once that brought the path to the boundary it just passed
             # (`Brakes._brake_first`, checked against the candidates ahead) goes on to its
             # end where it passes b below its cap: from inside it, zero acceleration at b,
-            # a feed cap, came too near (a
-            # feed change 0.2 mm before a drop, 46.6 mm/s at −1.9 m/s², the ramp to zero
-            # acceleration alone 0.209 mm: the last-resort brake went to 32 mm/s for 43.5,
-            # feeds seed 971)
+            # a feed cap, came too near (a feed change 0.2 mm before a drop, 46.6 mm/s at
+            # −1.9 m/s², the ramp to zero acceleration alone 0.209 mm: the last-resort brake
+            # went to 32 mm/s for 43.5, feeds seed 971)
             passed.window = w
             self.plan = passed
             return

@@ -307,7 +307,8 @@ class Tracker(Brakes):
                 # after an input change, the cap in the jerk gap (`_pick_target`) and the
                 # nearest velocity below it near rest: 1.25 mm/s for a cap of 8.44 after an
                 # override drop to 10 % at 117 mm/s 2 mm before it, the path went down to
-                # 1.06 mm/s (feeds seed 576); the brake at once passes it as the CNC does
+                # 1.06 mm/s (feeds seed 576); the brake at once passes it above, braking from
+                # the change on (deviation 10: a CNC brakes at once, it does not dip)
                 or (event and v_p > top_b and target < GAP_FLOOR * top_b)
             )
             and self._lost_cap(cands, best_i, below, event, a_max, j_max, w)
