@@ -14,7 +14,12 @@ from __future__ import annotations
 from liftd.cnc.path.constraints import CAP_TOL, INF, SLACK_MARGIN, SLACK_TOL, V_ROUND
 from liftd.cnc.path.plan import CRUISE, SETTLE, Plan
 from liftd.cnc.path.targets import Targets, highest, lowest_rise, only_brakes
-from liftd.cnc.path.velocity import brake_crossing, brake_distance
+from liftd.cnc.path.velocity import (
+    brake_crossing,
+    brake_distance,
+    projected_velocity,
+    ramp_distance,
+)
 
 DIP_STEPS = 10  # `Brakes._dip_through`: its velocity within 2^-10 of the cap (a ruckig solve each)
 DIP_FLOOR = 0.1  # ... and never below this fraction of the cap (a brake nearly to rest is a stop)
@@ -429,3 +434,35 @@ class Brakes(Targets):
         passed.window = w
         self.plan = passed
         return True
+
+
+def rests_before(
+    cands: list[tuple[int, float, float, bool]], s: float, v: float, a: float,
+    s_b: float, a_max: float, j_max: float,
+) -> bool:  # fmt: skip
+    """The brake to rest from (v, a) ends before s_b and before every run boundary in
+    `cands` (where the path acceleration must be zero), so it keeps them all: braking
+    harder than any profile to a boundary, it passes the others below their caps. Before
+    them by SLACK_MARGIN: a brake that ends on a run boundary reaches it with the rounding
+    of its last acceleration (−0.0004 m/s², wide seeds 81, 101, 369, 459, 693), where
+    the target profile to rest there has zero acceleration by construction. Where s_b,
+    a feed cap, lies inside the brake, the feed caps there are read off the brake's own
+    profile. A feed hold's brake (`Tracker._replan`)."""
+    if projected_velocity(v, a, j_max) > 0.0:
+        stop = brake_distance(v, a, 0.0, a_max, j_max) + SLACK_MARGIN
+    else:
+        stop = ramp_distance(v, a, j_max) + SLACK_MARGIN
+    if not all(not gate or stop <= s_c - s for _, s_c, _, gate in cands):
+        return False
+    if stop <= s_b - s:
+        return True
+    # a feed cap inside the brake: read off the brake's own profile (`brake_crossing`,
+    # SLACK_MARGIN before it; the lowest velocity at b with zero acceleration there was
+    # 104.2 mm/s for a cap of 107.3, 1 mm ahead at 115.7 mm/s, look-ahead 3: the target
+    # profile toward it held 104.2 mm/s at b before the brake to rest went on, 95.3 at
+    # the next boundary, feeds seed 787)
+    return all(
+        brake_crossing(v, a, 0.0, cap, a_max, j_max) <= s_c - s - SLACK_MARGIN
+        for _, s_c, cap, _ in cands
+        if s_c - s < stop
+    )

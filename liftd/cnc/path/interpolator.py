@@ -25,10 +25,10 @@ from collections import deque
 
 from liftd.cnc.path.bounds import lower_bound_time
 from liftd.cnc.path.nominal import NominalRun
-from liftd.cnc.path.plan import Crossing
+from liftd.cnc.path.plan import Crossing, Primed
 from liftd.cnc.path.program import PathProgram
 from liftd.cnc.path.table import PathTable
-from liftd.cnc.path.tracker import Primed, Tracker
+from liftd.cnc.path.tracker import Tracker
 from liftd.cnc.path.velocity import projected_velocity
 from liftd.cnc.release import ReleaseBins
 

@@ -98,3 +98,15 @@ class Plan:
             return self.t0 + self.dur if s <= self.p_end + EPS_S else t_default
         local = first_time_at(self.traj, s)
         return t_default if local is None else self.t0 + local
+
+
+class Primed:
+    """The profile a resting path will leave its stop with (`Tracker.plan_leaving`) and what
+    choosing it left behind in the tracker."""
+
+    __slots__ = ("last_error", "plan", "soft_from")
+
+    def __init__(self, plan: Plan, soft_from: int, last_error: str) -> None:
+        self.plan = plan
+        self.soft_from = soft_from
+        self.last_error = last_error

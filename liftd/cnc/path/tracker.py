@@ -29,7 +29,7 @@ answered with a brake (never expected; the closed-loop tests count them).
 
 from __future__ import annotations
 
-from liftd.cnc.path.brakes import Brakes
+from liftd.cnc.path.brakes import Brakes, rests_before
 from liftd.cnc.path.constraints import (
     CAP_TOL,
     CHAIN_MARGIN,
@@ -39,13 +39,10 @@ from liftd.cnc.path.constraints import (
     SLACK_TOL,
     V_ROUND,
 )
-from liftd.cnc.path.plan import CRUISE, EPS_S, SETTLE, Crossing, Plan
+from liftd.cnc.path.plan import CRUISE, EPS_S, SETTLE, Crossing, Plan, Primed
 from liftd.cnc.path.table import PathTable
 from liftd.cnc.path.velocity import (
-    brake_crossing,
-    brake_distance,
     projected_velocity,
-    ramp_distance,
     reach_velocity,
 )
 from liftd.cnc.ruckig1 import ProfileError
@@ -54,18 +51,6 @@ from liftd.cnc.ruckig1 import ProfileError
 # lower end, `Targets._pick_target`) is less than this fraction of it is out of reach
 # (`Tracker._lost_cap`)
 GAP_FLOOR = 0.5
-
-
-class Primed:
-    """The profile a resting path will leave its stop with (`Tracker.plan_leaving`) and what
-    choosing it left behind in the tracker."""
-
-    __slots__ = ("last_error", "plan", "soft_from")
-
-    def __init__(self, plan: Plan, soft_from: int, last_error: str) -> None:
-        self.plan = plan
-        self.soft_from = soft_from
-        self.last_error = last_error
 
 
 class Tracker(Brakes):
@@ -217,7 +202,7 @@ class Tracker(Brakes):
             self._cruise(top, a_max, j_max, w)
             return
         b, s_c, _, gate = best
-        if self.hold and self._rests_before(cands, s, v, a, s_c, a_max, j_max):
+        if self.hold and rests_before(cands, s, v, a, s_c, a_max, j_max):
             # a feed hold brakes as hard as it may (issue 36, wide seeds 181 and 285): a
             # profile to rest *at* b, time-optimal to b, reached b 5 ms before the plan without
             # the hold that braked to b's cap, and Z, which takes a hold for a later arrival,
@@ -421,37 +406,6 @@ class Tracker(Brakes):
         if below and self._dip_through(cands, cands[i], a_max, j_max, w):
             return True
         return not event and self._brake_lost(cands, i, a_max, j_max, w)
-
-    def _rests_before(
-        self, cands: list[tuple[int, float, float, bool]], s: float, v: float, a: float,
-        s_b: float, a_max: float, j_max: float,
-    ) -> bool:  # fmt: skip
-        """The brake to rest from (v, a) ends before s_b and before every run boundary in
-        `cands` (where the path acceleration must be zero), so it keeps them all: braking
-        harder than any profile to a boundary, it passes the others below their caps. Before
-        them by SLACK_MARGIN: a brake that ends on a run boundary reaches it with the rounding
-        of its last acceleration (−0.0004 m/s², wide seeds 81, 101, 369, 459, 693), where
-        the target profile to rest there has zero acceleration by construction. Where s_b,
-        a feed cap, lies inside the brake, the feed caps there are read off the brake's own
-        profile."""
-        if projected_velocity(v, a, j_max) > 0.0:
-            stop = brake_distance(v, a, 0.0, a_max, j_max) + SLACK_MARGIN
-        else:
-            stop = ramp_distance(v, a, j_max) + SLACK_MARGIN
-        if not all(not gate or stop <= s_c - s for _, s_c, _, gate in cands):
-            return False
-        if stop <= s_b - s:
-            return True
-        # a feed cap inside the brake: read off the brake's own profile (`brake_crossing`,
-        # SLACK_MARGIN before it; the lowest velocity at b with zero acceleration there was
-        # 104.2 mm/s for a cap of 107.3, 1 mm ahead at 115.7 mm/s, look-ahead 3: the target
-        # profile toward it held 104.2 mm/s at b before the brake to rest went on, 95.3 at
-        # the next boundary, feeds seed 787)
-        return all(
-            brake_crossing(v, a, 0.0, cap, a_max, j_max) <= s_c - s - SLACK_MARGIN
-            for _, s_c, cap, _ in cands
-            if s_c - s < stop
-        )
 
     def _cruise(self, ceiling: float, a_max: float, j_max: float, w: int) -> None:
         try:

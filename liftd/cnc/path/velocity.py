@@ -129,6 +129,21 @@ def ramp_crossing(v: float, a: float, v1: float, j_max: float) -> float:
     return v * t + 0.5 * a * t * t + j_max * t * t * t / 6.0
 
 
+def _brake_peak(a: float, drop: float, a_max: float, j_max: float) -> tuple[float, float]:
+    """The deepest deceleration a_p of the time-optimal brake from acceleration a by a velocity
+    drop of `drop` (jerk −J, hold −A, jerk +J), and how long it holds −A (0 where it does
+    not reach it). Not for a brake that is a mere ramp of a to 0 (`_ramps_only`)."""
+    a_p = -math.sqrt(max(0.5 * a * a + j_max * drop, 0.0))
+    if a_p >= -a_max:
+        return a_p, 0.0
+    return -a_max, max((drop + (a * a - 2.0 * a_max * a_max) / (2.0 * j_max)) / a_max, 0.0)
+
+
+def _ramps_only(a: float, drop: float, j_max: float) -> bool:
+    """|a_p| would be below |a|: ramping the deceleration to 0 alone undershoots the end."""
+    return a < 0.0 and 0.5 * a * a + j_max * drop < a * a
+
+
 def brake_distance(v: float, a: float, v1: float, a_max: float, j_max: float) -> float:
     """Least distance in which the velocity comes down from (v, a) to v1 with zero acceleration
     there (time-optimal jerk-limited brake: jerk −J, hold −A, jerk +J). Only meaningful when
@@ -137,15 +152,9 @@ def brake_distance(v: float, a: float, v1: float, a_max: float, j_max: float) ->
     if j_max == INF:
         return max(0.0, (v * v - v1 * v1) / (2.0 * a_max)) if v > v1 else 0.0
     drop = v - v1  # > a·|a|/2J by the precondition when braking is needed
-    peak_sq = 0.5 * a * a + j_max * drop
-    if a < 0.0 and peak_sq < a * a:  # |a_p| would be below |a|: ramping to 0 undershoots v1
+    if _ramps_only(a, drop, j_max):
         return ramp_distance(v, a, j_max)
-    a_p = -math.sqrt(max(peak_sq, 0.0))
-    t2 = 0.0
-    if a_p < -a_max:
-        a_p = -a_max
-        t2 = (drop + (a * a - 2.0 * a_max * a_max) / (2.0 * j_max)) / a_max
-        t2 = max(t2, 0.0)
+    a_p, t2 = _brake_peak(a, drop, a_max, j_max)
     t1 = (a - a_p) / j_max
     t3 = -a_p / j_max
     d1 = v * t1 + 0.5 * a * t1 * t1 - j_max * t1 * t1 * t1 / 6.0
@@ -168,14 +177,9 @@ def brake_crossing(v: float, a: float, v1: float, cap: float, a_max: float, j_ma
     if j_max == INF:
         return max(0.0, (v * v - cap * cap) / (2.0 * a_max))
     drop = v - v1
-    peak_sq = 0.5 * a * a + j_max * drop
-    if a < 0.0 and peak_sq < a * a:
+    if _ramps_only(a, drop, j_max):
         return ramp_crossing(v, a, cap, j_max)
-    a_p = -math.sqrt(max(peak_sq, 0.0))
-    t2 = 0.0
-    if a_p < -a_max:
-        a_p = -a_max
-        t2 = max((drop + (a * a - 2.0 * a_max * a_max) / (2.0 * j_max)) / a_max, 0.0)
+    a_p, t2 = _brake_peak(a, drop, a_max, j_max)
     t1 = (a - a_p) / j_max
     t3 = -a_p / j_max
     v_1 = v + (a * a - a_p * a_p) / (2.0 * j_max)

@@ -529,7 +529,7 @@ def test_a_feed_hold_brakes_through_the_feed_caps_inside_its_brake(seed: int) ->
     3. The lowest velocity there with zero acceleration was 104.2 mm/s, and the target
     profile toward it held that velocity at the boundary before the brake to rest went on:
     95.3 mm/s at the next boundary. The brake to rest passes such caps below, read off its
-    own profile (`Tracker._rests_before`): no overrun, no tracker error."""
+    own profile (`brakes.rests_before`): no overrun, no tracker error."""
     _, hard, _, errors = check(feed_scenario(seed))
     assert hard == [] and errors == 0, hard
 
