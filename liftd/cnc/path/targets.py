@@ -35,7 +35,14 @@ from liftd.cnc.path.velocity import (
     ramp_distance,
     reach_from,
 )
-from liftd.cnc.ruckig1 import Evaluator, Phases, ProfileError, Ruckig1, brake_pieces
+from liftd.cnc.ruckig1 import (
+    Evaluator,
+    Phases,
+    ProfileError,
+    Ruckig1,
+    brake_pieces,
+    highest_between,
+)
 
 DIP_TOL = 1e-4  # relative: a profile this much below the lower of its ends' velocities dips
 
@@ -404,3 +411,23 @@ class Targets(Constraints):
             if j == 0 and aj > GATE_TOL:
                 return j
         return -1
+
+    def _rises_above(self, plan: Plan, cand: tuple[int, float, float, bool]) -> bool:
+        """`plan` speeds up again after `cand`'s boundary above the ceiling of its block
+        before the block ends (`_passed_above` reads the boundary alone): a profile toward a
+        goal beyond it, with v_max at the velocity it had before it (`Tracker._replan`'s
+        shift), passed an F5548 boundary at its cap still braking and came back to 2.5 µm/s
+        above it in the block (feeds seed 940)."""
+        tb = self.tb
+        b, s_b = cand[0], cand[1]
+        if b >= tb.n:
+            return False
+        t_b = plan.time_at(s_b, INF)
+        if t_b == INF:
+            return False
+        plan.ev.prepare()
+        ph = plan.ev.phases
+        assert ph is not None
+        t_e = plan.time_at(tb.s[b + 1], plan.t0 + ph.dur)  # its end, or the profile's
+        top = highest_between(ph, t_b - plan.t0, t_e - plan.t0)
+        return top > tb.ceiling(b, self.ov) * (1.0 + CAP_TOL) + V_ROUND

@@ -351,6 +351,8 @@ class Tracker(Brakes):
             key=lambda c: c[1],
         )  # fmt: skip
         j = self._passed_above(plan, [first, *between], 1 + len(between))
+        if j < 0 and self._rises_above(plan, first):
+            j = 0
         if j > 0:
             first = between[j - 1]
         in_reach = self._need(v, a, first[2], False, a_max, j_max) <= first[1] - s + SLACK_TOL
