@@ -342,7 +342,7 @@ class Tracker(Brakes):
                 looked, v_p, s_c, target, ceiling, v_max, a_max, j_max, b, w, forced
             ):  # above the ceiling, below it once the acceleration is ramped out
                 self._settle(s, v, a, v_p, s_c, target, cap, v_max, a_max, j_max, b, w,
-                             self._hard(b, w), passed, held, event)  # fmt: skip
+                             self._hard(b, w), passed, held, event, ceiling)  # fmt: skip
             if b == w and target <= 0.0 and best_i + 1 < len(cands):
                 self._keep_floor(cands[best_i + 1], v_max, a_max, j_max, w)
         plan = self.plan
