@@ -196,18 +196,24 @@ def brake_pieces(ph: Phases) -> list[tuple[float, float, float, float, float]]:
     ]
 
 
-def travel_after(ph: Phases, time: float) -> float:
-    """An upper bound of the distance the profile moves from `time` (from its start) to its
-    end: over each piece left, its largest |v| times the time left in it (v is quadratic in a
-    piece: its extremes are at the ends or where a = 0)."""
+def _pieces(ph: Phases) -> list[tuple[float, float, float, float, float]]:
+    """(start, end, v, a, j) of each piece, from the profile's start: the brake's that last,
+    then the seven phases."""
     pieces = [(t0, t0 + dur, v, a, j) for t0, dur, v, a, j in brake_pieces(ph)]
     t0 = ph.b_dur
     for i in range(7):
         t1 = ph.b_dur + ph.t_sum[i]
         pieces.append((t0, t1, ph.v[i], ph.a[i], ph.j[i]))
         t0 = t1
+    return pieces
+
+
+def travel_after(ph: Phases, time: float) -> float:
+    """An upper bound of the distance the profile moves from `time` (from its start) to its
+    end: over each piece left, its largest |v| times the time left in it (v is quadratic in a
+    piece: its extremes are at the ends or where a = 0)."""
     total = 0.0
-    for start, end, v0, a0, j in pieces:
+    for start, end, v0, a0, j in _pieces(ph):
         if end <= time or end <= start:
             continue
         u = max(0.0, time - start)  # the piece's state from where it is still ahead
@@ -218,6 +224,26 @@ def travel_after(ph: Phases, time: float) -> float:
             top = max(top, abs(v - a * a / (2 * j)))
         total += top * span
     return total
+
+
+def highest_between(ph: Phases, t0: float, t1: float) -> float:
+    """The highest velocity of the profile from t0 to t1 (from its start; after its end it
+    keeps its final velocity): at a piece's ends within them, or where its acceleration
+    crosses zero under a negative jerk (v − a²/2j there)."""
+    top = ph.at(t0)[1]
+    if t1 >= ph.dur:
+        top = max(top, ph.v[7])
+    for start, end, v0, a0, j in _pieces(ph):
+        lo, hi = max(start, t0), min(end, t1)
+        if hi <= lo:
+            continue
+        u = lo - start
+        v, a = v0 + u * (a0 + u * j / 2), a0 + u * j
+        span = hi - lo
+        top = max(top, v, v + span * (a + span * j / 2))
+        if j < 0.0 and 0.0 < -a / j < span:
+            top = max(top, v - a * a / (2 * j))
+    return top
 
 
 def _integrate(t: float, p0: float, v0: float, a0: float, j: float) -> tuple[float, float, float]:

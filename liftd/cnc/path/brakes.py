@@ -168,6 +168,36 @@ class Brakes(Targets):
         # ruckig's profile went down to 174.6 mm/s toward a v_max of 185.5)
         return self._brake_past(looked, lost, top, a_max, j_max, w)
 
+    def _brake_tail(
+        self, cands: list[tuple[int, float, float, bool]], v_p: float, s_c: float,
+        target: float, ceiling: float, v_max: float, a_max: float, j_max: float, b: int,
+        w: int, forced: bool,
+    ) -> bool:  # fmt: skip
+        """The path is above the ceiling, braking, and below it once its acceleration is
+        ramped out (v_p): the tail of a brake into a ceiling, or an override that rose inside
+        a brake. Where a brake at once to v_p and a cruise there keep every candidate
+        (`_first_keeps`; not in a forced re-plan: its step loses one), that ramp-out
+        (`SETTLE`, re-planned at its end, from where the ceiling is ruckig's v_max); else the
+        target profile with v_max at the ceiling, which brakes on into it at once (ruckig's
+        brake into its limits), where it does not dip below its ends. True where either is
+        planned. With v_max at v the target profile sped up again above the ceiling after
+        the ramp-out (override 10 → 80 % at 70.1 mm/s and −2.0 m/s², 69.9 mm/s in a block of
+        69.65; a review's program), or held the velocity above it (a forced re-plan
+        0.03 mm/s above an F29399 ceiling at 15 %, 4 ms after the drop, passed the next
+        boundary 0.02 mm/s above its cap)."""
+        s, v, a = self.s, self.v, self.a
+        if self.hold or not v_p <= ceiling * (1.0 + CAP_TOL) + V_ROUND < v:
+            return False
+        if not forced and self._first_keeps(cands, v_p, a_max, j_max):
+            plan = self._velocity_plan(v_p, SETTLE, w, a_max, j_max)
+            if plan is not None and plan.dur > 0.0:
+                self.plan = plan
+                return True
+        top = max(min(v_max, ceiling), target, 1e-12)
+        if not self._try_target(s, v, a, s_c, target, top, a_max, j_max, b, w):
+            return False
+        return not self._dips(min(v, v_p, target))
+
     def _brake_past(
         self, cands: list[tuple[int, float, float, bool]], lost: list[int], e: float,
         a_max: float, j_max: float, w: int,

@@ -35,9 +35,17 @@ from liftd.cnc.path.velocity import (
     ramp_distance,
     reach_from,
 )
-from liftd.cnc.ruckig1 import Evaluator, Phases, ProfileError, Ruckig1, brake_pieces
+from liftd.cnc.ruckig1 import (
+    Evaluator,
+    Phases,
+    ProfileError,
+    Ruckig1,
+    brake_pieces,
+    highest_between,
+)
 
 DIP_TOL = 1e-4  # relative: a profile this much below the lower of its ends' velocities dips
+HOLD_TOP_GAIN = 1e-6  # s: `Targets._hold_top` takes the other profile where it is this shorter
 
 
 def lowest_velocity(ph: Phases) -> float:
@@ -187,7 +195,7 @@ class Targets(Constraints):
     def _settle(
         self, s: float, v: float, a: float, v_p: float, s_c: float, target: float, cap: float,
         v_max: float, a_max: float, j_max: float, b: int, w: int, hard: float, passed: Plan | None,
-        held: Plan | None = None, event: bool = False,
+        held: Plan | None = None, event: bool = False, ceiling: float = 0.0,
     ) -> None:  # fmt: skip
         """The target profile toward boundary b, or, where ruckig refuses it (it decides at
         the edge of what is feasible), in this order: the value nearest to it toward v_p (the
@@ -198,6 +206,8 @@ class Targets(Constraints):
         is replaced where `_undip` or `_unpin` (at an event `_exact_brake`) finds one that does
         not."""
         if self._try_target(s, v, a, s_c, target, v_max, a_max, j_max, b, w):
+            if a > 0.0 and abs(v_p - v_max) <= V_ROUND and v_max <= ceiling + V_ROUND:
+                self._hold_top(s, v, a, s_c, target, v_max, a_max, j_max, b, w)
             floor = min(v, v_p, target)
             if (
                 target < 0.5 * max(v, v_p)
@@ -273,6 +283,33 @@ class Targets(Constraints):
             # edge, a review's program); what it passes is checked on arrival (`_arrive`)
             self._count(f"target profile refused at boundary {b}")
         self._brake(a_max, j_max, w)
+
+    def _hold_top(
+        self, s: float, v: float, a: float, s_c: float, target: float, v_max: float,
+        a_max: float, j_max: float, b: int, w: int,
+    ) -> None:  # fmt: skip
+        """The profile just chosen starts where the path's acceleration ramps out onto v_max
+        (v_p = v_max, not above `_settle`'s ceiling: a cruise that ends at it): there ruckig
+        may miss the profile that holds v_max and brakes late, and return one that brakes
+        early (`_unpin`). A forced re-plan toward rest at the program's end, 7 mm ahead at
+        157.8 mm/s under a ceiling of 160, took 85.4 ms where 64.4 fit, for states 1e-16
+        apart, and braked from 160 to 115 mm/s where the path could hold 160
+        (tests/unit/cnc/path/test_dense_constraints.py). The same target with v_max half a
+        rounding higher (within `V_ROUND`: at the cap as the steps read it) is taken where it
+        is shorter by more than HOLD_TOP_GAIN (one ruckig call). A gain of a rounding is the
+        same profile: taken, its v_p a full rounding above a cap the shift's v_max stood for
+        made the steps' forced re-plans take turns, and the path passed F3000 blocks at up to
+        65.6 mm/s (feeds seeds 22, 23, 95, a first version). Above the ceiling (v_max = v_p
+        after an override drop) the early brake is the brake at once: kept."""
+        first = self.plan
+        assert first is not None
+        top = v_max + 0.5 * V_ROUND
+        if (
+            not self._try_target(s, v, a, s_c, target, top, a_max, j_max, b, w)
+            or self.plan is None
+            or self.plan.dur >= first.dur - HOLD_TOP_GAIN
+        ):
+            self.plan = first
 
     def _highest_below(
         self, s: float, v: float, a: float, s_c: float, target: float, v_max: float,
@@ -404,3 +441,23 @@ class Targets(Constraints):
             if j == 0 and aj > GATE_TOL:
                 return j
         return -1
+
+    def _rises_above(self, plan: Plan, cand: tuple[int, float, float, bool]) -> bool:
+        """`plan` speeds up again after `cand`'s boundary above the ceiling of its block
+        before the block ends (`_passed_above` reads the boundary alone): a profile toward a
+        goal beyond it, with v_max at the velocity it had before it (`Tracker._replan`'s
+        shift), passed an F5548 boundary at its cap still braking and came back to 2.5 µm/s
+        above it in the block (feeds seed 940)."""
+        tb = self.tb
+        b, s_b = cand[0], cand[1]
+        if b >= tb.n:
+            return False
+        t_b = plan.time_at(s_b, INF)
+        if t_b == INF:
+            return False
+        plan.ev.prepare()
+        ph = plan.ev.phases
+        assert ph is not None
+        t_e = plan.time_at(tb.s[b + 1], plan.t0 + ph.dur)  # its end, or the profile's
+        top = highest_between(ph, t_b - plan.t0, t_e - plan.t0)
+        return top > tb.ceiling(b, self.ov) * (1.0 + CAP_TOL) + V_ROUND

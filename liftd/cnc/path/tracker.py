@@ -163,6 +163,7 @@ class Tracker(Brakes):
     def _replan(self, dt: float, force: int | None = None) -> None:
         self._clear_s = -INF
         event, self._event = self._event, False
+        forced = force is not None  # a step would lose `force` (`advance`)
         passed, self._passed = self._passed, None
         # the profile in hand, where only the window moved on (`Targets._undip`)
         held = self.plan if force is None else None
@@ -337,8 +338,13 @@ class Tracker(Brakes):
                 looked, v_p, s_c, target, min(ceiling, v_max), v_max, a_max, j_max, b, w
             )  # above a lowered ceiling: brake at once (deviation 10 of docs/geo-core.md)
         ):
-            self._settle(s, v, a, v_p, s_c, target, cap, v_max, a_max, j_max, b, w,
-                         self._hard(b, w), passed, held, event)  # fmt: skip
+            if not self._brake_tail(
+                looked, v_p, s_c, target, ceiling, v_max, a_max, j_max, b, w, forced
+            ):  # above the ceiling, below it once the acceleration is ramped out
+                self._settle(s, v, a, v_p, s_c, target, cap, v_max, a_max, j_max, b, w,
+                             self._hard(b, w), passed, held, event, ceiling)  # fmt: skip
+            if b == w and target <= 0.0 and best_i + 1 < len(cands):
+                self._keep_floor(cands[best_i + 1], v_max, a_max, j_max, w)
         plan = self.plan
         if plan is None or not shifted or plan.goal != b:
             return
@@ -351,6 +357,8 @@ class Tracker(Brakes):
             key=lambda c: c[1],
         )  # fmt: skip
         j = self._passed_above(plan, [first, *between], 1 + len(between))
+        if j < 0 and self._rises_above(plan, first):
+            j = 0
         if j > 0:
             first = between[j - 1]
         in_reach = self._need(v, a, first[2], False, a_max, j_max) <= first[1] - s + SLACK_TOL
@@ -388,6 +396,45 @@ class Tracker(Brakes):
             # passed the second, 0.5 mm on, at 75.9 mm/s (feeds seed 192)
             after = self._collect(s, seg, s_c - s, first=first[0] + 1)
             self._brake_under(looked + after, first, v_p, s_c, target, v_max, a_max, j_max, b, w)
+
+    def _keep_floor(
+        self, floor: tuple[int, float, float, bool], v_max: float, a_max: float, j_max: float,
+        w: int,
+    ) -> None:  # fmt: skip
+        """The plan just made aims at rest at the window's end w; `floor` is w's second
+        candidate (`Constraints._window_floor`). Where that plan can no longer get down to the
+        floor with zero acceleration at w once the window moves on (the path at the boundary
+        after which w is no longer its end), and the profile to the floor keeps rest at w
+        reachable up to there, the profile to the floor is taken. The time-optimal profile
+        to rest brakes late and hard, so the floor, whose brake is shorter, can fall in its
+        jerk gap: look-ahead 3, 0.5 mm blocks, F12000 at 15 %, the profile to rest went to
+        58 mm/s, and the run boundary at w, its cap 30 mm/s, was passed at 36.9 once the
+        window moved on (a review's program; the forced re-plans chose rest, the lower slack,
+        four times a step)."""
+        rest = self.plan
+        m = w - self.look_ahead + 1  # the window moves on where the path reaches m
+        if rest is None or rest.goal != w or m <= self.seg or m >= w:
+            return
+        s_w, e = floor[1], floor[2]
+        if self._keeps_at(rest, m, s_w, e):
+            return
+        if not self._try_target(
+            self.s, self.v, self.a, s_w, e, max(v_max, e), a_max, j_max, w, w
+        ) or not self._keeps_at(self.plan, m, s_w, 0.0):
+            self.plan = rest
+
+    def _keeps_at(self, plan: Plan | None, m: int, s_w: float, e: float) -> bool:
+        """`plan` reaches boundary m with room left to get down to e at s_w with zero
+        acceleration there."""
+        if plan is None:
+            return False
+        s_m = self.tb.s[m]
+        t_m = plan.time_at(s_m, INF)
+        if t_m == INF:
+            return False
+        _, v_m, a_m = plan.at(t_m)
+        a_max, j_max = self._limits(m)
+        return s_w - s_m - self._need(v_m, a_m, e, True, a_max, j_max) >= SLACK_MARGIN
 
     def _lost_cap(
         self, cands: list[tuple[int, float, float, bool]], i: int, below: bool, event: bool,

@@ -8,7 +8,15 @@ import random
 
 from ruckig import Trajectory
 
-from liftd.cnc.ruckig1 import Evaluator, Phases, ProfileError, Ruckig1, state_at, travel_after
+from liftd.cnc.ruckig1 import (
+    Evaluator,
+    Phases,
+    ProfileError,
+    Ruckig1,
+    highest_between,
+    state_at,
+    travel_after,
+)
 
 
 def _profiles(n: int, seed: int = 1) -> list[Trajectory]:
@@ -82,6 +90,31 @@ def test_travel_after_bounds_what_is_left_of_a_profile_and_is_tight() -> None:
             ratios.append(bound / moved)
     assert travel_after(ph, dur) == 0.0 and travel_after(ph, dur + 1.0) == 0.0
     assert ratios and sorted(ratios)[len(ratios) // 2] < 1.5  # a bound, but not a loose one
+
+
+def test_highest_between_is_the_profiles_peak_velocity_over_the_interval() -> None:
+    """`highest_between` (the tracker's test that a profile speeds up again above a block's
+    ceiling after its boundary) is the highest velocity over [t0, t1], brake pieces and the
+    constant velocity after the end included: never below the highest of 2 000 samples, and
+    above it no more than the samples' spacing allows."""
+    rng = random.Random(5)
+    inside = 0
+    for traj in _profiles(300, seed=6):
+        dur = traj.duration
+        ph = Phases(traj)
+        t0 = rng.uniform(0.0, dur) if rng.random() < 0.8 else 0.0
+        t1 = rng.choice([rng.uniform(t0, dur), dur, dur + 0.01])
+        n = 2000
+        vs = [ph.at(t0 + (t1 - t0) * i / n)[1] for i in range(n + 1)]
+        top = highest_between(ph, t0, t1)
+        sampled = max(vs)
+        assert top >= sampled - 1e-12, (top, sampled)
+        # between two samples v rises at most |a| dt + j dt²/2 above the higher of them
+        step = (t1 - t0) / n
+        slack = max(abs(ph.at(t0 + step * i)[2]) for i in range(n + 1)) * step + 3000 * step**2
+        assert top <= sampled + slack + 1e-12, (top, sampled, slack)
+        inside += top > max(vs[0], vs[-1]) + 1e-9  # a peak inside, not at an end
+    assert inside > 20  # profiles whose peak lies inside the interval were among them
 
 
 def test_an_evaluator_answers_as_state_at_from_its_first_call_on() -> None:

@@ -444,8 +444,10 @@ def test_falling_feeds_keep_their_caps_without_a_last_resort_brake(seed: int) ->
 # re-plans took turns (223), a cap between the shift's first and its goal was read by neither
 # (232); 971 guards the brake at once that keeps that cap: a re-plan from inside it at a feed
 # change 0.2 mm before the next boundary was refused, and the last-resort brake went to 32
-# mm/s for 43.5 (`Targets._settle` keeps the brake now)
-SHIFT_SEEDS = [4, 20, 177, 223, 232, 238, 299, 971]
+# mm/s for 43.5 (`Targets._settle` keeps the brake now); on db64a13 940's shift passed an
+# F5548 boundary at its cap still braking and sped up again to 2.5 µm/s above it in the
+# block (`Targets._rises_above`)
+SHIFT_SEEDS = [4, 20, 177, 223, 232, 238, 299, 940, 971]
 
 
 @pytest.mark.parametrize("seed", SHIFT_SEEDS)
@@ -563,6 +565,34 @@ def test_a_lost_cap_costs_no_dip_and_no_error(
     ch = dataclasses.replace(shipped(), look_ahead_blocks=look_ahead, cycle_time=cycle)
     text = (PROGRAMS / f"{name}.nc").read_text()
     sc = Scenario(0, ch, text, Schedule(tuple(parse_override_spec(override)), hold))
+    _, hard, slow, errors = check(sc)
+    assert hard == [] and errors == 0, hard
+    assert slow == [], slow
+
+
+@pytest.mark.parametrize(
+    ("name", "look_ahead", "override"),
+    [
+        ("window_end_jerk_gap", 3, "6.3777:200,6.4249:15"),
+        ("override_rise_in_brake", 30, "0.4850:10,0.5020:80,0.5172:10"),
+    ],
+)
+def test_a_brake_tail_and_the_window_end_keep_their_caps(
+    name: str, look_ahead: int, override: str
+) -> None:
+    """Programs of the eleventh round's review corpora (2 ms). 0.5 mm blocks with F-only
+    lines, look-ahead 3, override 200 % then 15 %. On db64a13: the forced re-plans toward
+    the window's end chose rest there, the lower of its two slacks, four times a step; the
+    profile to rest went to 58 mm/s, and once the window moved on its run boundary (30 mm/s)
+    was passed at 36.9 (`Tracker._keep_floor` takes the profile to the floor where that
+    keeps rest). A forced re-plan 0.03 mm/s above an F29399 ceiling at 15 %, 4 ms after the
+    drop, held that velocity and passed the next boundary 0.02 mm/s above its cap. And 1.5 mm
+    blocks of rising feeds, override 10 → 80 % at 70.1 mm/s and −2.0 m/s²: the target profile
+    with v_max at v sped up again to 69.9 mm/s in a block of 69.65 after the ramp-out
+    (`Brakes._brake_tail` for both)."""
+    ch = dataclasses.replace(shipped(), look_ahead_blocks=look_ahead, cycle_time=2e-3)
+    text = (PROGRAMS / f"{name}.nc").read_text()
+    sc = Scenario(0, ch, text, Schedule(tuple(parse_override_spec(override)), ()))
     _, hard, slow, errors = check(sc)
     assert hard == [] and errors == 0, hard
     assert slow == [], slow
