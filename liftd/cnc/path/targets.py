@@ -289,13 +289,14 @@ class Targets:
         after an override drop) the early brake is the brake at once: kept."""
         first = self.st.plan
         assert first is not None
+        last = self.st.last_error
         top = v_max + 0.5 * V_ROUND
         if (
             not self.try_target(s, v, a, s_c, target, top, a_max, j_max, b, w)
             or self.st.plan is None
             or self.st.plan.dur >= first.dur - HOLD_TOP_GAIN
         ):
-            self.st.plan = first
+            self.st.plan, self.st.last_error = first, last  # (a refusal here is no error)
 
     def _highest_below(
         self, s: float, v: float, a: float, s_c: float, target: float, v_max: float,

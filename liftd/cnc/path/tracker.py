@@ -395,20 +395,22 @@ class Tracker:
         if skip >= 0:  # nor beyond the forced one's cap
             target = min(target, top)
             v_max = max(min(v_max, top), target, v, v_p)
-        if not (
+        braked = (
             not self.con.hold
             and skip < 0
             and v_p > ceiling * (1.0 + CAP_TOL) + V_ROUND
             and self.br.brake_into(
                 looked, v_p, s_c, target, min(ceiling, v_max), v_max, a_max, j_max, b, w
             )  # above a lowered ceiling: brake at once (deviation 10 of docs/geo-core.md)
-        ):
-            if not self.br.brake_tail(
-                looked, v_p, s_c, target, ceiling, v_max, a_max, j_max, b, w, forced
-            ):  # above the ceiling, below it once the acceleration is ramped out
-                self.tg.settle(s, v, a, v_p, s_c, target, cap, v_max, a_max, j_max, b, w,
-                               self.tg.hard(b, w), passed, held, event, ceiling)  # fmt: skip
-            if b == w and target <= 0.0 and best_i + 1 < len(cands):
+        ) or self.br.brake_tail(
+            looked, v_p, s_c, target, ceiling, v_max, a_max, j_max, b, w, forced
+        )  # above the ceiling, below it once the acceleration is ramped out
+        if not braked:
+            self.tg.settle(s, v, a, v_p, s_c, target, cap, v_max, a_max, j_max, b, w,
+                           self.tg.hard(b, w), passed, held, event, ceiling)  # fmt: skip
+            if b == w and target <= 0.0 and best_i + 1 < len(cands) and v <= ceiling:
+                # (not after a brake, nor above the ceiling: its v_max there is v, and the
+                # profile to the floor could hold it, a cold review found)
                 self._keep_floor(cands[best_i + 1], v_max, a_max, j_max, w)
         plan = self.st.plan
         if plan is None or not shifted or plan.goal != b:
@@ -483,10 +485,11 @@ class Tracker:
         s_w, e = floor[1], floor[2]
         if self._keeps_at(rest, m, s_w, e):
             return
+        last = self.st.last_error
         if not self.tg.try_target(
             self.st.s, self.st.v, self.st.a, s_w, e, max(v_max, e), a_max, j_max, w, w
         ) or not self._keeps_at(self.st.plan, m, s_w, 0.0):
-            self.st.plan = rest
+            self.st.plan, self.st.last_error = rest, last  # (a refusal here is no error)
 
     def _keeps_at(self, plan: Plan | None, m: int, s_w: float, e: float) -> bool:
         """`plan` reaches boundary m with room left to get down to e at s_w with zero
