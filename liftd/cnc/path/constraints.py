@@ -67,6 +67,18 @@ class Constraints:
         self._floor_val = 0.0
         self._low = INF  # the lowest cap `collect` kept so far (`_ahead` leaps below it)
 
+    def set_inputs(self, ov: float, hold: bool) -> bool:
+        """Override (fraction) and feed hold; whether they changed (the constraints are then
+        checked again). Override 0 acts as a hold; the caps keep the last override above 0 (a
+        stopping path does not make every corner a stop)."""
+        hold = hold or ov <= 0.0
+        cap_ov = ov if ov > 0.0 else self.ov
+        if cap_ov == self.ov and hold == self.hold:
+            return False
+        self.ov, self.hold = cap_ov, hold
+        self.recheck()
+        return True
+
     def recheck(self, stops: bool = False) -> None:
         """Check the constraints again from the next step on (`_clear_s`: a re-plan, new
         inputs); with `stops`, also the chains behind run boundaries (the stop sets may have

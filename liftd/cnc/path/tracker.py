@@ -149,17 +149,13 @@ class Tracker:
     def set_inputs(self, ov: float, hold: bool) -> None:
         """Override (fraction) and feed hold. Override 0 acts as a hold; the caps keep the last
         override above 0 (a stopping path does not make every corner a stop)."""
-        hold = hold or ov <= 0.0
-        cap_ov = ov if ov > 0.0 else self.con.ov
-        if cap_ov != self.con.ov or hold != self.con.hold:
-            self.con.ov, self.con.hold = cap_ov, hold
+        if self.con.set_inputs(ov, hold):
             self.st.plan = None
             self._passed = None  # planned under the old inputs: not to be kept
             # an event's re-plan (`Targets.settle`), also where no `set_state` follows: a
             # nominal run's tracker takes an override change as the path does (`nominal.py`)
             self._event = True
-            self.con.recheck()
-            if not hold:
+            if not self.con.hold:
                 self.parked = False
 
     def resume(self, t: float) -> None:
