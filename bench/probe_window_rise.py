@@ -54,10 +54,10 @@ def main() -> None:
     caps: dict[int, float] = {}
     for seg in range(start, b):
         con.seg = seg
-        cands = con._collect(tb.s[seg] + 1e-9, seg, 1.0)
+        cands = con.collect(tb.s[seg] + 1e-9, seg, 1.0)
         i = next(k for k, c in enumerate(cands) if c[0] == b)
-        caps[seg] = con._target_cap(cands, i)
-    a_max, j_max = con._limits(b - 1)
+        caps[seg] = con.target_cap(cands, i)
+    a_max, j_max = con.limits(b - 1)
     seg = start
     while s < tb.s[b]:
         while seg + 1 < b and tb.s[seg + 1] <= s:

@@ -1,18 +1,26 @@
 """The brakes at once: where the path brakes from the velocity it has now instead of at the
-latest moment a time-optimal profile would (`Brakes`, between the target choice of
-`targets.py` and the motion of `tracker.py`). A CNC brakes at once after an override drop
-(known deviation 10 of docs/geo-core.md: `_brake_first`, `_brake_into`); where the shift of
-`Tracker._replan` would give up a feed cap the path can still get below braking
-(deviation 12: `_brake_through`, `_keep_below`), or one that came into view too late for
-zero acceleration there (deviation 13: `_dip_through`). Each is slower than the late brake,
-never above a cap and never at rest; `_first_keeps` is the test they share: a brake at once
-and a cruise after it keep every candidate ahead.
+latest moment a time-optimal profile would (`Brakes`, a part of the tracker, `Tracker.br`,
+that holds the constraint queries, the path's state and the target profiles of
+`targets.py`). A CNC brakes at once after an override drop (known deviation 10 of
+docs/geo-core.md: `brake_first`, `brake_into`); where the shift of `Tracker._replan` would
+give up a feed cap the path can still get below braking (deviation 12: `brake_through`,
+`keep_below`), or one that came into view too late for zero acceleration there (deviation
+13: `dip_through`). Each is slower than the late brake, never above a cap and never at
+rest; `_first_keeps` is the test they share: a brake at once and a cruise after it keep
+every candidate ahead.
 """
 
 from __future__ import annotations
 
-from liftd.cnc.path.constraints import CAP_TOL, INF, SLACK_MARGIN, SLACK_TOL, V_ROUND
-from liftd.cnc.path.plan import CRUISE, SETTLE, Plan
+from liftd.cnc.path.constraints import (
+    CAP_TOL,
+    INF,
+    SLACK_MARGIN,
+    SLACK_TOL,
+    V_ROUND,
+    Constraints,
+)
+from liftd.cnc.path.plan import CRUISE, SETTLE, PathState, Plan
 from liftd.cnc.path.targets import Targets, highest, lowest_rise, only_brakes
 from liftd.cnc.path.velocity import (
     brake_crossing,
@@ -21,17 +29,23 @@ from liftd.cnc.path.velocity import (
     ramp_distance,
 )
 
-DIP_STEPS = 10  # `Brakes._dip_through`: its velocity within 2^-10 of the cap (a ruckig solve each)
+DIP_STEPS = 10  # `Brakes.dip_through`: its velocity within 2^-10 of the cap (a ruckig solve each)
 DIP_FLOOR = 0.1  # ... and never below this fraction of the cap (a brake nearly to rest is a stop)
-BISECT_STEPS = 24  # `Brakes._brake_first`: its velocity within 2^-24 of the interval searched
-BRAKE_CRUISE = 0.25  # share of the way `Brakes._brake_through`'s cruise may take at most
-UNDER_RISE = 0.95  # `Brakes._brake_under`: its profile speeds up again from at least this × v_max
+BISECT_STEPS = 24  # `Brakes.brake_first`: its velocity within 2^-24 of the interval searched
+BRAKE_CRUISE = 0.25  # share of the way `Brakes.brake_through`'s cruise may take at most
+UNDER_RISE = 0.95  # `Brakes.brake_under`: its profile speeds up again from at least this × v_max
 
 
-class Brakes(Targets):
-    """The brakes at once; `Tracker` chooses among them and the target profiles."""
+class Brakes:
+    """The brakes at once, for the path state `st` under the constraints `con`, with the
+    profiles of `tg`; `Tracker` holds it and chooses among them and the target profiles."""
 
-    def _brake_first(
+    def __init__(self, con: Constraints, st: PathState, tg: Targets) -> None:
+        self.con = con
+        self.st = st
+        self.tg = tg
+
+    def brake_first(
         self, cands: list[tuple[int, float, float, bool]], ceiling: float, a_max: float,
         j_max: float, w: int,
     ) -> bool:  # fmt: skip
@@ -49,7 +63,7 @@ class Brakes(Targets):
         never below the lowest cap ahead (with a jerk limit a brake to a lower velocity can be
         the shorter: CAM seed 956, on the exact brake to 2.68 mm/s at the drop, a brake to
         2.45 fitted and dipped). False where none keeps them (a feed cap it can no longer get
-        below, a run boundary inside the brake: `_brake_into`)."""
+        below, a run boundary inside the brake: `brake_into`)."""
         e, goal = ceiling, CRUISE
         below: list[int] = []  # the feed caps its own velocity keeps (`_first_keeps`)
         if not self._first_keeps(cands, e, a_max, j_max, below=below):
@@ -67,25 +81,25 @@ class Brakes(Targets):
             e, goal = good, SETTLE
             below = []
             self._first_keeps(cands, e, a_max, j_max, below=below)
-        plan = self._velocity_plan(e, goal, w, a_max, j_max)
+        plan = self.tg.velocity_plan(e, goal, w, a_max, j_max)
         if plan is None or (goal == SETTLE and plan.dur <= 0.0):
             return False  # refused, or a brake of no length, re-planned at its end without end
         if below:
-            # the steps read them by their hard caps (`_violated`: with zero acceleration
+            # the steps read them by their hard caps (`violated`: with zero acceleration
             # there they are out of reach from inside the brake, a forced re-plan toward them
             # was refused, feeds seed 3)
             plan.soft_from, plan.serves = min(below), max(below)
-            self._soft_from = plan.soft_from
-        self.plan = plan
+            self.st.soft_from = plan.soft_from
+        self.st.plan = plan
         return True
 
-    def _brake_into(
+    def brake_into(
         self, cands: list[tuple[int, float, float, bool]], v_p: float, s_c: float,
         target: float, ceiling: float, v_max: float, a_max: float, j_max: float, b: int,
         w: int,
     ) -> bool:  # fmt: skip
         """Above a lowered ceiling, where the brake at once to it is not enough
-        (`_brake_first`): the target profile with ruckig's v_max at the ceiling, or lower, at
+        (`brake_first`): the target profile with ruckig's v_max at the ceiling, or lower, at
         the lowest cap of the candidates before b that the path can still get down to with
         zero acceleration there (a profile held at the ceiling passes them above); ruckig then
         brakes from outside its limits at once (its brake profile) before the profile to the
@@ -93,25 +107,25 @@ class Brakes(Targets):
         caps it could no longer get down to, the profile with v_max = v held 360 mm/s for
         22 ms. Kept where ruckig accepts it and it does not dip below the target; else (False)
         the target profile with v_max = v stays (known deviation 10 of docs/geo-core.md)."""
-        s, v, a = self.s, self.v, self.a
+        s, v, a = self.st.s, self.st.v, self.st.a
         top = ceiling
         for _, s_j, cap, _ in cands:
             if s_j < s_c and cap < top and brake_distance(v, a, cap, a_max, j_max) <= s_j - s:
                 top = cap
         top = max(top, target)
-        if top >= v_max or not self._try_target(s, v, a, s_c, target, top, a_max, j_max, b, w):
+        if top >= v_max or not self.tg.try_target(s, v, a, s_c, target, top, a_max, j_max, b, w):
             return False
-        if self._dips(min(v, v_p, target)):
+        if self.tg.dips(min(v, v_p, target)):
             return False
         # from above its v_max the profile only brakes: ruckig's brake into its limits is not
         # a brake to v_max with zero acceleration, and the profile after it can brake to rest
         # and start again (a review found: override 100 → 30 % at 200 mm/s 5.1 mm before an
         # M00, at rest 0.7 mm before it; a dip below a target of 0 is no dip). Its pieces were
-        # read by `_dips`.
-        assert self.plan is not None and self.plan.ev.phases is not None
-        return only_brakes(self.plan.ev.phases)
+        # read by `dips`.
+        assert self.st.plan is not None and self.st.plan.ev.phases is not None
+        return only_brakes(self.st.plan.ev.phases)
 
-    def _brake_under(
+    def brake_under(
         self, looked: list[tuple[int, float, float, bool]], first: tuple[int, float, float, bool],
         v_p: float, s_c: float, target: float, v_max: float, a_max: float, j_max: float, b: int,
         w: int,
@@ -132,7 +146,7 @@ class Brakes(Targets):
         seed 4): the profile to rest at the M00, time-optimal, passed the F6000 boundary at
         108.7 mm/s (known deviation 15 of docs/geo-core.md). Slower than the late brake,
         never above a cap it can still keep."""
-        s, v, a = self.s, self.v, self.a
+        s, v, a = self.st.s, self.st.v, self.st.a
         kept: list[tuple[int, float, float, bool]] = []
         lost: list[int] = []  # the caps before b it can no longer get down to
         for c in looked:
@@ -149,26 +163,26 @@ class Brakes(Targets):
         top = max(min(caps), target)
         if top >= v_max:
             return False
-        shift = self.plan
+        shift = self.st.plan
         kept.sort(key=lambda c: c[1])
-        if self._try_target(s, v, a, s_c, target, top, a_max, j_max, b, w):
-            plan = self.plan
+        if self.tg.try_target(s, v, a, s_c, target, top, a_max, j_max, b, w):
+            plan = self.st.plan
             assert plan is not None
-            if not self._dips(min(v, v_p, target)):
+            if not self.tg.dips(min(v, v_p, target)):
                 assert plan.ev.phases is not None
                 if (
                     lowest_rise(plan.ev.phases) >= UNDER_RISE * top
-                    and self._passed_above(plan, kept, len(kept)) < 0
+                    and self.tg.passed_above(plan, kept, len(kept)) < 0
                 ):
                     return True
-        self.plan = shift
+        self.st.plan = shift
         # else the brake at once to it with zero acceleration there (ruckig's velocity
         # interface), or to the highest velocity below it that keeps every candidate, and the
-        # steps from there (`_brake_first`; feeds seed 299: falling feeds on 2 mm blocks,
+        # steps from there (`brake_first`; feeds seed 299: falling feeds on 2 mm blocks,
         # ruckig's profile went down to 174.6 mm/s toward a v_max of 185.5)
         return self._brake_past(looked, lost, top, a_max, j_max, w)
 
-    def _brake_tail(
+    def brake_tail(
         self, cands: list[tuple[int, float, float, bool]], v_p: float, s_c: float,
         target: float, ceiling: float, v_max: float, a_max: float, j_max: float, b: int,
         w: int, forced: bool,
@@ -185,45 +199,45 @@ class Brakes(Targets):
         69.65; a review's program), or held the velocity above it (a forced re-plan
         0.03 mm/s above an F29399 ceiling at 15 %, 4 ms after the drop, passed the next
         boundary 0.02 mm/s above its cap)."""
-        s, v, a = self.s, self.v, self.a
-        if self.hold or not v_p <= ceiling * (1.0 + CAP_TOL) + V_ROUND < v:
+        s, v, a = self.st.s, self.st.v, self.st.a
+        if self.con.hold or not v_p <= ceiling * (1.0 + CAP_TOL) + V_ROUND < v:
             return False
         if not forced and self._first_keeps(cands, v_p, a_max, j_max):
-            plan = self._velocity_plan(v_p, SETTLE, w, a_max, j_max)
+            plan = self.tg.velocity_plan(v_p, SETTLE, w, a_max, j_max)
             if plan is not None and plan.dur > 0.0:
-                self.plan = plan
+                self.st.plan = plan
                 return True
         top = max(min(v_max, ceiling), target, 1e-12)
-        if not self._try_target(s, v, a, s_c, target, top, a_max, j_max, b, w):
+        if not self.tg.try_target(s, v, a, s_c, target, top, a_max, j_max, b, w):
             return False
-        return not self._dips(min(v, v_p, target))
+        return not self.tg.dips(min(v, v_p, target))
 
     def _brake_past(
         self, cands: list[tuple[int, float, float, bool]], lost: list[int], e: float,
         a_max: float, j_max: float, w: int,
     ) -> bool:  # fmt: skip
-        """`_brake_first` to e with the candidates the path can still keep; the lost ones (their
+        """`brake_first` to e with the candidates the path can still keep; the lost ones (their
         boundaries) the plan passes as well as it can (`Plan.serves`, `Plan.soft_from`): read
         by the steps as caps to keep, their forced re-plans and the brake took turns, 203
         tracker errors after an override drop to 20 % (feeds seed 178)."""
-        if not self._brake_first([c for c in cands if c[0] not in lost], e, a_max, j_max, w):
+        if not self.brake_first([c for c in cands if c[0] not in lost], e, a_max, j_max, w):
             return False
         if lost:
-            plan = self.plan
+            plan = self.st.plan
             assert plan is not None
             soft = [plan.soft_from] if plan.soft_from >= 0 else []  # and the ones it keeps
-            plan.soft_from = self._soft_from = min([*lost, *soft])
+            plan.soft_from = self.st.soft_from = min([*lost, *soft])
             plan.serves = max(plan.serves, *lost)
         return True
 
-    def _brake_lost(
+    def brake_lost(
         self, cands: list[tuple[int, float, float, bool]], i: int, a_max: float, j_max: float,
         w: int,
     ) -> bool:  # fmt: skip
         """Candidate i, a feed cap, is out of reach (an override drop lowered it, or it came
         into view too late), and the path is not above its own block's ceiling: a brake at
         once to its cap, or to the highest velocity below it that keeps every candidate the
-        path can still keep (`_brake_first`). Its block is still ahead: the path is above its
+        path can still keep (`brake_first`). Its block is still ahead: the path is above its
         feed until it is down to it, and the target at its boundary (the nearest velocity
         above the cap with zero acceleration there) left the brake for the boundary, after
         which the cap of the block after it was lost too (override 100 → 60 % 0.5 mm before
@@ -232,11 +246,11 @@ class Brakes(Targets):
         lost = self._lost(cands, a_max, j_max)
         return cands[i][0] in lost and self._brake_past(cands, lost, cands[i][2], a_max, j_max, w)
 
-    def _brake_down(
+    def brake_down(
         self, cands: list[tuple[int, float, float, bool]], ceiling: float, a_max: float,
         j_max: float, w: int,
     ) -> bool:  # fmt: skip
-        """Above a lowered ceiling, where the brake at once to it (`_brake_first`) is refused
+        """Above a lowered ceiling, where the brake at once to it (`brake_first`) is refused
         because a feed cap ahead is out of reach: the same brake past the lost caps
         (`_brake_past`), rather than the target profile, which holds the velocity before it
         brakes (override 100 → 30 % at 31.5 mm/s 0.19 mm before an F1734 block and 0.39 mm
@@ -255,7 +269,7 @@ class Brakes(Targets):
         self, cands: list[tuple[int, float, float, bool]], a_max: float, j_max: float
     ) -> list[int]:
         """The feed caps of `cands` the path can no longer get down to."""
-        s, v, a = self.s, self.v, self.a
+        s, v, a = self.st.s, self.st.v, self.st.a
         return [
             c[0] for c in cands
             if not c[3] and brake_distance(v, a, c[2], a_max, j_max) > c[1] - s + SLACK_TOL
@@ -265,13 +279,13 @@ class Brakes(Targets):
         """`cand` is the window's end (rest there, or its floor) where that is not a stop: the
         window moves on with the path, block by block. Not a feed cap at the same boundary,
         which stays when the window moves on (`_first_keeps`)."""
-        w = self.window_end
+        w = self.con.window_end
         return (
             cand[0] == w
             and cand[3]
-            and w < self.tb.n
-            and not self.is_stop(w)
-            and self._window_floor(w) > 0.0
+            and w < self.con.tb.n
+            and not self.con.is_stop(w)
+            and self.con.window_floor(w) > 0.0
         )
 
     def _first_keeps(
@@ -286,9 +300,9 @@ class Brakes(Targets):
         brake to its cap with zero acceleration, passed 10 mm/s below it by the brake to a
         lower drop after it, made that one be passed 80 mm/s above it, known deviation 14 of
         docs/geo-core.md), or one after it that the path gets down to from e. Within `margin`
-        (SLACK_MARGIN: as `_violated` reads them).
+        (SLACK_MARGIN: as `violated` reads them).
         The window's end where it is not a stop moves on with the path (read by its feed cap
-        alone): the steps keep it reachable as from any cruise (`_violated`, a forced
+        alone): the steps keep it reachable as from any cruise (`violated`, a forced
         re-plan toward it); read as fixed, rest or its floor there held the brake to
         26 mm/s for a ceiling of 300 after an override drop on a line of 0.1 mm blocks
         (look-ahead 120, 12 mm: the brake to the ceiling took 6.2 of them, the window moving
@@ -301,18 +315,18 @@ class Brakes(Targets):
         148.3 with zero acceleration takes 1.1 mm, the brake to 125 is at 131 mm/s after
         1 mm; read by the zero-acceleration brake, no brake at once was found and the target
         profile toward F7500 passed F8900 at 149.3 (feeds seed 413)."""
-        s, v, a = self.s, self.v, self.a
+        s, v, a = self.st.s, self.st.v, self.st.a
         d_e = brake_distance(v, a, e, a_max, j_max)
         for c in cands:
             b, s_b, cap, gate = c
             if self._moves_on(c):
-                # the window's end moves on: the steps keep it reachable (`_violated`) where
+                # the window's end moves on: the steps keep it reachable (`violated`) where
                 # it is a run boundary; a feed drop there stays a feed cap (read as rest there
                 # and left out, a dip to 76 mm/s passed a drop to 46 there above it, and the
                 # steps and the dip took turns: 157 ruckig calls in a cycle, a review found)
-                if self.tb.gate[b]:
+                if self.con.tb.gate[b]:
                     continue
-                cap, gate = self.tb.entry_cap(b, self.ov), False
+                cap, gate = self.con.tb.entry_cap(b, self.con.ov), False
             room = s_b - s
             if room - d_e < margin:
                 if gate:
@@ -320,7 +334,7 @@ class Brakes(Targets):
                 if brake is not None:
                     if (
                         brake_distance(v, a, cap, a_max, j_max) > room - margin
-                        and self._passed_above(brake, [(b, s_b, cap, gate)], 1) >= 0
+                        and self.tg.passed_above(brake, [(b, s_b, cap, gate)], 1) >= 0
                     ):
                         return False
                 elif cap * (1.0 + CAP_TOL) + V_ROUND < e:
@@ -330,10 +344,10 @@ class Brakes(Targets):
                 elif brake_distance(v, a, cap, a_max, j_max) > room - margin:
                     # one at e or above is passed below it by the brake at once to e no
                     # later than the brake to it with zero acceleration there gets there,
-                    # kept with `margin` to spare as the steps read it (`_violated`: to a
+                    # kept with `margin` to spare as the steps read it (`violated`: to a
                     # rounding only, a forced re-plan toward such a cap from inside the
                     # brake was refused, feeds seed 3); else its own profile decides
-                    # (not the window's end: the steps keep it, `_violated` reads it where
+                    # (not the window's end: the steps keep it, `violated` reads it where
                     # it is the plan's, a cold review found)
                     if (
                         below is None
@@ -343,19 +357,19 @@ class Brakes(Targets):
                         return False
                     below.append(b)
             elif (cap < e or gate) and (
-                room - d_e - self._need(e, 0.0, cap, gate, a_max, j_max) < margin
+                room - d_e - self.con.need(e, 0.0, cap, gate, a_max, j_max) < margin
             ):
                 return False
         return True
 
-    def _brake_through(
+    def brake_through(
         self, cands: list[tuple[int, float, float, bool]], k: int, e: float, a_max: float,
         j_max: float, w: int,
     ) -> bool:  # fmt: skip
         """A brake at once to e, candidate k's target, then a cruise at it (ruckig's velocity
         interface), kept where it gets there before k and passes every candidate before k
         below its cap: braking toward the lowest, it is below the brake toward each of them
-        (`Constraints._target_cap`), which keeps that one where its own cap is in reach. Where
+        (`Constraints.target_cap`), which keeps that one where its own cap is in reach. Where
         the time-optimal profile toward k holds the velocity and passes a feed drop above its
         cap (CAM seed 0: boundary 52 at 34.19 for 33.09 mm/s 0.2 mm before a run boundary of
         25.82, its target at zero acceleration out of reach, its cap not; the shift of
@@ -365,21 +379,21 @@ class Brakes(Targets):
         only where the cruise after the brake takes at most BRAKE_CRUISE of the way (one to a
         corner of 0.43 mm/s 4.8 mm early crawled there, 12 % of the program's time)."""
         b, s_k = cands[k][0], cands[k][1]
-        if e <= 0.0 or self.is_stop(b) or b == w:
+        if e <= 0.0 or self.con.is_stop(b) or b == w:
             return False
-        plan = self._velocity_plan(e, CRUISE, w, a_max, j_max)
+        plan = self.tg.velocity_plan(e, CRUISE, w, a_max, j_max)
         if (
             plan is None
             or plan.p_end > s_k
-            or s_k - plan.p_end > BRAKE_CRUISE * (s_k - self.s)
-            or self._passed_above(plan, cands, k) >= 0
+            or s_k - plan.p_end > BRAKE_CRUISE * (s_k - self.st.s)
+            or self.tg.passed_above(plan, cands, k) >= 0
         ):
             return False
         plan.serves, plan.soft_from = cands[k][0], cands[0][0]
-        self.plan, self._soft_from = plan, cands[0][0]
+        self.st.plan, self.st.soft_from = plan, cands[0][0]
         return True
 
-    def _dip_through(
+    def dip_through(
         self, cands: list[tuple[int, float, float, bool]], first: tuple[int, float, float, bool],
         a_max: float, j_max: float, w: int,
     ) -> bool:  # fmt: skip
@@ -404,8 +418,8 @@ class Brakes(Targets):
         found: list[Plan] = []  # the plan of the last velocity that passes below
 
         def passes_below(e: float) -> bool:
-            plan = self._velocity_plan(e, SETTLE, w, a_max, j_max)
-            if plan is None or plan.dur <= 0.0 or self._passed_above(plan, [first], 1) >= 0:
+            plan = self.tg.velocity_plan(e, SETTLE, w, a_max, j_max)
+            if plan is None or plan.dur <= 0.0 or self.tg.passed_above(plan, [first], 1) >= 0:
                 return False
             if not self._first_keeps(others, e, a_max, j_max, 2.0 * SLACK_MARGIN, plan):
                 return False
@@ -418,7 +432,7 @@ class Brakes(Targets):
         kept = found[-1]
         # it keeps that cap, passed below it braking, and the feed caps after it up to the
         # first one below e or a run boundary (below them braking, `_first_keeps`, or at e):
-        # the steps check those by their hard caps only. Read by `_violated` as caps to reach
+        # the steps check those by their hard caps only. Read by `violated` as caps to reach
         # with zero acceleration, one of them was out of reach from inside the brake the next
         # step, and the forced re-plans toward it and the dip took turns, 16 re-plans and 88
         # ruckig solves in a cycle (a review found: F6000, F5400, F540 on 0.2 mm blocks)
@@ -430,16 +444,16 @@ class Brakes(Targets):
                 break
             serves = b
         # so are the caps before it it passes below (`_first_keeps` with the brake): read by
-        # `_violated` with zero acceleration there, the one before `first` was out of reach
+        # `violated` with zero acceleration there, the one before `first` was out of reach
         # at each step, and a forced re-plan and the dip took turns until the dip's cap was
         # lost too (feeds seed 223: falling feeds on 0.5 mm blocks, F8610 passed at 151 mm/s
         # for 143.5)
         soft = min(first[0], *(c[0] for c in cands))
         kept.serves, kept.soft_from = serves, soft
-        self.plan, self._soft_from = kept, soft
+        self.st.plan, self.st.soft_from = kept, soft
         return True
 
-    def _keep_below(
+    def keep_below(
         self, passed: Plan | None, first: tuple[int, float, float, bool], b: int, w: int,
         target: float = INF,
     ) -> bool:  # fmt: skip
@@ -450,19 +464,19 @@ class Brakes(Targets):
         step that loses it (known deviation 12 of docs/geo-core.md, CAM seed 956: boundary 93,
         114.8 mm/s, passed at 113.8 by the profile in hand, at 120.9 by the new one). So is
         the profile in hand where only the window moved on, if it ends at b's `target` now
-        (a brake under the cap, `_brake_under`, re-planned from inside its brake at each block
+        (a brake under the cap, `brake_under`, re-planned from inside its brake at each block
         lost the cap again: feeds seed 4; one toward rest at the window's end it planned for
         is not kept once that end has moved on and b's target is above rest)."""
         if (
             passed is None
             or passed.goal != b
-            or passed.t0 > self.t
+            or passed.t0 > self.st.t
             or (target < INF and abs(passed.v_end - target) > CAP_TOL * target + V_ROUND)
-            or self._passed_above(passed, [first], 1) >= 0
+            or self.tg.passed_above(passed, [first], 1) >= 0
         ):
             return False
         passed.window = w
-        self.plan = passed
+        self.st.plan = passed
         return True
 
 

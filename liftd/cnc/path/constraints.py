@@ -2,8 +2,8 @@
 constraint boundaries ahead (static ones from the table, the lift stops, the end of the
 look-ahead window), their caps, and for a state (s, v, a) the least distance the path needs to
 get below each cap (closed forms in `velocity.py`): a constraint's *slack* is the distance left
-minus that need. `Constraints` holds the state these queries read; `Tracker` extends it with
-the motion and the planning.
+minus that need. `Constraints` holds the state these queries read (the window's segment, the
+inputs, the stop sets); the tracker and its other parts hold it (`Tracker.con`).
 
 Effective caps come from a backward pass over the constraints up to the next run boundary (and,
 for that boundary, beyond it as far as they can matter): a cap that a later constraint makes
@@ -63,9 +63,29 @@ class Constraints:
         self._beyond_key: tuple[int, int, float, float] | None = None
         self._beyond_val = INF
         self._beyond_open = False  # the last `_beyond` chain ended at the window's end or a cut
-        self._floor_key = (-1, -1.0)  # (window end, override) of `_window_floor`'s last value
+        self._floor_key = (-1, -1.0)  # (window end, override) of `window_floor`'s last value
         self._floor_val = 0.0
-        self._low = INF  # the lowest cap `_collect` kept so far (`_ahead` leaps below it)
+        self._low = INF  # the lowest cap `collect` kept so far (`_ahead` leaps below it)
+
+    def set_inputs(self, ov: float, hold: bool) -> bool:
+        """Override (fraction) and feed hold; whether they changed (the constraints are then
+        checked again). Override 0 acts as a hold; the caps keep the last override above 0 (a
+        stopping path does not make every corner a stop)."""
+        hold = hold or ov <= 0.0
+        cap_ov = ov if ov > 0.0 else self.ov
+        if cap_ov == self.ov and hold == self.hold:
+            return False
+        self.ov, self.hold = cap_ov, hold
+        self.recheck()
+        return True
+
+    def recheck(self, stops: bool = False) -> None:
+        """Check the constraints again from the next step on (`_clear_s`: a re-plan, new
+        inputs); with `stops`, also the chains behind run boundaries (the stop sets may have
+        changed: `_beyond`'s cache)."""
+        self._clear_s = -INF
+        if stops:
+            self._beyond_key = None
 
     def is_stop(self, b: int) -> bool:
         tb = self.tb
@@ -82,13 +102,13 @@ class Constraints:
         return w if w < self.n else self.n
 
     # -- constraints ----------------------------------------------------------------------------
-    def _limits(self, seg: int) -> tuple[float, float]:
+    def limits(self, seg: int) -> tuple[float, float]:
         tb = self.tb
         r = tb.run[seg if seg < tb.n else tb.n - 1]
         return tb.run_a[r], tb.run_j[r]
 
     @staticmethod
-    def _horizon(v: float, a: float, a_max: float, j_max: float, dt: float) -> float:
+    def horizon(v: float, a: float, a_max: float, j_max: float, dt: float) -> float:
         """Distance beyond which no constraint can bind within the next step."""
         stop = 0.0
         if projected_velocity(v, a, j_max) > 0.0:
@@ -143,7 +163,7 @@ class Constraints:
             return 0.0, True, True
         return self.tb.entry_cap(b, self.ov), self.tb.gate[b], False
 
-    def _collect(
+    def collect(
         self, s: float, seg: int, reach: float, soft: tuple[int, int] = (0, 0), keep: int = -1,
         first: int = -1, every: bool = False,
     ) -> list[tuple[int, float, float, bool]]:  # fmt: skip
@@ -156,11 +176,11 @@ class Constraints:
 
         One that cannot bind is left out: a constraint without zero acceleration (a feed drop,
         a transition cap inside a run) whose cap is at least that of one before it in the
-        list. A path that keeps that one passes it with its projected velocity (`_need`) at
+        list. A path that keeps that one passes it with its projected velocity (`need`) at
         most that cap, so it keeps this one however near, and it is in the list from there on
         (not by slack: the brake to a higher cap with zero acceleration at its end can be the
         longer, 21.00 against 20.72 mm to 100 and 10 mm/s from 500 mm/s, a review found); the
-        chain of `_target_cap` leaves it reachable for the same reason. Without this, 0.2 mm
+        chain of `target_cap` leaves it reachable for the same reason. Without this, 0.2 mm
         blocks with a feed drop at every second one put 24 constraints within 9.6 mm and the
         24th counted as a stop
         (known deviation 1 of docs/geo-core.md: 314 for 500 mm/s). The caps compared are the
@@ -203,17 +223,17 @@ class Constraints:
             out.append((b, s_b, cap, gate))
             if gate:
                 if b == w and stop and not self.is_stop(b):
-                    floor = self._window_floor(w)
+                    floor = self.window_floor(w)
                     if floor > 0.0:
                         out.append((b, s_b, floor, True))
                 break
         return out
 
-    def _window_floor(self, w: int) -> float:
+    def window_floor(self, w: int) -> float:
         """The lowest cap the window's end w can have once the window moves on by a block: its
         own entry cap, or what rest at the boundary after it leaves over block w (known
         deviation 3 of docs/geo-core.md). The path keeps both rest and this velocity reachable
-        at w (a second candidate at w in `_collect`; `Tracker._window_end_lost`): with a jerk
+        at w (a second candidate at w in `collect`; `Tracker._window_end_lost`): with a jerk
         limit, braking to a low velocity takes longer than braking to rest, so a path braking
         to rest at w may no longer get down to w's cap exactly when the window moves on, and
         brakes to near rest instead (wide seed 22: 0.2 mm blocks, look-ahead 3, boundaries of
@@ -224,7 +244,7 @@ class Constraints:
             return 0.0
         if self._floor_key == (w, self.ov):  # asked every step while the profile aims at w
             return self._floor_val
-        a_max, j_max = self._limits(w)
+        a_max, j_max = self.limits(w)
         after = reach_velocity_any_above(
             0.0, max(tb.s[w + 1] - tb.s[w] - CHAIN_MARGIN, 0.0), a_max, j_max
         )
@@ -242,7 +262,7 @@ class Constraints:
         if cands[-1][3] and not self.is_stop(last):
             if cands[-1][2] <= 0.0:
                 return True  # rest behind no stop (a cap of 0): a later list may raise it
-            # cached: `_collect` just asked for it with g's entry cap (the result depends on
+            # cached: `collect` just asked for it with g's entry cap (the result depends on
             # the cap: a review found a chain for cap 0, cached under g, read back for its
             # entry cap, which left out every feed drop behind g: 19 mm/s in a 1 mm/s block)
             self._beyond(last, self.tb.entry_cap(last, self.ov), w)
@@ -252,13 +272,13 @@ class Constraints:
     def _link(self, e: float, s_from: float, b: int, s_b: float, is_open: bool) -> float:
         """The highest velocity at s_from (zero acceleration) from which e at boundary b (at
         s_b) stays reachable: every higher end too where the chain is open."""
-        a_max, j_max = self._limits(b - 1)
+        a_max, j_max = self.limits(b - 1)
         length = max(s_b - s_from - CHAIN_MARGIN, 0.0)
         if is_open:
             return reach_velocity_any_above(e, length, a_max, j_max)
         return reach_velocity(e, length, a_max, j_max)
 
-    def _target_cap(self, cands: list[tuple[int, float, float, bool]], i: int) -> float:
+    def target_cap(self, cands: list[tuple[int, float, float, bool]], i: int) -> float:
         """The velocity to plan for at candidate i (zero acceleration there): its cap, lowered
         so that the later candidates in the list stay reachable from it. They lie in one run
         up to its end (the list's last, a run boundary, a stop or the window's end, with the
@@ -308,7 +328,7 @@ class Constraints:
         """(`_beyond`'s velocity at g, whether the chain is open, whether it was cut) over at
         most `limit` links after g, the last counting as a stop. A constraint without zero
         acceleration that a lower cap before it keeps (g's own cap first) is not a link. The
-        links compose as in `_target_cap`: from each run boundary (g first), a brake of its
+        links compose as in `target_cap`: from each run boundary (g first), a brake of its
         own to every cap inside its run and to the run's end, at that end's value."""
         tb = self.tb
         chain: list[tuple[float, float, int, bool]] = []
@@ -355,7 +375,7 @@ class Constraints:
         return INF, is_open, cut  # not reached: the loop returns at i = -1
 
     @staticmethod
-    def _need(v: float, a: float, cap: float, gate: bool, a_max: float, j_max: float) -> float:
+    def need(v: float, a: float, cap: float, gate: bool, a_max: float, j_max: float) -> float:
         """Least distance after which the path can be below `cap` (with zero acceleration where
         `gate`). A cruise ends at v_p = cap up to rounding (3e-17 m/s above it read as a
         violation of the cap, which hid the stop behind it the path could still make: stress
@@ -375,7 +395,7 @@ class Constraints:
             ramp = min(ramp, brake_distance(v, a, 0.0, a_max, j_max))
         return ramp
 
-    def _passable(self, b: int, v: float, a: float, w: int, soft: bool = False) -> bool:
+    def passable(self, b: int, v: float, a: float, w: int, soft: bool = False) -> bool:
         """Whether the path may reach constraint boundary b at (v, a) (only its hard cap when
         `soft`: a plan passes its feed cap, `Plan.soft_from`)."""
         tb = self.tb
@@ -391,11 +411,11 @@ class Constraints:
             # ceiling it is (narrow seed 525: a feed drop to 96.69 mm/s crossed at 49.4 mm/s
             # and 6.17 m/s², ramped out to 96.86; known deviation 11 of docs/geo-core.md)
             top = tb.ceiling(b, self.ov)
-            if projected_velocity(v, a, self._limits(b)[1]) > top * (1.0 + CAP_TOL) + 1e-12:
+            if projected_velocity(v, a, self.limits(b)[1]) > top * (1.0 + CAP_TOL) + 1e-12:
                 return False
         return not gate or abs(a) <= GATE_TOL
 
-    def _violated(
+    def violated(
         self, s: float, v: float, a: float, seg: int, dt: float, goal: int, soft_from: int
     ) -> int | None:
         """The first constraint that could no longer be kept from (s, v, a), if any."""
@@ -415,10 +435,10 @@ class Constraints:
                 and not (self.lift_stops and any(seg < k < goal for k in self.lift_stops))
             ):
                 return None
-        a_max, j_max = self._limits(seg)
+        a_max, j_max = self.limits(seg)
         if v == 0.0 and a <= 0.0:
             return None
-        cands = self._collect(s, seg, self._horizon(v, a, a_max, j_max, dt), (soft_from, goal))
+        cands = self.collect(s, seg, self.horizon(v, a, a_max, j_max, dt), (soft_from, goal))
         if not cands:
             self._clear(s, projected_velocity(v, max(a, 0.0), j_max), seg, a_max, j_max, dt)
             return None
@@ -435,7 +455,7 @@ class Constraints:
                 # before a feed change, its forced cruise dropped the target of the stop
                 # behind it and made that stop unreachable (seed 1537)
                 continue
-            slack = s_c - s - self._need(v, a, cap, gate, a_max, j_max)
+            slack = s_c - s - self.need(v, a, cap, gate, a_max, j_max)
             if slack < SLACK_MARGIN:
                 return b
         return None
@@ -454,4 +474,4 @@ class Constraints:
             if seg < k < nxt:
                 nxt = k
         top = max(v, 0.0 if self.hold else tb.ceiling(seg if seg < n else n - 1, self.ov))
-        self._clear_s = tb.s[nxt] - self._horizon(top, a_max, a_max, j_max, dt)
+        self._clear_s = tb.s[nxt] - self.horizon(top, a_max, a_max, j_max, dt)

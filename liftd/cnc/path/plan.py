@@ -77,7 +77,7 @@ class Plan:
     @property
     def keeps(self) -> int:
         """The last boundary it keeps: its goal, or for a brake at once (a goal < 0) the cap
-        it serves (`Brakes._brake_through`, `_dip_through`; `Targets._settle`'s last resort
+        it serves (`Brakes.brake_through`, `dip_through`; `Targets.settle`'s last resort
         keeps it past the boundaries before that one)."""
         return max(self.goal, self.serves)
 
@@ -98,6 +98,24 @@ class Plan:
             return self.t0 + self.dur if s <= self.p_end + EPS_S else t_default
         local = first_time_at(self.traj, s)
         return t_default if local is None else self.t0 + local
+
+
+class PathState:
+    """The path's motion state and the profile it follows, shared by the tracker's parts
+    (`Targets`, `Brakes`, `Tracker`): each reads it, `Tracker` moves it along the plan. A
+    plain class, as `Crossing`."""
+
+    __slots__ = ("a", "errors", "last_error", "plan", "s", "soft_from", "t", "v")
+
+    def __init__(self, s: float) -> None:
+        self.t = 0.0
+        self.s = s
+        self.v = 0.0
+        self.a = 0.0
+        self.plan: Plan | None = None
+        self.soft_from = -1  # the target's Plan.soft_from (`Tracker._replan`)
+        self.errors = 0  # profiles ruckig refused, answered with a brake (never expected)
+        self.last_error = ""
 
 
 class Primed:

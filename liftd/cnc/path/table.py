@@ -67,7 +67,7 @@ class PathTable:
     next_constraint: tuple[int, ...]  # first constraint boundary ≥ b (n + 1 boundaries)
     next_gate: tuple[int, ...]  # first run boundary (or stop) ≥ b
     # per constraint boundary b: the next constraint after it with a lower feed, a lower hard
-    # cap (min of the transition and axis caps); n + 1 where none (`Constraints._collect`)
+    # cap (min of the transition and axis caps); n + 1 where none (`Constraints.collect`)
     lower_feed: tuple[int, ...]
     lower_hard: tuple[int, ...]
     sum_l_f: tuple[float, ...]  # Σ_{j<b} L_j / F_j

@@ -1,12 +1,12 @@
 """Which target the path tracker plans for (`tracker.py`), and the fallbacks where ruckig
-refuses it: the `Targets` layer between the constraint queries (`constraints.py`) and the
-motion (`Tracker`).
+refuses it: `Targets`, a part of the tracker (`Tracker.tg`) that holds the constraint queries
+(`constraints.py`) and the path's state (`plan.PathState`), which `Tracker` moves.
 
 A constraint's cap is a target, not only a bound (issue 36): the path reaches the lower of the
 two blocks' ceilings and the transition cap at a block boundary, and does not dip below the
 lower of the targets it moves between. (Ruckig's time-optimal profile to a low target velocity
 brakes below it and comes back when the exact brake no longer fits: the constraints are kept
-by that exact brake, `Constraints._need`, and a brake in hand is not re-planned where only a
+by that exact brake, `Constraints.need`, and a brake in hand is not re-planned where only a
 ceiling rises, `Tracker._arrive`.)
 Where a cap cannot be reached exactly (a cap that came into view with the look-ahead window,
 an override drop), the path gets as near to it as it can below it, and above it only where it
@@ -26,8 +26,7 @@ from liftd.cnc.path.constraints import (
     V_ROUND,
     Constraints,
 )
-from liftd.cnc.path.plan import BRAKE, EPS_S, SETTLE, Plan
-from liftd.cnc.path.table import PathTable
+from liftd.cnc.path.plan import BRAKE, EPS_S, SETTLE, PathState, Plan
 from liftd.cnc.path.velocity import (
     brake_distance,
     lowest_reachable_from,
@@ -98,52 +97,39 @@ def only_brakes(ph: Phases) -> bool:
     return max(ph.a) <= GATE_TOL and all(p[3] <= GATE_TOL for p in brake_pieces(ph))
 
 
-class Targets(Constraints):
-    """The target choice and the profiles toward it; `Tracker` moves along them."""
+class Targets:
+    """The target choice and the profiles toward it, for the path state `st` under the
+    constraints `con`; `Tracker` holds it and moves the path along them."""
 
-    def __init__(
-        self,
-        table: PathTable,
-        look_ahead: int,
-        lift_stops: set[int] | None = None,
-        acked: set[int] | None = None,
-    ) -> None:
-        super().__init__(table, look_ahead, lift_stops, acked)
+    def __init__(self, con: Constraints, st: PathState) -> None:
+        self.con = con
+        self.st = st
         self.calc = Ruckig1()
-        # the path state the profiles start from (`Tracker` moves it)
-        self.t = 0.0
-        self.s = table.s[0] if table.s else 0.0
-        self.v = 0.0
-        self.a = 0.0
-        self.plan: Plan | None = None
-        self.errors = 0
-        self.last_error = ""
-        self._soft_from = -1  # the target's Plan.soft_from (`Tracker._replan`)
 
-    def _hard(self, b: int, w: int) -> float:
+    def hard(self, b: int, w: int) -> float:
         """Boundary b's own hard cap: 0 at a stop and the window's end, else its axis and
         transition cap (never scaled by the override)."""
-        tb = self.tb
-        return 0.0 if self.is_stop(b) or b == w else min(tb.point_cap[b], tb.cap[b])
+        tb = self.con.tb
+        return 0.0 if self.con.is_stop(b) or b == w else min(tb.point_cap[b], tb.cap[b])
 
-    def _count(self, what: str) -> None:
-        self.errors += 1
-        self.last_error = what
+    def count(self, what: str) -> None:
+        self.st.errors += 1
+        self.st.last_error = what
 
-    def _try_target(
+    def try_target(
         self, s: float, v: float, a: float, s_c: float, tgt: float, v_max: float,
         a_max: float, j_max: float, b: int, w: int,
     ) -> bool:  # fmt: skip
         try:
             traj = self.calc.position(s, v, a, s_c, tgt, max(v_max, tgt), a_max, j_max)
         except ProfileError as exc:
-            self.last_error = str(exc)
+            self.st.last_error = str(exc)
             return False
-        plan = self.plan = Plan(traj, self.t, b, w, s_c, tgt)
-        plan.soft_from = min(self._soft_from, b)
+        plan = self.st.plan = Plan(traj, self.st.t, b, w, s_c, tgt)
+        plan.soft_from = min(self.st.soft_from, b)
         return True
 
-    def _pick_target(
+    def pick_target(
         self, v: float, a: float, v_p: float, d: float, cap: float, ceiling: float,
         a_max: float, j_max: float, hard: float, over: float = 0.0,
     ) -> float:  # fmt: skip
@@ -159,7 +145,7 @@ class Targets(Constraints):
         override drop (wide seed 641: 230 mm/s toward a cap of 100 at a 0.001° kink, x1 = 0.03
         mm/s, a near-stop), it takes x2, as slowly as it can above the cap, where x2 is within
         `over` and nearer the cap than x1."""
-        if self.hold:
+        if self.con.hold:
             return min(cap, lowest_reachable_from(v, a, d, a_max, j_max))
         top = min(cap, ceiling)  # the ceiling holds up to there
         fits = d + SLACK_TOL
@@ -192,7 +178,7 @@ class Targets(Constraints):
             return up
         return hard
 
-    def _settle(
+    def settle(
         self, s: float, v: float, a: float, v_p: float, s_c: float, target: float, cap: float,
         v_max: float, a_max: float, j_max: float, b: int, w: int, hard: float, passed: Plan | None,
         held: Plan | None = None, event: bool = False, ceiling: float = 0.0,
@@ -205,13 +191,13 @@ class Targets(Constraints):
         to the boundary it just passed; a brake (an error). A profile that dips below its ends
         is replaced where `_undip` or `_unpin` (at an event `_exact_brake`) finds one that does
         not."""
-        if self._try_target(s, v, a, s_c, target, v_max, a_max, j_max, b, w):
+        if self.try_target(s, v, a, s_c, target, v_max, a_max, j_max, b, w):
             if a > 0.0 and abs(v_p - v_max) <= V_ROUND and v_max <= ceiling + V_ROUND:
                 self._hold_top(s, v, a, s_c, target, v_max, a_max, j_max, b, w)
             floor = min(v, v_p, target)
             if (
                 target < 0.5 * max(v, v_p)
-                and self._dips(floor)
+                and self.dips(floor)
                 and not self._undip(target, b, w, (passed, held))
             ):
                 if event:  # a lift planned with the times before it (wide seed 767)
@@ -219,77 +205,77 @@ class Targets(Constraints):
                 else:
                     self._unpin(s, v, a, s_c, target, v_max, a_max, j_max, b, w, floor)
             return
-        if v_p <= max(hard, target) and self._try_target(
+        if v_p <= max(hard, target) and self.try_target(
             s, v, a, s_c, v_p, max(v_max, v_p), a_max, j_max, b, w
         ):
             # from v_p toward the target while ruckig still accepts it
             self._bisect(v_p, target, s, v, a, s_c, v_max, a_max, j_max, b, w)
             return
-        if target > 0.0 and self._try_target(s, v, a, s_c, 0.0, v_max, a_max, j_max, b, w):
+        if target > 0.0 and self.try_target(s, v, a, s_c, 0.0, v_max, a_max, j_max, b, w):
             # rest is accepted: the highest velocity below the target that is too (an exact
             # brake with no room left, refused at the edge: CAM seed 482, an override drop to
             # 18 % as the path began its brake to a 12.2 mm/s corner, passed it at rest)
             self._highest_below(s, v, a, s_c, target, v_max, a_max, j_max, b, w)
             return
         for tgt in (cap, hard):
-            if self._try_target(s, v, a, s_c, tgt, max(v_max, tgt), a_max, j_max, b, w):
+            if self.try_target(s, v, a, s_c, tgt, max(v_max, tgt), a_max, j_max, b, w):
                 return
         kept = passed
-        if kept is not None and kept.goal == b and kept.t0 <= self.t:
+        if kept is not None and kept.goal == b and kept.t0 <= self.st.t:
             # the step was cut at a boundary on the way to b (a feed change) and nothing new
             # from there is accepted, e.g. 1 µm before b while still ramping the acceleration
             # to 0 (stress seed 396, lifting): the profile that brought the path here keeps b
             # (a window that moved on only relaxes the constraints it was planned under)
             kept.window = w
-            self.plan = kept
+            self.st.plan = kept
             return
         for kept in (passed, held):
             if (
                 kept is not None
                 and kept.keeps > b
-                and kept.t0 <= self.t
-                and not self.tb.gate[b]
-                and self._passed_above(kept, [(b, s_c, cap, False)], 1) < 0
+                and kept.t0 <= self.st.t
+                and not self.con.tb.gate[b]
+                and self.passed_above(kept, [(b, s_c, cap, False)], 1) < 0
             ):
                 # the profile in hand, toward a goal beyond b, passes b below its cap, braking
-                # (a re-plan from inside a brake at once, `_brake_into`, 0.5 mm before a feed
+                # (a re-plan from inside a brake at once, `brake_into`, 0.5 mm before a feed
                 # drop at 116.6 mm/s and −3.3 m/s²: nothing toward b itself was accepted); so
                 # does a brake through to a cap beyond b (`Plan.keeps`: falling feeds on 1 mm
                 # blocks, the target profile 1 mm to the next drop refused from inside it,
                 # the last-resort brake went to 0.04 mm/s, feeds seed 157)
                 kept.window = w
-                self.plan = kept
+                self.st.plan = kept
                 return
         if (
             passed is not None
             and passed.goal == SETTLE
-            and passed.t0 <= self.t < passed.t0 + passed.dur
-            and not self.tb.gate[b]
-            and self._passed_above(passed, [(b, s_c, cap, False)], 1) < 0
+            and passed.t0 <= self.st.t < passed.t0 + passed.dur
+            and not self.con.tb.gate[b]
+            and self.passed_above(passed, [(b, s_c, cap, False)], 1) < 0
         ):
             # the brake at once that brought the path to the boundary it just passed
-            # (`Brakes._brake_first`, checked against the candidates ahead) goes on to its
+            # (`Brakes.brake_first`, checked against the candidates ahead) goes on to its
             # end where it passes b below its cap: from inside it, zero acceleration at b,
             # a feed cap, came too near (a feed change 0.2 mm before a drop, 46.6 mm/s at
             # −1.9 m/s², the ramp to zero acceleration alone 0.209 mm: the last-resort brake
             # went to 32 mm/s for 43.5, feeds seed 971)
             passed.window = w
-            self.plan = passed
+            self.st.plan = passed
             return
-        if not self.hold:
+        if not self.con.hold:
             # under a feed hold the brake to rest from the path's state is the hold's own
             # motion, not a fallback (a hold that came inside a brake at once to a feed cap,
             # 0.18 mm before a boundary whose lowest reachable velocity ruckig refused at the
             # edge, a review's program); what it passes is checked on arrival (`_arrive`)
-            self._count(f"target profile refused at boundary {b}")
-        self._brake(a_max, j_max, w)
+            self.count(f"target profile refused at boundary {b}")
+        self.brake(a_max, j_max, w)
 
     def _hold_top(
         self, s: float, v: float, a: float, s_c: float, target: float, v_max: float,
         a_max: float, j_max: float, b: int, w: int,
     ) -> None:  # fmt: skip
         """The profile just chosen starts where the path's acceleration ramps out onto v_max
-        (v_p = v_max, not above `_settle`'s ceiling: a cruise that ends at it): there ruckig
+        (v_p = v_max, not above `settle`'s ceiling: a cruise that ends at it): there ruckig
         may miss the profile that holds v_max and brakes late, and return one that brakes
         early (`_unpin`). A forced re-plan toward rest at the program's end, 7 mm ahead at
         157.8 mm/s under a ceiling of 160, took 85.4 ms where 64.4 fit, for states 1e-16
@@ -301,15 +287,16 @@ class Targets(Constraints):
         made the steps' forced re-plans take turns, and the path passed F3000 blocks at up to
         65.6 mm/s (feeds seeds 22, 23, 95, a first version). Above the ceiling (v_max = v_p
         after an override drop) the early brake is the brake at once: kept."""
-        first = self.plan
+        first = self.st.plan
         assert first is not None
+        last = self.st.last_error
         top = v_max + 0.5 * V_ROUND
         if (
-            not self._try_target(s, v, a, s_c, target, top, a_max, j_max, b, w)
-            or self.plan is None
-            or self.plan.dur >= first.dur - HOLD_TOP_GAIN
+            not self.try_target(s, v, a, s_c, target, top, a_max, j_max, b, w)
+            or self.st.plan is None
+            or self.st.plan.dur >= first.dur - HOLD_TOP_GAIN
         ):
-            self.plan = first
+            self.st.plan, self.st.last_error = first, last  # (a refusal here is no error)
 
     def _highest_below(
         self, s: float, v: float, a: float, s_c: float, target: float, v_max: float,
@@ -321,7 +308,7 @@ class Targets(Constraints):
         the target has no room left it refuses it and accepts one 1e-8 below (seed 482:
         12.2034 mm/s refused, 12.2034 · (1 − 1e-8) accepted, no dip)."""
         near = target * (1.0 - 1e-6)
-        if not self._try_target(s, v, a, s_c, near, max(v_max, near), a_max, j_max, b, w):
+        if not self.try_target(s, v, a, s_c, near, max(v_max, near), a_max, j_max, b, w):
             self._bisect(0.0, near, s, v, a, s_c, v_max, a_max, j_max, b, w)
 
     def _bisect(
@@ -332,14 +319,14 @@ class Targets(Constraints):
         steps; the last one accepted is planned."""
 
         def accepted(e: float) -> bool:
-            return self._try_target(s, v, a, s_c, e, max(v_max, e), a_max, j_max, b, w)
+            return self.try_target(s, v, a, s_c, e, max(v_max, e), a_max, j_max, b, w)
 
         accepted(highest(good, bad, 14, accepted))
 
-    def _dips(self, floor: float) -> bool:
+    def dips(self, floor: float) -> bool:
         """The profile just chosen goes below `floor` (the lower of the velocity it starts
         from and its target) on the way. Its pieces are read for it, and kept for its cycles."""
-        plan = self.plan
+        plan = self.st.plan
         assert plan is not None
         ph = Phases(plan.traj)
         plan.ev = Evaluator(plan.traj, ph)
@@ -357,10 +344,10 @@ class Targets(Constraints):
         profile through 8.236 in 26.86 ms; with v_max 1e-15 m/s higher, 23.72 ms and no dip).
         The same target with v_max a rounding higher (`V_ROUND`, a velocity that close above a
         cap is at it) is taken where it does not dip; else the dip stays (one ruckig call)."""
-        dipping = self.plan
+        dipping = self.st.plan
         top = v_max + V_ROUND
-        if not self._try_target(s, v, a, s_c, target, top, a_max, j_max, b, w) or self._dips(floor):
-            self.plan = dipping
+        if not self.try_target(s, v, a, s_c, target, top, a_max, j_max, b, w) or self.dips(floor):
+            self.st.plan = dipping
 
     def _exact_brake(
         self, s: float, v: float, a: float, s_c: float, target: float, a_max: float,
@@ -384,13 +371,13 @@ class Targets(Constraints):
         try:
             traj = self.calc.velocity(s, v, a, target, a_max, j_max)
         except ProfileError as exc:
-            self.last_error = str(exc)
+            self.st.last_error = str(exc)
             return
         if abs(float(traj.at_time(traj.duration)[0][0]) - s_c) > EPS_S:
             return  # ruckig's brake is not the closed form's (never seen)
-        plan = Plan(traj, self.t, b, w, s_c, target)
-        plan.soft_from = min(self._soft_from, b)
-        self.plan = plan
+        plan = Plan(traj, self.st.t, b, w, s_c, target)
+        plan.soft_from = min(self.st.soft_from, b)
+        self.st.plan = plan
 
     def _undip(self, target: float, b: int, w: int, kept: tuple[Plan | None, Plan | None]) -> bool:
         """Ruckig's time-optimal profile to a low target brakes below it and comes back where
@@ -406,32 +393,30 @@ class Targets(Constraints):
             if (
                 plan is not None
                 and plan.goal == b
-                and plan.t0 <= self.t
+                and plan.t0 <= self.st.t
                 and abs(plan.v_end - target) <= CAP_TOL * target + V_ROUND
             ):
                 plan.window = w
-                self.plan = plan
+                self.st.plan = plan
                 return True
         return False
 
-    def _brake(self, a_max: float, j_max: float, w: int) -> None:
+    def brake(self, a_max: float, j_max: float, w: int) -> None:
         """Last resort: brake to rest from the path's state (never expected; counted)."""
-        traj = self.calc.velocity(self.s, self.v, self.a, 0.0, a_max, j_max)
-        self.plan = Plan(traj, self.t, BRAKE, w, None, 0.0)
+        traj = self.calc.velocity(self.st.s, self.st.v, self.st.a, 0.0, a_max, j_max)
+        self.st.plan = Plan(traj, self.st.t, BRAKE, w, None, 0.0)
 
-    def _velocity_plan(
-        self, e: float, goal: int, w: int, a_max: float, j_max: float
-    ) -> Plan | None:
+    def velocity_plan(self, e: float, goal: int, w: int, a_max: float, j_max: float) -> Plan | None:
         """Ruckig's velocity interface from the path's state to e (time-optimal, zero
         acceleration there) as a plan toward `goal` (CRUISE or SETTLE); None where refused."""
         try:
-            traj = self.calc.velocity(self.s, self.v, self.a, e, a_max, j_max)
+            traj = self.calc.velocity(self.st.s, self.st.v, self.st.a, e, a_max, j_max)
         except ProfileError:
             return None
-        return Plan(traj, self.t, goal, w, None, e)
+        return Plan(traj, self.st.t, goal, w, None, e)
 
     @staticmethod
-    def _passed_above(plan: Plan, cands: list[tuple[int, float, float, bool]], k: int) -> int:
+    def passed_above(plan: Plan, cands: list[tuple[int, float, float, bool]], k: int) -> int:
         """The first of candidates 0 … k − 1 that `plan` passes above its cap (or, the first,
         not braking: it could speed up after it), -1 where none."""
         for j in range(k):
@@ -442,13 +427,13 @@ class Targets(Constraints):
                 return j
         return -1
 
-    def _rises_above(self, plan: Plan, cand: tuple[int, float, float, bool]) -> bool:
+    def rises_above(self, plan: Plan, cand: tuple[int, float, float, bool]) -> bool:
         """`plan` speeds up again after `cand`'s boundary above the ceiling of its block
-        before the block ends (`_passed_above` reads the boundary alone): a profile toward a
+        before the block ends (`passed_above` reads the boundary alone): a profile toward a
         goal beyond it, with v_max at the velocity it had before it (`Tracker._replan`'s
         shift), passed an F5548 boundary at its cap still braking and came back to 2.5 µm/s
         above it in the block (feeds seed 940)."""
-        tb = self.tb
+        tb = self.con.tb
         b, s_b = cand[0], cand[1]
         if b >= tb.n:
             return False
@@ -460,4 +445,4 @@ class Targets(Constraints):
         assert ph is not None
         t_e = plan.time_at(tb.s[b + 1], plan.t0 + ph.dur)  # its end, or the profile's
         top = highest_between(ph, t_b - plan.t0, t_e - plan.t0)
-        return top > tb.ceiling(b, self.ov) * (1.0 + CAP_TOL) + V_ROUND
+        return top > tb.ceiling(b, self.con.ov) * (1.0 + CAP_TOL) + V_ROUND

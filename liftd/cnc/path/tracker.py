@@ -18,7 +18,7 @@ profile is re-planned from the exact state.
 The look-ahead window ends `look_ahead` segments after the current one with a stop the path must
 be able to make; it moves with the path, so the path never actually stops there (except when
 the window is a single block). While it can, the path also keeps the lowest cap the window's end
-can have once the window moves on reachable there (`Constraints._window_floor`), so that it is
+can have once the window moves on reachable there (`Constraints.window_floor`), so that it is
 not braking to rest, too late to get down to that cap exactly, when it does.
 
 Hard constraints (transition caps, axis caps, stops, zero acceleration at run boundaries) are
@@ -38,23 +38,28 @@ from liftd.cnc.path.constraints import (
     SLACK_MARGIN,
     SLACK_TOL,
     V_ROUND,
+    Constraints,
 )
-from liftd.cnc.path.plan import CRUISE, EPS_S, SETTLE, Crossing, Plan, Primed
+from liftd.cnc.path.plan import CRUISE, EPS_S, SETTLE, Crossing, PathState, Plan, Primed
 from liftd.cnc.path.table import PathTable
+from liftd.cnc.path.targets import Targets
 from liftd.cnc.path.velocity import (
     projected_velocity,
     reach_velocity,
 )
-from liftd.cnc.ruckig1 import ProfileError
+from liftd.cnc.ruckig1 import ProfileError, Ruckig1
 
 # after an input change, a feed cap whose nearest reachable velocity below it (the jerk gap's
-# lower end, `Targets._pick_target`) is less than this fraction of it is out of reach
+# lower end, `Targets.pick_target`) is less than this fraction of it is out of reach
 # (`Tracker._lost_cap`)
 GAP_FLOOR = 0.5
 
 
-class Tracker(Brakes):
-    """Path state (t, s, v, a, seg) over one table; drive with `advance(t, dt)`."""
+class Tracker:
+    """Path state (t, s, v, a, seg) over one table; drive with `advance(t, dt)`. It holds its
+    parts: the constraint queries (`con`, which also holds the window's segment and the
+    inputs), the motion state (`st`), the target profiles (`tg`) and the brakes at once
+    (`br`); each part holds the ones it reads."""
 
     def __init__(
         self,
@@ -63,39 +68,94 @@ class Tracker(Brakes):
         lift_stops: set[int] | None = None,
         acked: set[int] | None = None,
     ) -> None:
-        super().__init__(table, look_ahead, lift_stops, acked)
+        self.con = Constraints(table, look_ahead, lift_stops, acked)
+        self.st = PathState(table.s[0] if table.s else 0.0)
+        self.tg = Targets(self.con, self.st)
+        self.br = Brakes(self.con, self.st, self.tg)
         self.stopped_at: int | None = 0  # resting at this boundary until `resume`
         self.parked = False  # at rest under a hold, not at a stop
         self._passed: Plan | None = None  # the target plan of the boundary just passed
         self._event = True  # the next re-plan is an event's (`set_state`): `Targets._unpin`
 
+    # -- the state its users read -------------------------------------------------------------
+    @property
+    def t(self) -> float:
+        return self.st.t
+
+    @property
+    def s(self) -> float:
+        return self.st.s
+
+    @property
+    def v(self) -> float:
+        return self.st.v
+
+    @property
+    def a(self) -> float:
+        return self.st.a
+
+    @property
+    def plan(self) -> Plan | None:
+        return self.st.plan
+
+    @property
+    def errors(self) -> int:
+        return self.st.errors
+
+    @property
+    def last_error(self) -> str:
+        return self.st.last_error
+
+    @property
+    def seg(self) -> int:
+        return self.con.seg
+
+    @property
+    def ov(self) -> float:
+        return self.con.ov
+
+    @property
+    def hold(self) -> bool:
+        return self.con.hold
+
+    @property
+    def calc(self) -> Ruckig1:
+        return self.tg.calc  # its solves are counted (`Ruckig1.calls`)
+
+    @property
+    def tb(self) -> PathTable:
+        return self.con.tb
+
+    @property
+    def look_ahead(self) -> int:
+        return self.con.look_ahead
+
+    @property
+    def window_end(self) -> int:
+        return self.con.window_end
+
     # -- control --------------------------------------------------------------------------------
     def set_state(
         self, t: float, s: float, v: float, a: float, seg: int, stopped_at: int | None
     ) -> None:
-        self.t, self.s, self.v, self.a, self.seg = t, s, v, a, seg
+        self.st.t, self.st.s, self.st.v, self.st.a, self.con.seg = t, s, v, a, seg
         self.stopped_at = stopped_at
-        self._beyond_key = None  # the stop sets may have changed
-        self._clear_s = -INF
-        self.parked = stopped_at is None and self.hold and v == 0.0 and a == 0.0
-        self.plan = None
+        self.con.recheck(stops=True)  # the stop sets may have changed
+        self.parked = stopped_at is None and self.con.hold and v == 0.0 and a == 0.0
+        self.st.plan = None
         self._passed = None  # planned for another state: not to be kept (`_replan`)
         self._event = True
 
     def set_inputs(self, ov: float, hold: bool) -> None:
         """Override (fraction) and feed hold. Override 0 acts as a hold; the caps keep the last
         override above 0 (a stopping path does not make every corner a stop)."""
-        hold = hold or ov <= 0.0
-        cap_ov = ov if ov > 0.0 else self.ov
-        if cap_ov != self.ov or hold != self.hold:
-            self.ov, self.hold = cap_ov, hold
-            self.plan = None
+        if self.con.set_inputs(ov, hold):
+            self.st.plan = None
             self._passed = None  # planned under the old inputs: not to be kept
-            # an event's re-plan (`Targets._settle`), also where no `set_state` follows: a
+            # an event's re-plan (`Targets.settle`), also where no `set_state` follows: a
             # nominal run's tracker takes an override change as the path does (`nominal.py`)
             self._event = True
-            self._clear_s = -INF
-            if not hold:
+            if not self.con.hold:
                 self.parked = False
 
     def resume(self, t: float) -> None:
@@ -103,8 +163,8 @@ class Tracker(Brakes):
         if self.stopped_at is None:
             return
         self.stopped_at = None
-        self.t = max(self.t, t)
-        self.plan = None
+        self.st.t = max(self.st.t, t)
+        self.st.plan = None
 
     def plan_leaving(self, dt: float) -> Primed | None:
         """While resting at a stop: the profile the path will leave it with, as `_replan`
@@ -114,69 +174,69 @@ class Tracker(Brakes):
         the choice is not that pure function (a hold, the program's end, a kept profile of the
         boundary just passed, an error on the way): the resume then plans as before."""
         b = self.stopped_at
-        if b is None or b >= self.n or self.hold or self.parked or self._passed is not None:
+        if b is None or b >= self.con.n or self.con.hold or self.parked or self._passed is not None:
             return None
-        errors, last, soft = self.errors, self.last_error, self._soft_from
+        errors, last, soft = self.st.errors, self.st.last_error, self.st.soft_from
         self.stopped_at = None
         self._event = True  # as the resume's re-plan (its `set_state`)
         self._replan(dt)
-        plan = self.plan
+        plan = self.st.plan
         primed = None
-        if plan is not None and self.errors == errors:
-            primed = Primed(plan, self._soft_from, self.last_error)
-        self.stopped_at, self.plan = b, None
-        self.errors, self.last_error, self._soft_from = errors, last, soft
+        if plan is not None and self.st.errors == errors:
+            primed = Primed(plan, self.st.soft_from, self.st.last_error)
+        self.stopped_at, self.st.plan = b, None
+        self.st.errors, self.st.last_error, self.st.soft_from = errors, last, soft
         return primed
 
     def take_leaving(self, primed: Primed) -> None:
         """Leave the stop (`resume` done) with the profile `plan_leaving` made for it."""
         plan = primed.plan
-        plan.t0 = self.t
-        self.plan = plan
+        plan.t0 = self.st.t
+        self.st.plan = plan
         self._passed = None
         self._event = False  # the primed profile is the event's re-plan
-        self._soft_from = primed.soft_from
-        self.last_error = primed.last_error
+        self.st.soft_from = primed.soft_from
+        self.st.last_error = primed.last_error
 
     # -- planning -------------------------------------------------------------------------------
     def _gap_over(
         self, cands: list[tuple[int, float, float, bool]], i: int, top: float, w: int
     ) -> float:
         """How far above its cap candidate i (a run boundary) may be passed where its cap falls
-        in the jerk gap (`Targets._pick_target`): where the cap is its own (not lowered for a
+        in the jerk gap (`Targets.pick_target`): where the cap is its own (not lowered for a
         later one), within its hard cap and what the later candidates allow; else 0."""
         if cands[i][2] > top * (1.0 + CAP_TOL):
             return 0.0
         b, s_c = cands[i][0], cands[i][1]
-        if not self.tb.gate[b]:
-            return 0.0  # a feed drop that stands for the ones after it (`_collect`): no gap rule
-        over = self._hard(b, w)
+        if not self.con.tb.gate[b]:
+            return 0.0  # a feed drop that stands for the ones after it (`collect`): no gap rule
+        over = self.tg.hard(b, w)
         if i + 1 < len(cands):
             nb, ns = cands[i + 1][0], cands[i + 1][1]
-            la, lj = self._limits(nb - 1)
+            la, lj = self.con.limits(nb - 1)
             later = reach_velocity(
-                self._target_cap(cands, i + 1), max(ns - s_c - CHAIN_MARGIN, 0.0), la, lj
+                self.con.target_cap(cands, i + 1), max(ns - s_c - CHAIN_MARGIN, 0.0), la, lj
             )
             over = min(over, later)
         return over
 
     def _replan(self, dt: float, force: int | None = None) -> None:
-        self._clear_s = -INF
+        self.con.recheck()
         event, self._event = self._event, False
         forced = force is not None  # a step would lose `force` (`advance`)
         passed, self._passed = self._passed, None
         # the profile in hand, where only the window moved on (`Targets._undip`)
-        held = self.plan if force is None else None
-        tb = self.tb
-        s, v, a, seg = self.s, self.v, self.a, self.seg
-        a_max, j_max = self._limits(seg)
-        ceiling = 0.0 if self.hold else tb.ceiling(seg if seg < tb.n else tb.n - 1, self.ov)
-        w = self.window_end
+        held = self.st.plan if force is None else None
+        tb = self.con.tb
+        s, v, a, seg = self.st.s, self.st.v, self.st.a, self.con.seg
+        a_max, j_max = self.con.limits(seg)
+        ceiling = 0.0 if self.con.hold else tb.ceiling(seg if seg < tb.n else tb.n - 1, self.con.ov)
+        w = self.con.window_end
         v_p = projected_velocity(v, a, j_max)
         best: tuple[int, float, float, bool] | None = None
         best_slack = INF
-        reach = INF if force is not None else self._horizon(v, a, a_max, j_max, dt)
-        cands = self._collect(s, seg, reach, keep=-1 if force is None else force)
+        reach = INF if force is not None else self.con.horizon(v, a, a_max, j_max, dt)
+        cands = self.con.collect(s, seg, reach, keep=-1 if force is None else force)
         if force is not None and all(c[0] != force for c in cands):
             force = None  # not a constraint from here: the most binding one
         best_i = -1
@@ -196,14 +256,14 @@ class Tracker(Brakes):
                 continue
             if not gate and v_p <= cap + V_ROUND and v <= cap + V_ROUND:
                 continue  # cannot bind from here
-            slack = s_c - s - self._need(v, a, cap, gate, a_max, j_max)
+            slack = s_c - s - self.con.need(v, a, cap, gate, a_max, j_max)
             if slack < best_slack:
                 best, best_slack, best_i = c, slack, i
         if best is None:
             self._cruise(top, a_max, j_max, w)
             return
         b, s_c, _, gate = best
-        if self.hold and rests_before(cands, s, v, a, s_c, a_max, j_max):
+        if self.con.hold and rests_before(cands, s, v, a, s_c, a_max, j_max):
             # a feed hold brakes as hard as it may (issue 36, wide seeds 181 and 285): a
             # profile to rest *at* b, time-optimal to b, reached b 5 ms before the plan without
             # the hold that braked to b's cap, and Z, which takes a hold for a later arrival,
@@ -212,14 +272,14 @@ class Tracker(Brakes):
             return
         if (
             force is None
-            and not self.hold
+            and not self.con.hold
             and (
                 v_p > ceiling * (1.0 + CAP_TOL) + V_ROUND
                 or (v > ceiling * (1.0 + CAP_TOL) + V_ROUND and v_p >= ceiling * (1.0 - CAP_TOL))
             )
             and (
-                self._brake_first(cands, ceiling, a_max, j_max, w)
-                or self._brake_down(cands, ceiling, a_max, j_max, w)
+                self.br.brake_first(cands, ceiling, a_max, j_max, w)
+                or self.br.brake_down(cands, ceiling, a_max, j_max, w)
             )
         ):
             # an override drop: brake at once (known deviation 10 of docs/geo-core.md); also
@@ -229,20 +289,21 @@ class Tracker(Brakes):
             # 188), not where v_p is below it (from there a brake to the ceiling with zero
             # acceleration goes below it first and comes back: the target profile stays)
             return
-        cap = self._target_cap(cands, best_i)
+        cap = self.con.target_cap(cands, best_i)
         d = s_c - s
         over = self._gap_over(cands, best_i, min(cap, ceiling), w) if gate else 0.0
-        target = self._pick_target(v, a, v_p, d, cap, ceiling, a_max, j_max, self._hard(b, w), over)
+        hard_b = self.tg.hard(b, w)
+        target = self.tg.pick_target(v, a, v_p, d, cap, ceiling, a_max, j_max, hard_b, over)
         soft_from = b
         shifted = False
-        horizon = max(self._horizon(v, a, a_max, j_max, dt), d)
+        horizon = max(self.con.horizon(v, a, a_max, j_max, dt), d)
         # Zero acceleration at a boundary that does not need it, below a feed cap the path can
         # no longer get down to (an override drop), is at a velocity from which the next
         # candidate may be lost too, although the path could still keep it by braking through
         # this one (a feed drop 5 mm before a corner: stress seed 1777, lifting). Then the path
         # aims at the next candidate, passing this one as it brakes (only its hard cap kept).
         first = cands[best_i]  # the candidate the shift, if any, passes first
-        looked = list(cands)  # every candidate the shift looks at (`Brakes._brake_into`)
+        looked = list(cands)  # every candidate the shift looks at (`Brakes.brake_into`)
         while not gate:
             own = cands[best_i][2]
             hard = min(tb.point_cap[b], tb.cap[b])
@@ -252,22 +313,22 @@ class Tracker(Brakes):
             # ones after it leave less than the path can get down to (a stop 0.8 mm after it)
             if (
                 own >= hard
-                or self._need(v, a, cap, True, a_max, j_max) <= d + SLACK_TOL
-                or self._need(v, a, hard, False, a_max, j_max) > max(d - SLACK_MARGIN, 0.0)
+                or self.con.need(v, a, cap, True, a_max, j_max) <= d + SLACK_TOL
+                or self.con.need(v, a, hard, False, a_max, j_max) > max(d - SLACK_MARGIN, 0.0)
             ):
                 break  # its target is reachable, or its hard cap binds (kept as it is)
             # the constraints after b as a list of their own: one that the list left out for
             # a cap before b may bind once b is passed above its cap (its first is the next
             # constraint; within the braking horizon, also for a forced re-plan)
-            tail = self._collect(s, seg, horizon, first=b + 1)
+            tail = self.con.collect(s, seg, horizon, first=b + 1)
             if not tail:
                 break
             nb, ns, _, ngate = tail[0]
-            ncap = self._target_cap(tail, 0)
+            ncap = self.con.target_cap(tail, 0)
             e = reach_velocity(ncap, max(ns - s_c - CHAIN_MARGIN, 0.0), a_max, j_max)
             if (
-                self._need(v, a, e, False, a_max, j_max) <= d + SLACK_TOL
-                and self._need(v, a, hard, True, a_max, j_max) <= d + SLACK_TOL
+                self.con.need(v, a, e, False, a_max, j_max) <= d + SLACK_TOL
+                and self.con.need(v, a, hard, True, a_max, j_max) <= d + SLACK_TOL
             ):
                 # zero acceleration at b, at most e there, loses nothing after it (where the
                 # path can have zero acceleration at b at all: an override drop to 40 % at
@@ -279,18 +340,18 @@ class Tracker(Brakes):
             looked += tail
             b, s_c, gate, cap = nb, ns, ngate, ncap
             d = s_c - s
-            target = self._pick_target(v, a, v_p, d, cap, ceiling, a_max, j_max,
-                                       self._hard(b, w))  # fmt: skip
+            target = self.tg.pick_target(v, a, v_p, d, cap, ceiling, a_max, j_max,
+                                       self.tg.hard(b, w))  # fmt: skip
             shifted = True
         below = ceiling * (1.0 + CAP_TOL) + V_ROUND >= v_p  # not after an override drop
         top_b = min(cap, ceiling)
         if (
             not shifted
             and not gate
-            and not self.hold
+            and not self.con.hold
             and (
                 target > cands[best_i][2] * (1.0 + CAP_TOL) + V_ROUND
-                # after an input change, the cap in the jerk gap (`_pick_target`) and the
+                # after an input change, the cap in the jerk gap (`pick_target`) and the
                 # nearest velocity below it near rest: 1.25 mm/s for a cap of 8.44 after an
                 # override drop to 10 % at 117 mm/s 2 mm before it, the path went down to
                 # 1.06 mm/s (feeds seed 576); the brake at once passes it above, braking from
@@ -300,12 +361,12 @@ class Tracker(Brakes):
             and self._lost_cap(cands, best_i, below, event, a_max, j_max, w)
         ):
             return
-        self._soft_from = soft_from
+        self.st.soft_from = soft_from
         kept = passed
         if (
             kept is not None
             and kept.goal == b
-            and kept.t0 <= self.t
+            and kept.t0 <= self.st.t
             and abs(kept.v_end - top_b) <= CAP_TOL * top_b
             and abs(target - top_b) > CAP_TOL * top_b
         ):
@@ -313,12 +374,12 @@ class Tracker(Brakes):
             # its cap, and nothing from here does (a new one from its last µm before the brake
             # can find the exact brake a few 10 nm too long): it keeps b
             kept.window = w
-            self.plan = kept
+            self.st.plan = kept
             return
         # above the ceiling (the override just dropped, or a hold): no acceleration, but the
         # brake toward the target may start from the current velocity
         # (a positive acceleration still lifts it to v_p while it is ramped down)
-        if self.hold or v > ceiling:
+        if self.con.hold or v > ceiling:
             v_max = max(ceiling, target, v, v_p, 1e-12)
         else:
             # v_p too: a positive acceleration takes the path there whatever it plans (a cruise
@@ -330,22 +391,24 @@ class Tracker(Brakes):
         if skip >= 0:  # nor beyond the forced one's cap
             target = min(target, top)
             v_max = max(min(v_max, top), target, v, v_p)
-        if not (
-            not self.hold
+        braked = (
+            not self.con.hold
             and skip < 0
             and v_p > ceiling * (1.0 + CAP_TOL) + V_ROUND
-            and self._brake_into(
+            and self.br.brake_into(
                 looked, v_p, s_c, target, min(ceiling, v_max), v_max, a_max, j_max, b, w
             )  # above a lowered ceiling: brake at once (deviation 10 of docs/geo-core.md)
-        ):
-            if not self._brake_tail(
-                looked, v_p, s_c, target, ceiling, v_max, a_max, j_max, b, w, forced
-            ):  # above the ceiling, below it once the acceleration is ramped out
-                self._settle(s, v, a, v_p, s_c, target, cap, v_max, a_max, j_max, b, w,
-                             self._hard(b, w), passed, held, event, ceiling)  # fmt: skip
-            if b == w and target <= 0.0 and best_i + 1 < len(cands):
+        ) or self.br.brake_tail(
+            looked, v_p, s_c, target, ceiling, v_max, a_max, j_max, b, w, forced
+        )  # above the ceiling, below it once the acceleration is ramped out
+        if not braked:
+            self.tg.settle(s, v, a, v_p, s_c, target, cap, v_max, a_max, j_max, b, w,
+                           self.tg.hard(b, w), passed, held, event, ceiling)  # fmt: skip
+            if b == w and target <= 0.0 and best_i + 1 < len(cands) and v <= ceiling:
+                # (not after a brake, nor above the ceiling: its v_max there is v, and the
+                # profile to the floor could hold it, a cold review found)
                 self._keep_floor(cands[best_i + 1], v_max, a_max, j_max, w)
-        plan = self.plan
+        plan = self.st.plan
         if plan is None or not shifted or plan.goal != b:
             return
         # the first candidate before b the shift's profile passes above its cap: `first`, or
@@ -353,25 +416,25 @@ class Tracker(Brakes):
         # neither the shift nor the steps, passed at 24.6 mm/s for 24.2: feeds seed 232)
         between = sorted(
             (c for c in looked if first[1] < c[1] < s_c and not c[3]
-             and self._need(v, a, c[2], False, a_max, j_max) <= c[1] - s + SLACK_TOL),
+             and self.con.need(v, a, c[2], False, a_max, j_max) <= c[1] - s + SLACK_TOL),
             key=lambda c: c[1],
         )  # fmt: skip
-        j = self._passed_above(plan, [first, *between], 1 + len(between))
-        if j < 0 and self._rises_above(plan, first):
+        j = self.tg.passed_above(plan, [first, *between], 1 + len(between))
+        if j < 0 and self.tg.rises_above(plan, first):
             j = 0
         if j > 0:
             first = between[j - 1]
-        in_reach = self._need(v, a, first[2], False, a_max, j_max) <= first[1] - s + SLACK_TOL
+        in_reach = self.con.need(v, a, first[2], False, a_max, j_max) <= first[1] - s + SLACK_TOL
         if (
             j < 0
-            or self._keep_below(passed, first, b, w)
-            or self._keep_below(held, first, b, w, target)
+            or self.br.keep_below(passed, first, b, w)
+            or self.br.keep_below(held, first, b, w, target)
         ):
             return
         # the shift's profile passes `first` above its cap
         if in_reach and (
-            self._brake_through([first, (b, s_c, cap, gate)], 1, target, a_max, j_max, w)
-            or self._brake_under(looked, first, v_p, s_c, target, v_max, a_max, j_max, b, w)
+            self.br.brake_through([first, (b, s_c, cap, gate)], 1, target, a_max, j_max, w)
+            or self.br.brake_under(looked, first, v_p, s_c, target, v_max, a_max, j_max, b, w)
             or (b != w and not gate)
         ):
             # a feed cap the path could still get below braking: a brake at once instead
@@ -381,7 +444,7 @@ class Tracker(Brakes):
             # boundary or a stop just after it: the dip follows (feeds seed 177, a corner of
             # 4.5 mm/s 1 mm after a drop to F6000, passed at 106.7 mm/s)
             return
-        if below and self._dip_through(looked, first, a_max, j_max, w):
+        if below and self.br.dip_through(looked, first, a_max, j_max, w):
             # below it braking through (it came into view too late, or the shift's goal is
             # the window's end, toward which a cruise is no plan): known deviations 13 and 14
             # (0.1 mm blocks, look-ahead 10, F8110 -> F1740: the profile to rest at the
@@ -391,18 +454,18 @@ class Tracker(Brakes):
         if below and not in_reach:
             # `first` is lost, the blocks after it are not: a brake under their caps, the
             # caps after it the path can still get below read again (the lists leave them
-            # out as kept by `first`, `_collect`): an override drop to 30 % lowered F6000
+            # out as kept by `first`, `collect`): an override drop to 30 % lowered F6000
             # blocks to 30 mm/s, their first boundary out of reach, and the shift's profile
             # passed the second, 0.5 mm on, at 75.9 mm/s (feeds seed 192)
-            after = self._collect(s, seg, s_c - s, first=first[0] + 1)
-            self._brake_under(looked + after, first, v_p, s_c, target, v_max, a_max, j_max, b, w)
+            after = self.con.collect(s, seg, s_c - s, first=first[0] + 1)
+            self.br.brake_under(looked + after, first, v_p, s_c, target, v_max, a_max, j_max, b, w)
 
     def _keep_floor(
         self, floor: tuple[int, float, float, bool], v_max: float, a_max: float, j_max: float,
         w: int,
     ) -> None:  # fmt: skip
         """The plan just made aims at rest at the window's end w; `floor` is w's second
-        candidate (`Constraints._window_floor`). Where that plan can no longer get down to the
+        candidate (`Constraints.window_floor`). Where that plan can no longer get down to the
         floor with zero acceleration at w once the window moves on (the path at the boundary
         after which w is no longer its end), and the profile to the floor keeps rest at w
         reachable up to there, the profile to the floor is taken. The time-optimal profile
@@ -411,30 +474,31 @@ class Tracker(Brakes):
         58 mm/s, and the run boundary at w, its cap 30 mm/s, was passed at 36.9 once the
         window moved on (a review's program; the forced re-plans chose rest, the lower slack,
         four times a step)."""
-        rest = self.plan
-        m = w - self.look_ahead + 1  # the window moves on where the path reaches m
-        if rest is None or rest.goal != w or m <= self.seg or m >= w:
+        rest = self.st.plan
+        m = w - self.con.look_ahead + 1  # the window moves on where the path reaches m
+        if rest is None or rest.goal != w or m <= self.con.seg or m >= w:
             return
         s_w, e = floor[1], floor[2]
         if self._keeps_at(rest, m, s_w, e):
             return
-        if not self._try_target(
-            self.s, self.v, self.a, s_w, e, max(v_max, e), a_max, j_max, w, w
-        ) or not self._keeps_at(self.plan, m, s_w, 0.0):
-            self.plan = rest
+        last = self.st.last_error
+        if not self.tg.try_target(
+            self.st.s, self.st.v, self.st.a, s_w, e, max(v_max, e), a_max, j_max, w, w
+        ) or not self._keeps_at(self.st.plan, m, s_w, 0.0):
+            self.st.plan, self.st.last_error = rest, last  # (a refusal here is no error)
 
     def _keeps_at(self, plan: Plan | None, m: int, s_w: float, e: float) -> bool:
         """`plan` reaches boundary m with room left to get down to e at s_w with zero
         acceleration there."""
         if plan is None:
             return False
-        s_m = self.tb.s[m]
+        s_m = self.con.tb.s[m]
         t_m = plan.time_at(s_m, INF)
         if t_m == INF:
             return False
         _, v_m, a_m = plan.at(t_m)
-        a_max, j_max = self._limits(m)
-        return s_w - s_m - self._need(v_m, a_m, e, True, a_max, j_max) >= SLACK_MARGIN
+        a_max, j_max = self.con.limits(m)
+        return s_w - s_m - self.con.need(v_m, a_m, e, True, a_max, j_max) >= SLACK_MARGIN
 
     def _lost_cap(
         self, cands: list[tuple[int, float, float, bool]], i: int, below: bool, event: bool,
@@ -442,63 +506,63 @@ class Tracker(Brakes):
     ) -> bool:  # fmt: skip
         """Candidate i, a feed cap, is out of reach and nothing after it is in view to shift to
         (its block goes on past the horizon): known deviation 15 of docs/geo-core.md. Where it
-        came into view too late, below it braking through (`_dip_through`, deviation 13), else
-        a brake at once to it (`_brake_lost`); where an input change put it out of reach, the
+        came into view too late, below it braking through (`dip_through`, deviation 13), else
+        a brake at once to it (`brake_lost`); where an input change put it out of reach, the
         brake at once first, as the CNC brakes after an override drop (a dip there went to
         2.03 mm/s in a block of 3 after an override drop to 60 % 12 µm before it, a review's
         program; the check excuses passing it above as far as the brake from the change could
         not avoid it)."""
-        if event and self._brake_lost(cands, i, a_max, j_max, w):
+        if event and self.br.brake_lost(cands, i, a_max, j_max, w):
             return True
-        if below and self._dip_through(cands, cands[i], a_max, j_max, w):
+        if below and self.br.dip_through(cands, cands[i], a_max, j_max, w):
             return True
-        return not event and self._brake_lost(cands, i, a_max, j_max, w)
+        return not event and self.br.brake_lost(cands, i, a_max, j_max, w)
 
     def _cruise(self, ceiling: float, a_max: float, j_max: float, w: int) -> None:
         try:
-            traj = self.calc.velocity(self.s, self.v, self.a, ceiling, a_max, j_max)
+            traj = self.tg.calc.velocity(self.st.s, self.st.v, self.st.a, ceiling, a_max, j_max)
         except ProfileError as exc:
-            self._count(f"cruise profile refused: {exc}")
-            self._brake(a_max, j_max, w)
+            self.tg.count(f"cruise profile refused: {exc}")
+            self.tg.brake(a_max, j_max, w)
             return
-        self.plan = Plan(traj, self.t, CRUISE, w, None, ceiling)
+        self.st.plan = Plan(traj, self.st.t, CRUISE, w, None, ceiling)
 
     # -- motion ---------------------------------------------------------------------------------
     def advance(self, t_new: float, dt: float) -> list[Crossing]:
         """Move to time t_new; the boundaries reached on the way that have actions, or where the
         path stops, with their exact times."""
         out: list[Crossing] = []
-        tb = self.tb
-        n = self.n
+        tb = self.con.tb
+        n = self.con.n
         forced = 0
         for _ in range(100_000):  # bounded: each pass ends the step, or at a boundary / plan end
-            if self.stopped_at is not None or self.t >= t_new:
+            if self.stopped_at is not None or self.st.t >= t_new:
                 return out
             if self.parked:
-                self.t = t_new  # holding at rest: time goes on
+                self.st.t = t_new  # holding at rest: time goes on
                 return out
-            if self.hold and self.v == 0.0 and self.a == 0.0:
+            if self.con.hold and self.st.v == 0.0 and self.st.a == 0.0:
                 self.parked = True
-                self.t = t_new
+                self.st.t = t_new
                 return out
-            plan = self.plan
-            if plan is None or (plan.goal >= 0 and plan.window != self.window_end):
+            plan = self.st.plan
+            if plan is None or (plan.goal >= 0 and plan.window != self.con.window_end):
                 self._replan(dt)
-                plan = self.plan
+                plan = self.st.plan
                 assert plan is not None
             t_end = t_new
             if plan.goal != CRUISE and plan.t0 + plan.dur < t_end:
                 t_end = plan.t0 + plan.dur  # the goal is reached inside this step
             s1, v1, a1 = plan.at(t_end)
-            w = self.window_end
+            w = self.con.window_end
             cut = -1
-            b = self.seg + 1
+            b = self.con.seg + 1
             while b <= n and s1 >= tb.s[b] - EPS_S:
                 if b == plan.goal:  # reached when its profile ends, exactly in its goal state
                     if plan.t0 + plan.dur <= t_end:
                         cut = b
                     break
-                if tb.replan[b] or b == w or b in self.lift_stops:
+                if tb.replan[b] or b == w or b in self.con.lift_stops:
                     cut = b
                     break
                 b += 1
@@ -507,7 +571,7 @@ class Tracker(Brakes):
                 s1, v1, a1 = tb.s[cut], plan.v_end, 0.0
                 seg1 = cut
             elif cut >= 0:
-                t_end = min(max(plan.time_at(tb.s[cut], t_end), self.t), t_end)
+                t_end = min(max(plan.time_at(tb.s[cut], t_end), self.st.t), t_end)
                 _, v1, a1 = plan.at(t_end)
                 s1 = tb.s[cut]
                 seg1 = cut
@@ -518,7 +582,7 @@ class Tracker(Brakes):
             v1 = max(v1, 0.0)
             if forced < 4:
                 violated = None
-                # the soft range as `_violated` reads it: up to the boundary the plan keeps
+                # the soft range as `violated` reads it: up to the boundary the plan keeps
                 # (for a brake at once its `serves`: the caps a brake past lost caps passes,
                 # read as hard at the cut, forced re-plans toward them, each refused, a
                 # last-resort brake each: override 100 → 60 % at 172 mm/s 0.9 mm before a
@@ -526,48 +590,49 @@ class Tracker(Brakes):
                 if (
                     cut >= 0
                     and cut != plan.serves
-                    and not self._passable(cut, v1, a1, w, plan.soft_from <= cut < plan.keeps)
+                    and not self.con.passable(cut, v1, a1, w, plan.soft_from <= cut < plan.keeps)
                 ):
                     violated = cut  # the step ends on a constraint it does not keep
                 if violated is None:
-                    violated = self._violated(s1, v1, a1, seg1, dt, plan.serves, plan.soft_from)
+                    violated = self.con.violated(s1, v1, a1, seg1, dt, plan.serves, plan.soft_from)
                 if violated is None and plan.goal >= 0:
                     violated = self._window_end_lost(plan, s1, v1, a1, seg1)
                 if violated is not None:
                     forced += 1
                     # the window end seen from the end state lies beyond the one seen now
-                    self._replan(dt, force=min(violated, self.window_end))
+                    self._replan(dt, force=min(violated, self.con.window_end))
                     continue
             self._commit(t_end, s1, v1, a1, seg1, cut, plan, out)
             forced = 0
             if cut >= 0:
                 self._arrive(cut, out)
-            elif plan.goal != CRUISE and self.t >= plan.t0 + plan.dur:
-                self.plan = None  # a goal reached between boundaries: plan the next one
-        self._count("advance did not converge")
+            elif plan.goal != CRUISE and self.st.t >= plan.t0 + plan.dur:
+                self.st.plan = None  # a goal reached between boundaries: plan the next one
+        self.tg.count("advance did not converge")
         return out
 
     def _window_end_lost(
         self, plan: Plan, s1: float, v1: float, a1: float, seg1: int
     ) -> int | None:
         """A profile to the window's end keeps the velocity it targets there (rest, or the
-        end's floor, `Constraints._window_floor`); the other one is kept while it can be: the
+        end's floor, `Constraints.window_floor`); the other one is kept while it can be: the
         window's end if the step would lose it, having kept it at the step's start (a forced
         re-plan then aims at the lower of the two slacks; one lost before the step is not
         asked for again, so the two do not take turns)."""
         g = plan.goal
-        if g != seg1 + self.look_ahead or g >= self.n or self.is_stop(g):
+        if g != seg1 + self.con.look_ahead or g >= self.con.n or self.con.is_stop(g):
             return None
-        floor = self._window_floor(g)
+        floor = self.con.window_floor(g)
         if floor <= 0.0:
             return None
         other = 0.0 if plan.v_end > 0.0 else floor
-        s_g = self.tb.s[g]
-        a_max, j_max = self._limits(self.seg)
-        if s_g - self.s - self._need(self.v, self.a, other, True, a_max, j_max) < SLACK_MARGIN:
+        s_g = self.con.tb.s[g]
+        st = self.st
+        a_max, j_max = self.con.limits(self.con.seg)
+        if s_g - st.s - self.con.need(st.v, st.a, other, True, a_max, j_max) < SLACK_MARGIN:
             return None  # lost before this step
-        a_max, j_max = self._limits(seg1)
-        if s_g - s1 - self._need(v1, a1, other, True, a_max, j_max) < SLACK_MARGIN:
+        a_max, j_max = self.con.limits(seg1)
+        if s_g - s1 - self.con.need(v1, a1, other, True, a_max, j_max) < SLACK_MARGIN:
             return g
         return None
 
@@ -577,67 +642,68 @@ class Tracker(Brakes):
     ) -> None:  # fmt: skip
         """Move the state to (t, s, v, a); report the boundaries with actions passed on the way
         (the boundary the step was cut at is reported by `_arrive`)."""
-        tb = self.tb
-        for b in range(self.seg + 1, seg + 1):
+        tb = self.con.tb
+        for b in range(self.con.seg + 1, seg + 1):
             if b != cut and tb.needs_time[b]:
                 t_b = plan.time_at(tb.s[b], t)
                 _, v_b, a_b = plan.at(t_b)
                 out.append(Crossing(b, t_b, False, max(v_b, 0.0), a_b))
-        self.t, self.s, self.v, self.a = t, s, v, a
-        self.seg = max(self.seg, seg)
+        self.st.t, self.st.s, self.st.v, self.st.a = t, s, v, a
+        self.con.seg = max(self.con.seg, seg)
 
     def _arrive(self, b: int, out: list[Crossing]) -> None:
         """The step ended exactly at boundary b: stop there, or check it and go on."""
-        tb = self.tb
-        t, v, a = self.t, self.v, self.a
-        w = self.window_end
-        plan = self.plan
+        tb = self.con.tb
+        t, v, a = self.st.t, self.st.v, self.st.a
+        w = self.con.window_end
+        plan = self.st.plan
         # a plan that keeps a boundary beyond b (a target, a brake through): kept in case no
-        # new profile from here is accepted (`_replan`, `Targets._settle`'s last resort)
-        # (or a brake at once still braking: `Targets._settle`)
+        # new profile from here is accepted (`_replan`, `Targets.settle`'s last resort)
+        # (or a brake at once still braking: `Targets.settle`)
         self._passed = (
             plan
             if plan is not None
             and (plan.keeps > b or (plan.goal == SETTLE and t < plan.t0 + plan.dur))
             else None
         )
-        self.plan = None
+        self.st.plan = None
         if (
             plan is not None
             and (plan.goal > b or (plan.goal == SETTLE and plan.serves > b))
             and a < 0.0
             and not tb.gate[b]
-            and not self.is_stop(b)
+            and not self.con.is_stop(b)
             and b != w
-            and self._passable(b, v, a, w)
+            and self.con.passable(b, v, a, w)
         ):
             # braking toward a goal beyond a boundary it keeps (a feed change, a higher
             # ceiling): the profile in hand is still the time-optimal one, and a new one from
             # inside its brake, which has no slack left, may find the exact brake a few 10 nm
             # too long and dip below the goal's velocity (ruckig brakes below it and comes
             # back: issue 36, 5 mm/s after a brake from 141 mm/s went down to 3). So is the
-            # brake below a feed cap beyond b (`Brakes._dip_through`): dropped at a higher
+            # brake below a feed cap beyond b (`Brakes.dip_through`): dropped at a higher
             # feed drop before it, the re-plan from inside that brake was refused and the
             # path braked to rest (a review found: F24000 -> F7200 -> F2400 on 0.1 mm blocks)
-            self.plan = plan
-        if self.is_stop(b):
+            self.st.plan = plan
+        if self.con.is_stop(b):
             if v > CAP_TOL:
-                self._count(f"passed the stop at boundary {b} at {v:.6g} m/s")
+                self.tg.count(f"passed the stop at boundary {b} at {v:.6g} m/s")
             else:
-                self.v = self.a = 0.0
-                self.seg = b if b < tb.n else tb.n
+                self.st.v = self.st.a = 0.0
+                self.con.seg = b if b < tb.n else tb.n
                 self.stopped_at = b
                 out.append(Crossing(b, t, True, 0.0, 0.0))
                 return
         if b == w and v <= CAP_TOL:
-            self.v = self.a = v = a = 0.0  # the end of the look-ahead window: it moves on at once
+            # the end of the look-ahead window: it moves on at once
+            self.st.v = self.st.a = v = a = 0.0
         hard = min(tb.point_cap[b], tb.cap[b]) if b < tb.n else 0.0
         if v > hard * (1.0 + CAP_TOL) + 1e-12:
-            self._count(f"boundary {b} reached at {v:.9g} m/s above its cap {hard:.9g}")
+            self.tg.count(f"boundary {b} reached at {v:.9g} m/s above its cap {hard:.9g}")
         if tb.gate[b] and abs(a) > GATE_TOL:
-            self._count(f"run boundary {b} reached with acceleration {a:.3g} m/s²")
+            self.tg.count(f"run boundary {b} reached with acceleration {a:.3g} m/s²")
         elif tb.gate[b]:
-            self.a = a = 0.0
-        self.seg = b if b < tb.n else tb.n
+            self.st.a = a = 0.0
+        self.con.seg = b if b < tb.n else tb.n
         if tb.needs_time[b]:
             out.append(Crossing(b, t, False, v, a))

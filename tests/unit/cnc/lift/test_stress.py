@@ -102,7 +102,7 @@ WIDE_REGRESSIONS = [388, 890, 983, 1113, 1747, 1965]
 # 1.05, 1.28, 6.88, 1.03 × its jerk limit inside a range (since issue 36): the path's target at
 # a kink was the velocity reachable within the distance plus 1 nm, ruckig ended 1 nm past the
 # kink and the tracker set the path back onto it; the 1 nm step, × dz/ds ≈ 39 while the path
-# crawls (path/targets.py `_pick_target`; tests/unit/cnc/path/test_tracker.py)
+# crawls (path/targets.py `pick_target`; tests/unit/cnc/path/test_tracker.py)
 WIDE_LIFTING_REGRESSIONS = [76, 399, 410, 689, 811]
 WIDE_CASES = [(s, LiftMethod.ADVANCED) for s in WIDE_REGRESSIONS + list(range(0, 300, 12))] + [
     (s, LiftMethod.LIFTING) for s in WIDE_LIFTING_REGRESSIONS

@@ -52,7 +52,7 @@ def test_random_lift_runs_rest_only_where_a_rule_says(seed: int) -> None:
 def test_an_override_drop_brakes_at_once() -> None:
     """Wide seed 79: override 150 → 10 % at 150 mm/s. The path held 150 mm/s for 1.4 ms
     (the time-optimal profile toward the next constraint) before it braked: known deviation
-    10 of docs/geo-core.md until `Brakes._brake_first`. The check fails a brake that pauses
+    10 of docs/geo-core.md until `Brakes.brake_first`. The check fails a brake that pauses
     above the new ceiling; the velocity falls in the cycle after the drop."""
     sc = wide_scenario(79)
     task = GeoTask(sc.channel, sc.text)
@@ -373,7 +373,7 @@ def test_a_feed_drop_that_comes_into_view_too_late_is_never_passed_above(
 
 def test_two_feed_drops_in_a_row_seen_too_late_keep_the_path_moving() -> None:
     """F24000, then F7200 for 4 blocks of 0.1 mm, then F2400 (40 mm/s), look-ahead 30: the
-    brake below the second drop (`Brakes._dip_through`) was dropped at the first drop's
+    brake below the second drop (`Brakes.dip_through`) was dropped at the first drop's
     boundary, the re-plan from inside it was refused (a tracker error) and the path braked
     to 0.011 mm/s (a review found). The brake is kept through the first drop."""
     ch = dataclasses.replace(shipped(), look_ahead_blocks=30, cycle_time=1e-3)
@@ -427,9 +427,9 @@ FEED_SEEDS = [157, 192, 394]
 @pytest.mark.parametrize("seed", FEED_SEEDS)
 def test_falling_feeds_keep_their_caps_without_a_last_resort_brake(seed: int) -> None:
     """Short blocks whose feed changes block by block. Seed 157 (falling feeds on 1 mm
-    blocks): from inside a brake through to a later cap (`Brakes._brake_through`), the target
+    blocks): from inside a brake through to a later cap (`Brakes.brake_through`), the target
     profile 1 mm to the next drop was refused and the path braked to 0.04 mm/s; the last
-    resort of `_settle` now keeps the brake through (`Plan.keeps`). No overrun, no tracker
+    resort of `settle` now keeps the brake through (`Plan.keeps`). No overrun, no tracker
     error, and on 394 no slowdown the rules do not explain."""
     _, hard, slow, errors = check(feed_scenario(seed))
     assert hard == [] and errors == 0, hard
@@ -444,9 +444,9 @@ def test_falling_feeds_keep_their_caps_without_a_last_resort_brake(seed: int) ->
 # re-plans took turns (223), a cap between the shift's first and its goal was read by neither
 # (232); 971 guards the brake at once that keeps that cap: a re-plan from inside it at a feed
 # change 0.2 mm before the next boundary was refused, and the last-resort brake went to 32
-# mm/s for 43.5 (`Targets._settle` keeps the brake now); on db64a13 940's shift passed an
+# mm/s for 43.5 (`Targets.settle` keeps the brake now); on db64a13 940's shift passed an
 # F5548 boundary at its cap still braking and sped up again to 2.5 µm/s above it in the
-# block (`Targets._rises_above`)
+# block (`Targets.rises_above`)
 SHIFT_SEEDS = [4, 20, 177, 223, 232, 238, 299, 940, 971]
 
 
@@ -455,7 +455,7 @@ def test_a_feed_drop_before_a_stop_is_passed_below_it(seed: int) -> None:
     """Seed 4: 0.5 mm blocks at F45000 for 5 mm, then F6000 for 1 mm and an M00, look-ahead
     30, 2 ms. The drop to F6000 with zero acceleration there leaves no room to stop at the
     M00; once the M00 came into view the profile toward it, time-optimal, passed the F6000
-    boundary at 108.7 mm/s. A brake under the cap (`Brakes._brake_under`: ruckig's v_max at
+    boundary at 108.7 mm/s. A brake under the cap (`Brakes.brake_under`: ruckig's v_max at
     it, else a brake at once to it) now passes it below, and the profile in hand is kept
     while only the window moves on. No overrun, no tracker error."""
     _, hard, _, errors = check(feed_scenario(seed))
@@ -477,7 +477,7 @@ def test_a_feed_cap_lost_to_an_override_drop_is_braked_to_at_once(seed: int) -> 
     its boundary out of reach, the path went to the nearest velocity above the cap with zero
     acceleration there (50 mm/s) and began the brake to 30 only at it, and passed the next
     boundary, which it could have kept from the drop on, at 35.3 mm/s. It brakes at once now
-    (`Brakes._brake_lost`); the boundary it could no longer keep is passed above it as the
+    (`Brakes.brake_lost`); the boundary it could no longer keep is passed above it as the
     check allows (the brake from the drop on), no other, and no tracker error."""
     _, hard, _, errors = check(feed_scenario(seed))
     assert hard == [] and errors == 0, hard
@@ -504,7 +504,7 @@ def test_a_brake_at_once_keeps_a_cap_its_own_profile_passes_below(seed: int) -> 
 # runs of tests/support/feed_cases.py and of a cold review's generator with override drops
 # that passed caps above them on f089ba8 beyond what the brake from the drop could not avoid:
 # the brake at once refused for a cap out of reach (60, 626, 644, 798, 907: now the brake
-# past it, `Brakes._brake_down`), the jerk gap's lower end taken near rest (576)
+# past it, `Brakes.brake_down`), the jerk gap's lower end taken near rest (576)
 DROP_SEEDS = [60, 576, 626, 644, 798, 907]
 
 
@@ -552,7 +552,7 @@ def test_a_lost_cap_costs_no_dip_and_no_error(
 ) -> None:
     """Programs of the tenth round's cold review (0.5 mm blocks). An override drop to 60 %
     12 µm before an F300 block (3 mm/s now): in a first version of this round's fallbacks
-    the dip below its cap (`Brakes._dip_through`) went to 2.03 mm/s in it (67ef359 has no
+    the dip below its cap (`Brakes.dip_through`) went to 2.03 mm/s in it (67ef359 has no
     dip there); after an input change the brake at once comes first now
     (`Tracker._lost_cap`) and the block is entered braking, as the check allows. A feed hold
     that came inside a brake at once to a feed cap: the target profile 0.18 mm on was
@@ -589,7 +589,7 @@ def test_a_brake_tail_and_the_window_end_keep_their_caps(
     drop, held that velocity and passed the next boundary 0.02 mm/s above its cap. And 1.5 mm
     blocks of rising feeds, override 10 → 80 % at 70.1 mm/s and −2.0 m/s²: the target profile
     with v_max at v sped up again to 69.9 mm/s in a block of 69.65 after the ramp-out
-    (`Brakes._brake_tail` for both)."""
+    (`Brakes.brake_tail` for both)."""
     ch = dataclasses.replace(shipped(), look_ahead_blocks=look_ahead, cycle_time=2e-3)
     text = (PROGRAMS / f"{name}.nc").read_text()
     sc = Scenario(0, ch, text, Schedule(tuple(parse_override_spec(override)), ()))

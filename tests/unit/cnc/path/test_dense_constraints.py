@@ -1,7 +1,7 @@
 """Issue 36, known deviation 1 of docs/geo-core.md: more constraints within the brake than the
 tracker considers at once. The 24th counted as a stop, so 0.2 mm blocks with a feed drop at
 every second one ran at 314 mm/s where the feed allows 500. A feed drop whose cap is at least
-that of one before it cannot bind, and is no longer counted (`Constraints._collect`); after an
+that of one before it cannot bind, and is no longer counted (`Constraints.collect`); after an
 override drop, where the path passes feed caps above them, the tracker reads the list that
 begins after each one it passes. The chain of run boundaries behind the first one is followed
 farther where its 24th link lowers the cap (`Constraints._beyond`). Each run goes through the
@@ -94,7 +94,7 @@ def test_an_override_drop_on_dense_feed_drops_keeps_every_stop_and_limit(
     """The 0.1 mm programs held ~360 mm/s for 22 ms after the drop to 40 % (ceilings 160–400
     mm/s) before they braked, and passed 60 boundaries above feed caps they could have got
     down to (known deviation 10 of docs/geo-core.md). They now brake at once
-    (`Brakes._brake_first`, `_brake_into`); what remains is the end of that brake: in the
+    (`Brakes.brake_first`, `brake_into`); what remains is the end of that brake: in the
     blocks of 400 mm/s between those of 160 the path is below its ceiling and the re-plans
     there ease the brake, so up to four boundaries whose 160 mm/s cap the brake from the drop
     reaches with 0.2 mm to spare are passed up to 1.8 % above it."""
@@ -125,7 +125,7 @@ def test_a_polyline_s_rounding_kinks_beyond_the_24th_are_not_a_stop(seed: int) -
 
 
 def _dominated(every: list[tuple[int, float, float, bool]], keep: int) -> list[int]:
-    """The boundaries `_collect` keeps of a list with none left out: a candidate without zero
+    """The boundaries `collect` keeps of a list with none left out: a candidate without zero
     acceleration only where its cap is below every one kept before it (or it is `keep`),
     the 24th counting as a stop."""
     kept: list[int] = []
@@ -142,7 +142,7 @@ def _dominated(every: list[tuple[int, float, float, bool]], keep: int) -> list[i
 
 
 def test_the_leaps_over_caps_that_cannot_bind_find_every_one_that_can() -> None:
-    """`_collect` leaps along the chains of lower feeds and lower hard caps (`PathTable`); it
+    """`collect` leaps along the chains of lower feeds and lower hard caps (`PathTable`); it
     keeps the same constraints as a scan of all of them would, with lift stops, a forced one
     and overrides in play."""
     rng = random.Random(361)
@@ -171,10 +171,10 @@ def test_the_leaps_over_caps_that_cannot_bind_find_every_one_that_can() -> None:
             for _ in range(20):
                 seg = rng.randrange(0, tb.n - 1)
                 tr.set_state(0.0, tb.s[seg], 0.3, 0.0, seg, None)
-                every = tr._collect(tb.s[seg], seg, 1.0, every=True)
+                every = tr.con.collect(tb.s[seg], seg, 1.0, every=True)
                 # a forced re-plan's constraint is one of them
                 keep = rng.choice([-1, *(c[0] for c in every if not c[3])])
-                got = [c[0] for c in tr._collect(tb.s[seg], seg, 1.0, keep=keep)]
+                got = [c[0] for c in tr.con.collect(tb.s[seg], seg, 1.0, keep=keep)]
                 want = _dominated(every, keep)
                 assert got[: len(want)] == want, (seg, keep, ov)
                 compared += 1
@@ -226,7 +226,7 @@ def test_a_feed_falling_block_by_block_brakes_through_more_caps_than_a_step_plan
     step_mm: float, f0: int, ratio: float, blocks: int, over: float
 ) -> None:
     """More than MAX_CANDIDATES falling feeds within one brake: the last candidate stands for
-    those after it with zero acceleration there (`Constraints._collect`), not as a stop. The
+    those after it with zero acceleration there (`Constraints.collect`), not as a stop. The
     program time against the lower bound of tests/support/reference_bound.py (no motion within
     the rules is faster): 22 and 28 % above it with the stop, 5.0 and 10.9 % now (9.1 % on the
     second with no limit on candidates: the remainder is the target choice, known deviation 8
@@ -245,16 +245,16 @@ def test_a_feed_falling_block_by_block_brakes_through_more_caps_than_a_step_plan
 
 def test_the_candidate_that_stands_for_the_rest_passes_no_feed_cap_above() -> None:
     """The 24th of more falling caps within one brake is listed with zero acceleration there,
-    as a run boundary is (`Constraints._collect`), but it is a feed drop: the jerk gap's rule
+    as a run boundary is (`Constraints.collect`), but it is a feed drop: the jerk gap's rule
     that lets a run boundary's own cap be passed above after an override drop
     (`Tracker._gap_over`) does not apply to it (a feed cap passed above is an overrun)."""
     task = GeoTask(shipped(), falling(0.2, 60000, 0.96, 60))
     tb = task.prog.table
     tr = Tracker(tb, 200)
-    tr.ov = 0.4
+    tr.con.ov = 0.4
     k = max(range(tb.n), key=lambda i: tb.s[i + 1] - tb.s[i])  # the 20 mm line
     v = tb.ceiling(k, 1.0)  # its feed before the drop to 40 %
-    cands = tr._collect(tb.s[k + 1] - 1e-3, k, brake_reach(v, 0.0, 10.0, 500.0) + 0.05)
+    cands = tr.con.collect(tb.s[k + 1] - 1e-3, k, brake_reach(v, 0.0, 10.0, 500.0) + 0.05)
     assert len(cands) == MAX_CANDIDATES
     last, s_last, cap, gate = cands[-1]
     assert gate and not tb.gate[last]  # listed as a run boundary, a feed drop in the table

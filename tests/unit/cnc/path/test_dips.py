@@ -60,7 +60,7 @@ def test_an_event_planned_while_decelerating_ramps_the_deceleration_out_first(se
     (expected 42.6 and 98.0 mm/s); it now starts where the deceleration is ramped out.
     (Seed 138 also held 81.96 and 65.43 mm/s above its new ceilings of 75 and 50 for ~2.5 ms
     after 200 → 150 % and 150 → 100 % before it braked on: known deviation 10 of
-    docs/geo-core.md, fixed by `Brakes._brake_first`.)"""
+    docs/geo-core.md, fixed by `Brakes.brake_first`.)"""
     sc = wide_scenario(seed)
     _, hard, slow, errors = check(sc)
     assert hard == [] and errors == 0, (hard, describe(sc))
@@ -104,8 +104,8 @@ def test_a_brake_from_a_cruise_at_the_ceiling_does_not_dip_below_its_target() ->
     a_max, j_max = 9.572885628540265, 478.64428142701325
     v_p = projected_velocity(v, a, j_max)
     assert v_p == v_max  # the degenerate case: the acceleration ramps out onto v_max
-    tracker.t = 11.4945
-    tracker._settle(s, v, a, v_p, s_c, target, target, v_max, a_max, j_max, 665, 785, target,
+    tracker.st.t = 11.4945
+    tracker.tg.settle(s, v, a, v_p, s_c, target, target, v_max, a_max, j_max, 665, 785, target,
                     None, None, False)  # fmt: skip
     plan = tracker.plan
     assert plan is not None and plan.goal == 665 and plan.v_end == target
@@ -146,14 +146,14 @@ def test_an_event_inside_the_exact_brake_plans_that_brake(case: str) -> None:
     sc = make(seed)
     task = GeoTask(sc.channel, sc.text)
     tracker = Tracker(task.interp.table, task.interp.prod.look_ahead)
-    tracker.t = t
+    tracker.st.t = t
     v_p = projected_velocity(v, a, j_max)
     args = (s, v, a, v_p, s_c, target, target, v_max, a_max, j_max, b, w, target, None, None)
-    tracker._settle(*args, False)  # not an event: ruckig's profile, the dip (no brake in hand)
+    tracker.tg.settle(*args, False)  # not an event: ruckig's profile, the dip (no brake in hand)
     plan = tracker.plan
     assert plan is not None and plan.dur * 1e3 == pytest.approx(dip, abs=1e-3)
     assert lowest_velocity(Phases(plan.traj)) < 0.7 * target
-    tracker._settle(*args, True)
+    tracker.tg.settle(*args, True)
     plan = tracker.plan
     assert plan is not None and plan.goal == b and plan.v_end == target and plan.p_end == s_c
     assert plan.dur * 1e3 == pytest.approx(brake, abs=1e-3)
@@ -171,7 +171,7 @@ def test_the_lowest_velocity_of_a_profile_that_brakes_into_its_limits_first() ->
     """From 150 mm/s and −1 m/s² with v_max 100 mm/s, ruckig brakes into its limits first with
     a brake of one piece; the second piece's velocity, never written, reads 0, and the
     lowest velocity read 0 where the profile never goes below its target of 10 mm/s (a review
-    found: 242 of 266 profiles of `Brakes._brake_into` refused as dips that were none)."""
+    found: 242 of 266 profiles of `Brakes.brake_into` refused as dips that were none)."""
     traj = Ruckig1().position(0.0, 0.15, -1.0, 0.01, 0.01, 0.1, 8.0, 400.0)
     ph = Phases(traj)
     assert ph.b_dur > 0.0 and ph.b_t0 == ph.b_dur  # a brake of one piece

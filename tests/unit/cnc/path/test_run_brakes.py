@@ -40,7 +40,7 @@ def test_cam_programs_pass_a_runs_feed_drops_in_one_brake(seed: int) -> None:
     mm/s) and 298 (6 such findings): no slowdown the rules do not explain, nothing else
     either. CAM seed 0: with the caps composed, the shift of `Tracker._replan` gave up
     boundary 52's feed cap, in reach braking, and passed it at 34.19 for 33.09 mm/s (an
-    overrun; known deviation 12): a brake at once instead (`Brakes._brake_through`). CAM
+    overrun; known deviation 12): a brake at once instead (`Brakes.brake_through`). CAM
     seed 440: that brake, taken wherever an aimed profile failed, held boundary 23 at 317.9
     for 352.2 mm/s; it is taken only where the shift's profile passes the cap above."""
     cycles, hard, slow, errors = check(cam_scenario(seed))
@@ -102,7 +102,7 @@ FEED_DROP_BEFORE_A_SHARP_CORNER = "\n".join(
 def test_the_brake_at_once_never_rests_or_crawls_where_no_rule_says(
     text: str, look_ahead: int, cycle: float
 ) -> None:
-    """A cold review of `Brakes._brake_through` as first merged: braking at once toward rest
+    """A cold review of `Brakes.brake_through` as first merged: braking at once toward rest
     (an M00 1 mm after a feed drop, or the window end's rest at look-ahead 3) planned a
     cruise at 0 that nothing re-planned, and the path stood still for good; toward a corner
     of 0.43 mm/s 4.8 mm early, it crawled there (the program 12 % longer). Each ends, with no
