@@ -55,6 +55,22 @@ from liftd.cnc.ruckig1 import ProfileError, Ruckig1
 GAP_FLOOR = 0.5
 
 
+def _same(a: Plan, b: Plan | None) -> bool:
+    """Two plans are the same profile toward the same goal (a re-plan from one state with one
+    set of inputs is deterministic, to the bit)."""
+    return (
+        b is not None
+        and a.goal == b.goal
+        and a.t0 == b.t0
+        and a.dur == b.dur
+        and a.p_end == b.p_end
+        and a.v_end == b.v_end
+        and a.soft_from == b.soft_from
+        and a.serves == b.serves
+        and a.window == b.window
+    )
+
+
 class Tracker:
     """Path state (t, s, v, a, seg) over one table; drive with `advance(t, dt)`. It holds its
     parts: the constraint queries (`con`, which also holds the window's segment and the
@@ -601,6 +617,13 @@ class Tracker:
                     forced += 1
                     # the window end seen from the end state lies beyond the one seen now
                     self._replan(dt, force=min(violated, self.con.window_end))
+                    if forced >= 2 and _same(plan, self.st.plan):
+                        # the profile the step just refused, again, from a forced re-plan
+                        # whose inputs the next one shares (the kept profiles and the event
+                        # were taken by the first): the next ones would repeat it, and the
+                        # step takes it as after the fourth (feeds seed 5: four identical
+                        # re-plans a step, twice in 25 ms after an override drop to 20 %)
+                        forced = 4
                     continue
             self._commit(t_end, s1, v1, a1, seg1, cut, plan, out)
             forced = 0

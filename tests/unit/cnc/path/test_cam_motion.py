@@ -612,6 +612,25 @@ def test_an_override_drop_before_two_feed_drops_keeps_them() -> None:
     assert hard == [] and errors == 0, hard
 
 
+def test_a_forced_re_plan_that_repeats_its_profile_is_not_made_again() -> None:
+    """Feeds seed 69 (falling feeds, override steps): on db64a13 a cycle made 40 ruckig
+    solves, the step's four forced re-plans returning one profile each time. A forced
+    re-plan that returns the profile the step just refused, from inputs the next one shares,
+    ends the tries (`Tracker.advance`); the run is the same cycle for cycle (the feeds
+    corpus: 9 187 163 cycles and the same findings either way) and its worst cycle makes 24
+    solves."""
+    sc = feed_scenario(69)
+    _, hard, _, errors = check(sc)
+    assert hard == [] and errors == 0, hard
+    task = GeoTask(sc.channel, sc.text)
+    calc = task.interp.prod.calc
+    last, worst = calc.calls, 0
+    limit = time_limit(task.prog.table, sc)
+    for _ in run_cycles(task, SimPlc(0.02), sc.schedule, sc.channel.cycle_time, limit):
+        worst, last = max(worst, calc.calls - last), calc.calls
+    assert worst <= 24, worst
+
+
 def test_a_dip_before_a_drop_at_the_window_end_costs_a_bounded_cycle() -> None:
     """0.1 mm blocks, F12000, one block at F4569, five at F2785, an M00, look-ahead 30: the
     drop to F2785 sat at the window's end, read there as the window's end and left out of
