@@ -20,7 +20,7 @@ The rules:
   ceiling. Within that brake it may pass a block boundary above the feed caps
   (F × override) that it could no longer get down to with zero acceleration there from its
   state at the change, or at the last run boundary it passed in the brake (zero acceleration
-  there) (the tracker's `Plan.soft_from`, and `Tracker._gap_over`, the jerk gap:
+  there) (the tracker's `Plan.soft_from`, and `Targets.gap_over`, the jerk gap:
   docs/geo-core.md deviation 6), but never above a hard cap: the transition cap and the axes' and the
   lift's caps, which no override scales. The brake ends where the acceleration stops
   falling at or below the ceiling.

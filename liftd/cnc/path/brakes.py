@@ -45,6 +45,24 @@ class Brakes:
         self.st = st
         self.tg = tg
 
+    def lost_cap(
+        self, cands: list[tuple[int, float, float, bool]], i: int, below: bool, event: bool,
+        a_max: float, j_max: float, w: int,
+    ) -> bool:  # fmt: skip
+        """Candidate i, a feed cap, is out of reach and nothing after it is in view to shift to
+        (its block goes on past the horizon): known deviation 15 of docs/geo-core.md. Where it
+        came into view too late, below it braking through (`dip_through`, deviation 13), else
+        a brake at once to it (`brake_lost`); where an input change put it out of reach, the
+        brake at once first, as the CNC brakes after an override drop (a dip there went to
+        2.03 mm/s in a block of 3 after an override drop to 60 % 12 µm before it, a review's
+        program; the check excuses passing it above as far as the brake from the change could
+        not avoid it)."""
+        if event and self.brake_lost(cands, i, a_max, j_max, w):
+            return True
+        if below and self.dip_through(cands, cands[i], a_max, j_max, w):
+            return True
+        return not event and self.brake_lost(cands, i, a_max, j_max, w)
+
     def brake_first(
         self, cands: list[tuple[int, float, float, bool]], ceiling: float, a_max: float,
         j_max: float, w: int,

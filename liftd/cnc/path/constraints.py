@@ -233,7 +233,7 @@ class Constraints:
         """The lowest cap the window's end w can have once the window moves on by a block: its
         own entry cap, or what rest at the boundary after it leaves over block w (known
         deviation 3 of docs/geo-core.md). The path keeps both rest and this velocity reachable
-        at w (a second candidate at w in `collect`; `Tracker._window_end_lost`): with a jerk
+        at w (a second candidate at w in `collect`; `Constraints.window_end_lost`): with a jerk
         limit, braking to a low velocity takes longer than braking to rest, so a path braking
         to rest at w may no longer get down to w's cap exactly when the window moves on, and
         brakes to near rest instead (wide seed 22: 0.2 mm blocks, look-ahead 3, boundaries of
@@ -394,6 +394,34 @@ class Constraints:
         if a < 0.0 and v > 0.0:
             ramp = min(ramp, brake_distance(v, a, 0.0, a_max, j_max))
         return ramp
+
+    def window_end_lost(
+        self, goal: int, v_end: float, s: float, v: float, a: float, s1: float, v1: float,
+        a1: float, seg1: int,
+    ) -> int | None:  # fmt: skip
+        """A profile toward `goal`, the window's end, keeps the velocity it targets there
+        (`v_end`: rest, or the end's floor, `window_floor`); the other one is kept while it can
+        be: the window's end if the step from (s, v, a) to (s1, v1, a1) in segment seg1 would
+        lose it, having kept it at the step's start (a forced re-plan then aims at the lower of
+        the two slacks; one lost before the step is not asked for again, so the two do not
+        take turns)."""
+        g = goal
+        if g != seg1 + self.look_ahead or g >= self.n or self.is_stop(g):
+            return None
+        floor = self.window_floor(g)
+        if floor <= 0.0:
+            return None
+        other = 0.0 if v_end > 0.0 else floor
+        s_g = self.tb.s[g]
+        if not self.stays(s, v, a, self.seg, s_g, other):
+            return None  # lost before this step
+        return None if self.stays(s1, v1, a1, seg1, s_g, other) else g
+
+    def stays(self, s: float, v: float, a: float, seg: int, s_b: float, e: float) -> bool:
+        """From (s, v, a) in segment seg the path can still be at e or below with zero
+        acceleration at s_b, with SLACK_MARGIN to spare (with seg's limits)."""
+        a_max, j_max = self.limits(seg)
+        return s_b - s - self.need(v, a, e, True, a_max, j_max) >= SLACK_MARGIN
 
     def passable(self, b: int, v: float, a: float, w: int, soft: bool = False) -> bool:
         """Whether the path may reach constraint boundary b at (v, a) (only its hard cap when

@@ -20,19 +20,21 @@ from collections.abc import Callable
 
 from liftd.cnc.path.constraints import (
     CAP_TOL,
+    CHAIN_MARGIN,
     GATE_TOL,
     INF,
     SLACK_TOL,
     V_ROUND,
     Constraints,
 )
-from liftd.cnc.path.plan import BRAKE, EPS_S, SETTLE, PathState, Plan
+from liftd.cnc.path.plan import BRAKE, CRUISE, EPS_S, SETTLE, PathState, Plan
 from liftd.cnc.path.velocity import (
     brake_distance,
     lowest_reachable_from,
     nearest_reachable,
     ramp_distance,
     reach_from,
+    reach_velocity,
 )
 from liftd.cnc.ruckig1 import (
     Evaluator,
@@ -106,6 +108,77 @@ class Targets:
         self.st = st
         self.calc = Ruckig1()
 
+    def gap_over(
+        self, cands: list[tuple[int, float, float, bool]], i: int, top: float, w: int
+    ) -> float:
+        """How far above its cap candidate i (a run boundary) may be passed where its cap falls
+        in the jerk gap (`Targets.pick_target`): where the cap is its own (not lowered for a
+        later one), within its hard cap and what the later candidates allow; else 0."""
+        if cands[i][2] > top * (1.0 + CAP_TOL):
+            return 0.0
+        b, s_c = cands[i][0], cands[i][1]
+        if not self.con.tb.gate[b]:
+            return 0.0  # a feed drop that stands for the ones after it (`collect`): no gap rule
+        over = self.hard(b, w)
+        if i + 1 < len(cands):
+            nb, ns = cands[i + 1][0], cands[i + 1][1]
+            la, lj = self.con.limits(nb - 1)
+            later = reach_velocity(
+                self.con.target_cap(cands, i + 1), max(ns - s_c - CHAIN_MARGIN, 0.0), la, lj
+            )
+            over = min(over, later)
+        return over
+
+    def keep_floor(
+        self, floor: tuple[int, float, float, bool], v_max: float, a_max: float, j_max: float,
+        w: int,
+    ) -> None:  # fmt: skip
+        """The plan just made aims at rest at the window's end w; `floor` is w's second
+        candidate (`Constraints.window_floor`). Where that plan can no longer get down to the
+        floor with zero acceleration at w once the window moves on (the path at the boundary
+        after which w is no longer its end), and the profile to the floor keeps rest at w
+        reachable up to there, the profile to the floor is taken. The time-optimal profile
+        to rest brakes late and hard, so the floor, whose brake is shorter, can fall in its
+        jerk gap: look-ahead 3, 0.5 mm blocks, F12000 at 15 %, the profile to rest went to
+        58 mm/s, and the run boundary at w, its cap 30 mm/s, was passed at 36.9 once the
+        window moved on (a review's program; the forced re-plans chose rest, the lower slack,
+        four times a step)."""
+        rest = self.st.plan
+        m = w - self.con.look_ahead + 1  # the window moves on where the path reaches m
+        if rest is None or rest.goal != w or m <= self.con.seg or m >= w:
+            return
+        s_w, e = floor[1], floor[2]
+        if self._keeps_at(rest, m, s_w, e):
+            return
+        last = self.st.last_error
+        if not self.try_target(
+            self.st.s, self.st.v, self.st.a, s_w, e, max(v_max, e), a_max, j_max, w, w
+        ) or not self._keeps_at(self.st.plan, m, s_w, 0.0):
+            self.st.plan, self.st.last_error = rest, last  # (a refusal here is no error)
+
+    def _keeps_at(self, plan: Plan | None, m: int, s_w: float, e: float) -> bool:
+        """`plan` reaches boundary m with room left to get down to e at s_w with zero
+        acceleration there."""
+        if plan is None:
+            return False
+        s_m = self.con.tb.s[m]
+        t_m = plan.time_at(s_m, INF)
+        if t_m == INF:
+            return False
+        _, v_m, a_m = plan.at(t_m)
+        return self.con.stays(s_m, v_m, a_m, m, s_w, e)
+
+    def cruise(self, ceiling: float, a_max: float, j_max: float, w: int) -> None:
+        """Ruckig's velocity interface from the path's state to `ceiling` (`CRUISE`); where it
+        is refused, the last resort's brake (counted)."""
+        try:
+            traj = self.calc.velocity(self.st.s, self.st.v, self.st.a, ceiling, a_max, j_max)
+        except ProfileError as exc:
+            self.count(f"cruise profile refused: {exc}")
+            self.brake(a_max, j_max, w)
+            return
+        self.st.plan = Plan(traj, self.st.t, CRUISE, w, None, ceiling)
+
     def hard(self, b: int, w: int) -> float:
         """Boundary b's own hard cap: 0 at a stop and the window's end, else its axis and
         transition cap (never scaled by the override)."""
@@ -140,7 +213,7 @@ class Targets:
         transition cap). Under a hold the lowest reachable one.
 
         `over` > the cap: the path may pass this cap above it up to `over` (a run boundary's own
-        feed cap; `Tracker._gap_over`). With a jerk limit the end velocities the path can have
+        feed cap; `Targets.gap_over`). With a jerk limit the end velocities the path can have
         at d are [0, x1] ∪ [x2, v_p]; where a brake puts the cap between x1 and x2, as after an
         override drop (wide seed 641: 230 mm/s toward a cap of 100 at a 0.001° kink, x1 = 0.03
         mm/s, a near-stop), it takes x2, as slowly as it can above the cap, where x2 is within

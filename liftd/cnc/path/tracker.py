@@ -47,11 +47,11 @@ from liftd.cnc.path.velocity import (
     projected_velocity,
     reach_velocity,
 )
-from liftd.cnc.ruckig1 import ProfileError, Ruckig1
+from liftd.cnc.ruckig1 import Ruckig1
 
 # after an input change, a feed cap whose nearest reachable velocity below it (the jerk gap's
 # lower end, `Targets.pick_target`) is less than this fraction of it is out of reach
-# (`Tracker._lost_cap`)
+# (`Brakes.lost_cap`)
 GAP_FLOOR = 0.5
 
 
@@ -215,27 +215,6 @@ class Tracker:
         self.st.last_error = primed.last_error
 
     # -- planning -------------------------------------------------------------------------------
-    def _gap_over(
-        self, cands: list[tuple[int, float, float, bool]], i: int, top: float, w: int
-    ) -> float:
-        """How far above its cap candidate i (a run boundary) may be passed where its cap falls
-        in the jerk gap (`Targets.pick_target`): where the cap is its own (not lowered for a
-        later one), within its hard cap and what the later candidates allow; else 0."""
-        if cands[i][2] > top * (1.0 + CAP_TOL):
-            return 0.0
-        b, s_c = cands[i][0], cands[i][1]
-        if not self.con.tb.gate[b]:
-            return 0.0  # a feed drop that stands for the ones after it (`collect`): no gap rule
-        over = self.tg.hard(b, w)
-        if i + 1 < len(cands):
-            nb, ns = cands[i + 1][0], cands[i + 1][1]
-            la, lj = self.con.limits(nb - 1)
-            later = reach_velocity(
-                self.con.target_cap(cands, i + 1), max(ns - s_c - CHAIN_MARGIN, 0.0), la, lj
-            )
-            over = min(over, later)
-        return over
-
     def _replan(self, dt: float, force: int | None = None) -> None:
         self.con.recheck()
         event, self._event = self._event, False
@@ -276,7 +255,7 @@ class Tracker:
             if slack < best_slack:
                 best, best_slack, best_i = c, slack, i
         if best is None:
-            self._cruise(top, a_max, j_max, w)
+            self.tg.cruise(top, a_max, j_max, w)
             return
         b, s_c, _, gate = best
         if self.con.hold and rests_before(cands, s, v, a, s_c, a_max, j_max):
@@ -284,7 +263,7 @@ class Tracker:
             # profile to rest *at* b, time-optimal to b, reached b 5 ms before the plan without
             # the hold that braked to b's cap, and Z, which takes a hold for a later arrival,
             # landed late; the brake is behind every other profile at every moment
-            self._cruise(0.0, a_max, j_max, w)
+            self.tg.cruise(0.0, a_max, j_max, w)
             return
         if (
             force is None
@@ -307,7 +286,7 @@ class Tracker:
             return
         cap = self.con.target_cap(cands, best_i)
         d = s_c - s
-        over = self._gap_over(cands, best_i, min(cap, ceiling), w) if gate else 0.0
+        over = self.tg.gap_over(cands, best_i, min(cap, ceiling), w) if gate else 0.0
         hard_b = self.tg.hard(b, w)
         target = self.tg.pick_target(v, a, v_p, d, cap, ceiling, a_max, j_max, hard_b, over)
         soft_from = b
@@ -374,7 +353,7 @@ class Tracker:
                 # the change on (deviation 10: a CNC brakes at once, it does not dip)
                 or (event and v_p > top_b and target < GAP_FLOOR * top_b)
             )
-            and self._lost_cap(cands, best_i, below, event, a_max, j_max, w)
+            and self.br.lost_cap(cands, best_i, below, event, a_max, j_max, w)
         ):
             return
         self.st.soft_from = soft_from
@@ -423,7 +402,7 @@ class Tracker:
             if b == w and target <= 0.0 and best_i + 1 < len(cands) and v <= ceiling:
                 # (not after a brake, nor above the ceiling: its v_max there is v, and the
                 # profile to the floor could hold it, a cold review found)
-                self._keep_floor(cands[best_i + 1], v_max, a_max, j_max, w)
+                self.tg.keep_floor(cands[best_i + 1], v_max, a_max, j_max, w)
         plan = self.st.plan
         if plan is None or not shifted or plan.goal != b:
             return
@@ -475,73 +454,6 @@ class Tracker:
             # passed the second, 0.5 mm on, at 75.9 mm/s (feeds seed 192)
             after = self.con.collect(s, seg, s_c - s, first=first[0] + 1)
             self.br.brake_under(looked + after, first, v_p, s_c, target, v_max, a_max, j_max, b, w)
-
-    def _keep_floor(
-        self, floor: tuple[int, float, float, bool], v_max: float, a_max: float, j_max: float,
-        w: int,
-    ) -> None:  # fmt: skip
-        """The plan just made aims at rest at the window's end w; `floor` is w's second
-        candidate (`Constraints.window_floor`). Where that plan can no longer get down to the
-        floor with zero acceleration at w once the window moves on (the path at the boundary
-        after which w is no longer its end), and the profile to the floor keeps rest at w
-        reachable up to there, the profile to the floor is taken. The time-optimal profile
-        to rest brakes late and hard, so the floor, whose brake is shorter, can fall in its
-        jerk gap: look-ahead 3, 0.5 mm blocks, F12000 at 15 %, the profile to rest went to
-        58 mm/s, and the run boundary at w, its cap 30 mm/s, was passed at 36.9 once the
-        window moved on (a review's program; the forced re-plans chose rest, the lower slack,
-        four times a step)."""
-        rest = self.st.plan
-        m = w - self.con.look_ahead + 1  # the window moves on where the path reaches m
-        if rest is None or rest.goal != w or m <= self.con.seg or m >= w:
-            return
-        s_w, e = floor[1], floor[2]
-        if self._keeps_at(rest, m, s_w, e):
-            return
-        last = self.st.last_error
-        if not self.tg.try_target(
-            self.st.s, self.st.v, self.st.a, s_w, e, max(v_max, e), a_max, j_max, w, w
-        ) or not self._keeps_at(self.st.plan, m, s_w, 0.0):
-            self.st.plan, self.st.last_error = rest, last  # (a refusal here is no error)
-
-    def _keeps_at(self, plan: Plan | None, m: int, s_w: float, e: float) -> bool:
-        """`plan` reaches boundary m with room left to get down to e at s_w with zero
-        acceleration there."""
-        if plan is None:
-            return False
-        s_m = self.con.tb.s[m]
-        t_m = plan.time_at(s_m, INF)
-        if t_m == INF:
-            return False
-        _, v_m, a_m = plan.at(t_m)
-        a_max, j_max = self.con.limits(m)
-        return s_w - s_m - self.con.need(v_m, a_m, e, True, a_max, j_max) >= SLACK_MARGIN
-
-    def _lost_cap(
-        self, cands: list[tuple[int, float, float, bool]], i: int, below: bool, event: bool,
-        a_max: float, j_max: float, w: int,
-    ) -> bool:  # fmt: skip
-        """Candidate i, a feed cap, is out of reach and nothing after it is in view to shift to
-        (its block goes on past the horizon): known deviation 15 of docs/geo-core.md. Where it
-        came into view too late, below it braking through (`dip_through`, deviation 13), else
-        a brake at once to it (`brake_lost`); where an input change put it out of reach, the
-        brake at once first, as the CNC brakes after an override drop (a dip there went to
-        2.03 mm/s in a block of 3 after an override drop to 60 % 12 µm before it, a review's
-        program; the check excuses passing it above as far as the brake from the change could
-        not avoid it)."""
-        if event and self.br.brake_lost(cands, i, a_max, j_max, w):
-            return True
-        if below and self.br.dip_through(cands, cands[i], a_max, j_max, w):
-            return True
-        return not event and self.br.brake_lost(cands, i, a_max, j_max, w)
-
-    def _cruise(self, ceiling: float, a_max: float, j_max: float, w: int) -> None:
-        try:
-            traj = self.tg.calc.velocity(self.st.s, self.st.v, self.st.a, ceiling, a_max, j_max)
-        except ProfileError as exc:
-            self.tg.count(f"cruise profile refused: {exc}")
-            self.tg.brake(a_max, j_max, w)
-            return
-        self.st.plan = Plan(traj, self.st.t, CRUISE, w, None, ceiling)
 
     # -- motion ---------------------------------------------------------------------------------
     def advance(self, t_new: float, dt: float) -> list[Crossing]:
@@ -612,7 +524,9 @@ class Tracker:
                 if violated is None:
                     violated = self.con.violated(s1, v1, a1, seg1, dt, plan.serves, plan.soft_from)
                 if violated is None and plan.goal >= 0:
-                    violated = self._window_end_lost(plan, s1, v1, a1, seg1)
+                    violated = self.con.window_end_lost(
+                        plan.goal, plan.v_end, self.st.s, self.st.v, self.st.a, s1, v1, a1, seg1
+                    )
                 if violated is not None:
                     forced += 1
                     # the window end seen from the end state lies beyond the one seen now
@@ -633,31 +547,6 @@ class Tracker:
                 self.st.plan = None  # a goal reached between boundaries: plan the next one
         self.tg.count("advance did not converge")
         return out
-
-    def _window_end_lost(
-        self, plan: Plan, s1: float, v1: float, a1: float, seg1: int
-    ) -> int | None:
-        """A profile to the window's end keeps the velocity it targets there (rest, or the
-        end's floor, `Constraints.window_floor`); the other one is kept while it can be: the
-        window's end if the step would lose it, having kept it at the step's start (a forced
-        re-plan then aims at the lower of the two slacks; one lost before the step is not
-        asked for again, so the two do not take turns)."""
-        g = plan.goal
-        if g != seg1 + self.con.look_ahead or g >= self.con.n or self.con.is_stop(g):
-            return None
-        floor = self.con.window_floor(g)
-        if floor <= 0.0:
-            return None
-        other = 0.0 if plan.v_end > 0.0 else floor
-        s_g = self.con.tb.s[g]
-        st = self.st
-        a_max, j_max = self.con.limits(self.con.seg)
-        if s_g - st.s - self.con.need(st.v, st.a, other, True, a_max, j_max) < SLACK_MARGIN:
-            return None  # lost before this step
-        a_max, j_max = self.con.limits(seg1)
-        if s_g - s1 - self.con.need(v1, a1, other, True, a_max, j_max) < SLACK_MARGIN:
-            return g
-        return None
 
     def _commit(
         self, t: float, s: float, v: float, a: float, seg: int, cut: int, plan: Plan,

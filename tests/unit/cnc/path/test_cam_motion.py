@@ -554,7 +554,7 @@ def test_a_lost_cap_costs_no_dip_and_no_error(
     12 µm before an F300 block (3 mm/s now): in a first version of this round's fallbacks
     the dip below its cap (`Brakes.dip_through`) went to 2.03 mm/s in it (67ef359 has no
     dip there); after an input change the brake at once comes first now
-    (`Tracker._lost_cap`) and the block is entered braking, as the check allows. A feed hold
+    (`Brakes.lost_cap`) and the block is entered braking, as the check allows. A feed hold
     that came inside a brake at once to a feed cap: the target profile 0.18 mm on was
     refused at the edge, and the hold's brake to rest counted as a tracker error (on 67ef359
     the path passed a boundary at 49 mm/s under the hold). The eleventh round's review
@@ -584,7 +584,7 @@ def test_a_brake_tail_and_the_window_end_keep_their_caps(
     lines, look-ahead 3, override 200 % then 15 %. On db64a13: the forced re-plans toward
     the window's end chose rest there, the lower of its two slacks, four times a step; the
     profile to rest went to 58 mm/s, and once the window moved on its run boundary (30 mm/s)
-    was passed at 36.9 (`Tracker._keep_floor` takes the profile to the floor where that
+    was passed at 36.9 (`Targets.keep_floor` takes the profile to the floor where that
     keeps rest). A forced re-plan 0.03 mm/s above an F29399 ceiling at 15 %, 4 ms after the
     drop, held that velocity and passed the next boundary 0.02 mm/s above its cap. And 1.5 mm
     blocks of rising feeds, override 10 → 80 % at 70.1 mm/s and −2.0 m/s²: the target profile

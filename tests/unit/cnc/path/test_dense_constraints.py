@@ -247,7 +247,7 @@ def test_the_candidate_that_stands_for_the_rest_passes_no_feed_cap_above() -> No
     """The 24th of more falling caps within one brake is listed with zero acceleration there,
     as a run boundary is (`Constraints.collect`), but it is a feed drop: the jerk gap's rule
     that lets a run boundary's own cap be passed above after an override drop
-    (`Tracker._gap_over`) does not apply to it (a feed cap passed above is an overrun)."""
+    (`Targets.gap_over`) does not apply to it (a feed cap passed above is an overrun)."""
     task = GeoTask(shipped(), falling(0.2, 60000, 0.96, 60))
     tb = task.prog.table
     tr = Tracker(tb, 200)
@@ -258,7 +258,9 @@ def test_the_candidate_that_stands_for_the_rest_passes_no_feed_cap_above() -> No
     assert len(cands) == MAX_CANDIDATES
     last, s_last, cap, gate = cands[-1]
     assert gate and not tb.gate[last]  # listed as a run boundary, a feed drop in the table
-    assert tr._gap_over(cands, len(cands) - 1, cap, tr.window_end) == 0.0
+    assert tr.tg.gap_over(cands, len(cands) - 1, cap, tr.window_end) == 0.0
     run_end = next(b for b in range(last, tb.n) if tb.gate[b])
     real = [(run_end, tb.s[run_end], tb.entry_cap(run_end, 0.4), True)]
-    assert tr._gap_over(real, 0, real[0][2], tr.window_end) > 0.0  # a run boundary's: its hard cap
+    assert (
+        tr.tg.gap_over(real, 0, real[0][2], tr.window_end) > 0.0
+    )  # a run boundary's: its hard cap
