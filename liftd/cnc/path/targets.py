@@ -217,7 +217,8 @@ class Targets:
         at d are [0, x1] ∪ [x2, v_p]; where a brake puts the cap between x1 and x2, as after an
         override drop (wide seed 641: 230 mm/s toward a cap of 100 at a 0.001° kink, x1 = 0.03
         mm/s, a near-stop), it takes x2, as slowly as it can above the cap, where x2 is within
-        `over` and nearer the cap than x1."""
+        `over` and nearer the cap than x1 by ratio (x2 / cap < cap / x1). Above a lowered
+        ceiling that ends before b, `over` is at least the cap itself."""
         if self.con.hold:
             return min(cap, lowest_reachable_from(v, a, d, a_max, j_max))
         top = min(cap, ceiling)  # the ceiling holds up to there
@@ -241,11 +242,21 @@ class Targets:
         # boundary's own hard cap (`top` may be lower, for the candidates after it)
         if brake_distance(v, a, 0.0, a_max, j_max) <= fits:
             below = nearest_reachable(v, a, fits, top, a_max, j_max, False)
+            if ceiling < cap and v > ceiling:
+                # above a lowered ceiling that ends before b: its brake, without a pause,
+                # may pass b above that ceiling, within b's own cap (override 100 → 10 % at
+                # 38.9 mm/s, 0.4 mm before a run boundary of 29.3 mm/s, the ceiling of
+                # 10 mm/s ending 0.2 mm on: the path dipped to 0.75 mm/s and passed it at
+                # 4.18, feeds seed 942; now 21.0, its brake at once)
+                over = max(over, cap)
             if over <= top:
                 return below
             up = nearest_reachable(v, a, fits, top, a_max, j_max, True)
             ok = up <= over and brake_distance(v, a, up, a_max, j_max) <= fits
-            return up if ok and up - top < top - below else below
+            # nearer by ratio, not by difference: x1 = 10.09 below a cap of 50 mm/s against
+            # x2 = 90.0 above it, 0.1 mm/s apart by difference, was a near-stop after an
+            # override drop, with a dip to 3.84 (feeds seed 676)
+            return up if ok and up * below < top * top else below
         up = nearest_reachable(v, a, fits, top, a_max, j_max, True)
         if up <= hard or brake_distance(v, a, hard, a_max, j_max) > fits:
             return up
