@@ -119,6 +119,10 @@ class Targets:
         b, s_c = cands[i][0], cands[i][1]
         if not self.con.tb.gate[b]:
             return 0.0  # a feed drop that stands for the ones after it (`collect`): no gap rule
+        if cands[i][2] < self.con.tb.entry_cap(b, self.con.ov) * (1.0 - CAP_TOL):
+            # lowered for what lies after it (`Constraints._beyond`: a stop 0.5 mm after it
+            # caps it at 46 mm/s): above that, what lies after it is lost (a cold review)
+            return 0.0
         over = self.hard(b, w)
         if i + 1 < len(cands):
             nb, ns = cands[i + 1][0], cands[i + 1][1]
@@ -241,7 +245,9 @@ class Targets:
         # after a sudden override drop, as slowly as it can above it, but within the
         # boundary's own hard cap (`top` may be lower, for the candidates after it)
         if brake_distance(v, a, 0.0, a_max, j_max) <= fits:
-            below = nearest_reachable(v, a, fits, top, a_max, j_max, False)
+            # within d itself: from x1 a rounding beyond it, ruckig's profile to b brakes
+            # below x1 and comes back (feeds seed 48: 9.62 mm/s reached through 3.64)
+            below = nearest_reachable(v, a, d, top, a_max, j_max, False)
             if ceiling < cap and v > ceiling:
                 # above a lowered ceiling that ends before b: its brake, without a pause,
                 # may pass b above that ceiling, within b's own cap (override 100 → 10 % at

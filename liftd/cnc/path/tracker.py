@@ -316,16 +316,16 @@ class Tracker:
             # a cap before b may bind once b is passed above its cap (its first is the next
             # constraint; within the braking horizon, also for a forced re-plan)
             tail = self.con.collect(s, seg, horizon, first=b + 1)
-            if not tail and target < GAP_FLOOR * min(cap, ceiling):
-                # none within the brake to rest from here, and b's target with zero
-                # acceleration lies at the low end of the jerk gap: the candidates after b
-                # this re-plan collected (a forced one reads all) may still cap it. A forced
-                # re-plan 5.04 mm before a feed cap of 100 mm/s, 0.5 mm before an M00 beyond
-                # the brake to rest, at 72.2 mm/s and +7.6 m/s², aimed at 46.29 there, which
-                # it could not reach from below (the brake to a velocity is longer than the
-                # brake to rest), and passed the cap at 1.38 mm/s (feeds seed 915); it now
-                # aims at the M00, passing the cap as it brakes
-                tail = [c for c in cands if c[0] > b]
+            if not tail and forced and target < GAP_FLOOR * min(cap, ceiling):
+                # a forced re-plan, none within the brake to rest from here, and b's target
+                # with zero acceleration at the low end of the jerk gap: the candidates after
+                # b as far as the window reaches may still cap it. A forced re-plan 5.04 mm
+                # before a feed cap of 100 mm/s, 0.5 mm before an M00 beyond the brake to
+                # rest, at 72.2 mm/s and +7.6 m/s², aimed at 46.29 there, which it could not
+                # reach from below (the brake to a velocity is longer than the brake to
+                # rest), and passed the cap at 1.38 mm/s (feeds seed 915); it now aims at the
+                # M00, passing the cap as it brakes
+                tail = self.con.collect(s, seg, INF, first=b + 1)
             if not tail:
                 break
             nb, ns, _, ngate = tail[0]
