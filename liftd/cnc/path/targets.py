@@ -301,6 +301,11 @@ class Targets:
                     self._exact_brake(s, v, a, s_c, target, a_max, j_max, b, w)
                 else:
                     self._unpin(s, v, a, s_c, target, v_max, a_max, j_max, b, w, floor)
+                    if self.dips(floor):
+                        # the exact brake where it reaches b: from a cruise at 73.0 mm/s to
+                        # x1 = 2.19 1 mm on (override 10 %), ruckig's profile went down to
+                        # 1.40 (feeds seed 381; `_unpin` found none)
+                        self._exact_brake(s, v, a, s_c, target, a_max, j_max, b, w)
             return
         if v_p <= max(hard, target) and self.try_target(
             s, v, a, s_c, v_p, max(v_max, v_p), a_max, j_max, b, w
@@ -451,7 +456,8 @@ class Targets:
         j_max: float, b: int, w: int,
     ) -> None:  # fmt: skip
         """An event's re-plan (`Tracker.set_state`) chose a profile that dips and no profile
-        is in hand (the producer's is the queue tail's, not the path's). Where the path is
+        is in hand (the producer's is the queue tail's, not the path's), or (elsewhere) one
+        that `_unpin` could not replace. Where the path is
         on the exact brake to the target, the brake reaching b within EPS_S, that brake is
         planned: ruckig's velocity interface, time-optimal from (v, a) to the target, with b
         as its goal. It is the profile the path followed before the event (from a state
@@ -461,8 +467,8 @@ class Targets:
         100 → 77 % while braking from 196 mm/s to 4.82 mm/s 3.663 mm on, the brake
         3e-17 m longer than the distance, a profile through 3.09 mm/s, 44.27 ms, where the
         brake takes 39.90; CAM seed 956: 46.3 → 2.68 mm/s, 1.15 mm/s and 21.65 against 17.61
-        ms). Elsewhere the dip stays: a profile that leaves the brake may reach a lift's
-        boundary sooner than planned (a lower target, tried: wide seed 767, Z 0.2 ms late)."""
+        ms). Only the exact brake: a profile that leaves it (a lower target, tried) may reach
+        a lift's boundary sooner than planned (wide seed 767, Z 0.2 ms late)."""
         if abs(s + brake_distance(v, a, target, a_max, j_max) - s_c) > EPS_S:
             return
         try:
