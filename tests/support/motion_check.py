@@ -322,6 +322,26 @@ def check_motion(
                     f"{path.bounds[b].line}) between {entry_v * 1e3:.4f} and {v_b * 1e3:.4f} "
                     f"(t={smp.t:.4f} s)"
                 )
+            if (
+                smp.a < 0.0
+                and v_b > path.ceiling(b - 1, smp.override) * (1.0 + REL_TOL)
+                and path.ceiling(b, smp.override) > path.ceiling(b - 1, smp.override)
+            ):
+                # the brake from above a lowered ceiling (after an input change) that ends
+                # where the ceiling rises again: its deceleration is ramped out at full jerk
+                # after b, as after an event (feeds seed 931: override 200 → 20 % at
+                # 102 mm/s, a 1 mm block of 10 mm/s, then 80; the ramp from 15.4 mm/s and
+                # −2.1 m/s² at its end went down to 10.09), and the forward pass and the
+                # interval go on from its end
+                _, j = path.limits(smp.seg, smp.seg + 1)
+                if j != INF:
+                    t_r = -smp.a / j
+                    ramp_s = smp.s + t_r * (smp.v + t_r * (smp.a / 2.0 + t_r * j / 6.0))
+                    ramp_v = max(smp.v + smp.a * t_r / 2.0, 0.0)
+                    ramp, ramp_ends = (smp.s, smp.v, smp.a, j), ramp_s
+                    anchor_s, anchor_v, anchor_seg = ramp_s, ramp_v, b
+                    entry_v, interval_min, fresh = min(v_b, ramp_v), INF, False
+                    continue
             # the forward pass starts again where the acceleration is zero (a run boundary),
             # where a cap held the path below it, and where the path was slower than the rules
             # allow (found above). Not where it is only a little below it, within REL_TOL:
