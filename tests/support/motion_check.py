@@ -1,7 +1,7 @@
 """An independent check of the path velocity, cycle by cycle (issue 36, item 2): every slowdown
 of the path is explained by a rule of the CNC, or the run fails.
 
-The rules (docs/architecture.md, "Which rule decides a slowdown"):
+The rules (docs/geo-core.md, "Which rule decides a slowdown", linked from docs/architecture.md):
 
 * **Rest** only where a rule makes the path rest: a stop boundary of the program (program end,
   M00/M01, a synchronised M function, a dwell, #FLUSH, a lift range without path motion), a
@@ -30,7 +30,9 @@ resume) the path follows a new plan: where it decelerates, that deceleration is 
 full jerk first (a boundary inside that ramp is expected at the ramp's velocity there, or
 lower where a cap needs it); the forward pass starts again where the ramp ends (or at the
 event's state), and the interval goes on from there: no dip below the lower of the ramp's end
-and the next boundary.
+and the next boundary. The same where the brake from above a ceiling an input lowered passes
+the end of that ceiling's block still decelerating into a higher ceiling: the ramp-out after
+that boundary is the jerk limit's, not a dip.
 
 What the rules allow is tests/support/motion_rules.py, in the checker's own arithmetic (a
 jerk-limited velocity change with zero acceleration at both ends, inverted by bisection), not
