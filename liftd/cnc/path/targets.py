@@ -119,17 +119,6 @@ class Targets:
         b, s_c = cands[i][0], cands[i][1]
         if not self.con.tb.gate[b]:
             return 0.0  # a feed drop that stands for the ones after it (`collect`): no gap rule
-        tb = self.con.tb
-        if cands[i][2] < tb.entry_cap(b, self.con.ov) * (1.0 - CAP_TOL):
-            # lowered for what lies after it (`Constraints._beyond`). Above it, the feed caps
-            # after it are passed above as after any override drop, and the window's end
-            # moves on; a stop after it (an M00, a lift's stop 0.5 mm on that caps it at
-            # 46 mm/s) would be lost: no gap rule then (a cold review). For every lowering,
-            # x1 = 0.04 mm/s was taken after an override drop to 20 % (feeds seed 589)
-            last = w if w >= tb.n else w - 1
-            for k in range(b + 1, last + 1):
-                if self.con.is_stop(k):
-                    return 0.0
         over = self.hard(b, w)
         if i + 1 < len(cands):
             nb, ns = cands[i + 1][0], cands[i + 1][1]

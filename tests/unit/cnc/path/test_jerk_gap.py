@@ -8,12 +8,18 @@ within the boundary's hard cap and what the candidates after it allow."""
 
 from __future__ import annotations
 
+import dataclasses
+import math
 import re
 
 import pytest
 
+from liftd.cnc.geo_task import GeoTask
+from liftd.cnc.path.tracker import Tracker
+from liftd.cnc.path.velocity import brake_distance
 from tests.support.cam_cases import cam_scenario
 from tests.support.cam_runs import check
+from tests.support.channel import shipped
 from tests.support.feed_cases import feed_scenario
 from tests.support.scenarios import describe, wide_scenario
 
@@ -77,3 +83,35 @@ def test_a_cap_in_the_gap_is_no_near_stop(seed: int) -> None:
     for f in slow:
         m = _FINDING.search(f)
         assert m is not None and float(m.group(1)) >= 0.5 * float(m.group(2)), f
+
+
+def _kinked(look_ahead: int, corner_deg: float, lift_stops: set[int]) -> Tracker:
+    """F6000 on X with a slight kink at X10 (boundary 1) and a kink of `corner_deg` at X10.5
+    (boundary 2), then 9.5 mm on: the tracker of that program."""
+    ch = dataclasses.replace(shipped(), cycle_time=1e-3, look_ahead_blocks=look_ahead)
+    dy = 0.5 * math.tan(math.radians(corner_deg))
+    text = f"G01 X0 Y0 F6000\nG01 X10 Y0\nG01 X10.5 Y0.001\nG01 X20 Y{0.001 + 19 * dy:.4f}\nM30\n"
+    return Tracker(GeoTask(ch, text).interp.table, look_ahead, lift_stops=lift_stops)
+
+
+@pytest.mark.parametrize(("look_ahead", "corner_deg", "stops"), [(3, 0.0, {2}), (2, 0.0, {2}),
+                                                                 (3, 30.0, set())])  # fmt: skip
+def test_what_a_run_boundary_holds_for_after_it_is_kept_by_the_gap_rule(
+    look_ahead: int, corner_deg: float, stops: set[int]
+) -> None:
+    """A cold review: the gap rule's x2 may pass a run boundary above its feed cap, within
+    its hard cap, but never so fast that a stop or a hard cap after it is lost (a lift's stop
+    0.5 mm on, also where it is the window's end; a corner 0.5 mm on). `hard_reach` is the
+    highest velocity at the boundary, with zero acceleration there, that keeps them: the brake
+    from it to the stop (the corner's transition cap) fits within the 0.5 mm, and from 1 %
+    more it does not."""
+    tr = _kinked(look_ahead, corner_deg, stops)
+    tb = tr.con.tb
+    w = min(1 + look_ahead, tb.n)
+    v = tr.con.hard_reach(1, w)
+    end = 0.0 if stops else min(tb.point_cap[2], tb.cap[2])
+    a_max, j_max = tr.con.limits(1)
+    room = tb.s[2] - tb.s[1]
+    assert end < 0.5 * min(tb.point_cap[1], tb.cap[1])  # the case: it binds at boundary 1
+    assert brake_distance(v, 0.0, end, a_max, j_max) <= room
+    assert brake_distance(1.01 * v, 0.0, end, a_max, j_max) > room
