@@ -324,22 +324,28 @@ def check_motion(
                     f"{path.bounds[b].line}) between {entry_v * 1e3:.4f} and {v_b * 1e3:.4f} "
                     f"(t={smp.t:.4f} s)"
                 )
+            # the acceleration where the path passed b (linear between the samples)
+            frac = (s_b - last.s) / (smp.s - last.s) if smp.s > last.s else 1.0
+            a_b = last.a + (smp.a - last.a) * frac
             if (
-                smp.a < 0.0
+                a_b < 0.0
+                and smp.a < 0.0
                 and v_b > path.ceiling(b - 1, smp.override) * (1.0 + REL_TOL)
                 and path.ceiling(b, smp.override) > path.ceiling(b - 1, smp.override)
             ):
-                # the brake from above a lowered ceiling (after an input change) that ends
-                # where the ceiling rises again: its deceleration is ramped out at full jerk
-                # after b, as after an event (feeds seed 931: override 200 → 20 % at
-                # 102 mm/s, a 1 mm block of 10 mm/s, then 80; the ramp from 15.4 mm/s and
-                # −2.1 m/s² at its end went down to 10.09), and the forward pass and the
-                # interval go on from its end
-                _, j = path.limits(smp.seg, smp.seg + 1)
+                # the brake from above a lowered ceiling (after an input change: above it
+                # otherwise, motion_overrun fails the run) that ends where the ceiling rises
+                # again: its deceleration is ramped out at full jerk after b, as after an
+                # event (feeds seed 931: override 200 → 20 % at 102 mm/s, a 1 mm block of
+                # 10 mm/s, then 80; the ramp from 15.4 mm/s and −2.1 m/s² at its end went
+                # down to 10.09), and the forward pass and the interval go on from its end:
+                # the higher of the ramps from b and from the sample after it (a path that
+                # brakes on after b is not credited with it, a cold review found)
+                _, j = path.limits(b, b + 1)
                 if j != INF:
                     t_r = -smp.a / j
                     ramp_s = smp.s + t_r * (smp.v + t_r * (smp.a / 2.0 + t_r * j / 6.0))
-                    ramp_v = max(smp.v + smp.a * t_r / 2.0, 0.0)
+                    ramp_v = max(smp.v + smp.a * t_r / 2.0, v_b - a_b * a_b / (2.0 * j), 0.0)
                     ramp, ramp_ends = (smp.s, smp.v, smp.a, j), ramp_s
                     anchor_s, anchor_v, anchor_seg = ramp_s, ramp_v, b
                     entry_v, interval_min, fresh = min(v_b, ramp_v), INF, False
