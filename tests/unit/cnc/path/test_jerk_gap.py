@@ -115,3 +115,17 @@ def test_what_a_run_boundary_holds_for_after_it_is_kept_by_the_gap_rule(
     assert end < 0.5 * min(tb.point_cap[1], tb.cap[1])  # the case: it binds at boundary 1
     assert brake_distance(v, 0.0, end, a_max, j_max) <= room
     assert brake_distance(1.01 * v, 0.0, end, a_max, j_max) > room
+
+
+@pytest.mark.parametrize("seed", [48, 381])
+def test_x1_is_reached_without_a_dip(seed: int) -> None:
+    """Feeds seed 48: override 150 → 40 % 2.09 mm before a run boundary of 20 mm/s, x1 =
+    9.62 mm/s computed within the distance + 1 nm; ruckig's profile to it braked to 3.64 and
+    came back. Seed 381: from a cruise at 73.0 mm/s (override 10 %) to x1 = 2.19 mm/s 1 mm
+    on, ruckig's profile went down to 1.40 (the exact brake and a cruise at its end is not
+    in its profile family) and `_unpin` found none without the dip. x1 is now within the
+    distance itself, and the exact brake is planned where `_unpin` finds nothing: no dip."""
+    sc = feed_scenario(seed)
+    _, hard, slow, errors = check(sc)
+    assert hard == [] and errors == 0, (hard, describe(sc))
+    assert not any(f.startswith("dip") for f in slow), slow
