@@ -1,7 +1,7 @@
 """An independent check of the path velocity, cycle by cycle (issue 36, item 2): every slowdown
 of the path is explained by a rule of the CNC, or the run fails.
 
-The rules (docs/architecture.md, "Which rule decides a slowdown"):
+The rules (docs/geo-core.md, "Which rule decides a slowdown", linked from docs/architecture.md):
 
 * **Rest** only where a rule makes the path rest: a stop boundary of the program (program end,
   M00/M01, a synchronised M function, a dwell, #FLUSH, a lift range without path motion), a
@@ -30,7 +30,9 @@ resume) the path follows a new plan: where it decelerates, that deceleration is 
 full jerk first (a boundary inside that ramp is expected at the ramp's velocity there, or
 lower where a cap needs it); the forward pass starts again where the ramp ends (or at the
 event's state), and the interval goes on from there: no dip below the lower of the ramp's end
-and the next boundary.
+and the next boundary. The same where the brake from above a ceiling an input lowered passes
+the end of that ceiling's block still decelerating into a higher ceiling: the ramp-out after
+that boundary is the jerk limit's, not a dip.
 
 What the rules allow is tests/support/motion_rules.py, in the checker's own arithmetic (a
 jerk-limited velocity change with zero acceleration at both ends, inverted by bisection), not
@@ -322,6 +324,32 @@ def check_motion(
                     f"{path.bounds[b].line}) between {entry_v * 1e3:.4f} and {v_b * 1e3:.4f} "
                     f"(t={smp.t:.4f} s)"
                 )
+            # the acceleration where the path passed b (linear between the samples)
+            frac = (s_b - last.s) / (smp.s - last.s) if smp.s > last.s else 1.0
+            a_b = last.a + (smp.a - last.a) * frac
+            if (
+                a_b < 0.0
+                and smp.a < 0.0
+                and v_b > path.ceiling(b - 1, smp.override) * (1.0 + REL_TOL)
+                and path.ceiling(b, smp.override) > path.ceiling(b - 1, smp.override)
+            ):
+                # the brake from above a lowered ceiling (after an input change: above it
+                # otherwise, motion_overrun fails the run) that ends where the ceiling rises
+                # again: its deceleration is ramped out at full jerk after b, as after an
+                # event (feeds seed 931: override 200 → 20 % at 102 mm/s, a 1 mm block of
+                # 10 mm/s, then 80; the ramp from 15.4 mm/s and −2.1 m/s² at its end went
+                # down to 10.09), and the forward pass and the interval go on from its end:
+                # the higher of the ramps from b and from the sample after it (a path that
+                # brakes on after b is not credited with it, a cold review found)
+                _, j = path.limits(b, b + 1)
+                if j != INF:
+                    t_r = -smp.a / j
+                    ramp_s = smp.s + t_r * (smp.v + t_r * (smp.a / 2.0 + t_r * j / 6.0))
+                    ramp_v = max(smp.v + smp.a * t_r / 2.0, v_b - a_b * a_b / (2.0 * j), 0.0)
+                    ramp, ramp_ends = (smp.s, smp.v, smp.a, j), ramp_s
+                    anchor_s, anchor_v, anchor_seg = ramp_s, ramp_v, b
+                    entry_v, interval_min, fresh = min(v_b, ramp_v), INF, False
+                    continue
             # the forward pass starts again where the acceleration is zero (a run boundary),
             # where a cap held the path below it, and where the path was slower than the rules
             # allow (found above). Not where it is only a little below it, within REL_TOL:

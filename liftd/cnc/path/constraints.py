@@ -252,6 +252,50 @@ class Constraints:
         self._floor_val = min(tb.entry_cap(w, self.ov), after)
         return self._floor_val
 
+    def hard_reach(self, b: int, w: int) -> float:
+        """The highest velocity at run boundary b, with zero acceleration there, from which
+        every stop and every hard cap (axis and transition caps, which no override scales)
+        after b up to the window's end w stays reachable: a backward pass, zero acceleration
+        at the run boundaries and stops, one brake through the hard caps between them (each a
+        brake of its own), rest at a stop, and at w (not a stop) the least of its hard cap and
+        what rest one block on allows (the window moves on). Feed caps are left out: after an
+        override drop the path passes those it can no longer get down to above them. Read
+        where the jerk gap's rule would pass b above its cap (`Tracker._replan`: x2 above
+        this loses what lies after b; a cold review built it with a lift's stop 0.5 mm after
+        b, and with a corner of 25 mm/s there)."""
+        tb = self.tb
+        end = min(w, tb.n)
+        if self.is_stop(end):
+            v_link = 0.0
+        else:
+            a_max, j_max = self.limits(end)
+            after = reach_velocity_any_above(
+                0.0, max(tb.s[end + 1] - tb.s[end] - CHAIN_MARGIN, 0.0), a_max, j_max
+            )
+            v_link = min(tb.point_cap[end], tb.cap[end], after)
+        s_link = tb.s[end]
+        lows: list[tuple[float, float]] = []  # hard caps inside the run before the link
+        for k in range(end - 1, b, -1):
+            s_k = tb.s[k]
+            if self.is_stop(k):
+                v_link, s_link, lows = 0.0, s_k, []
+                continue
+            h = min(tb.point_cap[k], tb.cap[k])
+            if not tb.gate[k]:
+                lows.append((s_k, h))
+                continue
+            a_max, j_max = self.limits(k)
+            v = min(h, reach_velocity(v_link, max(s_link - s_k - CHAIN_MARGIN, 0.0), a_max, j_max))
+            for s_h, c in lows:
+                v = min(v, reach_velocity(c, max(s_h - s_k - CHAIN_MARGIN, 0.0), a_max, j_max))
+            v_link, s_link, lows = v, s_k, []
+        s_b = tb.s[b]
+        a_max, j_max = self.limits(b)
+        v = reach_velocity(v_link, max(s_link - s_b - CHAIN_MARGIN, 0.0), a_max, j_max)
+        for s_h, c in lows:
+            v = min(v, reach_velocity(c, max(s_h - s_b - CHAIN_MARGIN, 0.0), a_max, j_max))
+        return v
+
     def _chain_open(self, cands: list[tuple[int, float, float, bool]]) -> bool:
         """Whether the chain of `cands` ends at the window's end (or its run boundary's chain
         does): its end may rise as the window moves on (`_beyond`)."""

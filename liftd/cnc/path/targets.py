@@ -217,7 +217,8 @@ class Targets:
         at d are [0, x1] ∪ [x2, v_p]; where a brake puts the cap between x1 and x2, as after an
         override drop (wide seed 641: 230 mm/s toward a cap of 100 at a 0.001° kink, x1 = 0.03
         mm/s, a near-stop), it takes x2, as slowly as it can above the cap, where x2 is within
-        `over` and nearer the cap than x1."""
+        `over` and nearer the cap than x1 by ratio (x2 / cap < cap / x1). Above a lowered
+        ceiling that ends before b, `over` is at least the cap itself."""
         if self.con.hold:
             return min(cap, lowest_reachable_from(v, a, d, a_max, j_max))
         top = min(cap, ceiling)  # the ceiling holds up to there
@@ -240,12 +241,24 @@ class Targets:
         # after a sudden override drop, as slowly as it can above it, but within the
         # boundary's own hard cap (`top` may be lower, for the candidates after it)
         if brake_distance(v, a, 0.0, a_max, j_max) <= fits:
-            below = nearest_reachable(v, a, fits, top, a_max, j_max, False)
+            # within d itself: from x1 a rounding beyond it, ruckig's profile to b brakes
+            # below x1 and comes back (feeds seed 48: 9.62 mm/s reached through 3.64)
+            below = nearest_reachable(v, a, d, top, a_max, j_max, False)
+            if ceiling < cap and v > ceiling:
+                # above a lowered ceiling that ends before b: its brake, without a pause,
+                # may pass b above that ceiling, within b's own cap (override 100 → 10 % at
+                # 38.9 mm/s, 0.4 mm before a run boundary of 29.3 mm/s, the ceiling of
+                # 10 mm/s ending 0.2 mm on: the path dipped to 0.75 mm/s and passed it at
+                # 4.18, feeds seed 942; now 21.0, its brake at once)
+                over = max(over, cap)
             if over <= top:
                 return below
             up = nearest_reachable(v, a, fits, top, a_max, j_max, True)
             ok = up <= over and brake_distance(v, a, up, a_max, j_max) <= fits
-            return up if ok and up - top < top - below else below
+            # nearer by ratio, not by difference: x1 = 10.09 below a cap of 50 mm/s against
+            # x2 = 90.0 above it, 0.1 mm/s apart by difference, was a near-stop after an
+            # override drop, with a dip to 3.84 (feeds seed 676)
+            return up if ok and up * below < top * top else below
         up = nearest_reachable(v, a, fits, top, a_max, j_max, True)
         if up <= hard or brake_distance(v, a, hard, a_max, j_max) > fits:
             return up
@@ -277,6 +290,11 @@ class Targets:
                     self._exact_brake(s, v, a, s_c, target, a_max, j_max, b, w)
                 else:
                     self._unpin(s, v, a, s_c, target, v_max, a_max, j_max, b, w, floor)
+                    if self.dips(floor):
+                        # the exact brake where it reaches b: from a cruise at 73.0 mm/s to
+                        # x1 = 2.19 1 mm on (override 10 %), ruckig's profile went down to
+                        # 1.40 (feeds seed 381; `_unpin` found none)
+                        self._exact_brake(s, v, a, s_c, target, a_max, j_max, b, w)
             return
         if v_p <= max(hard, target) and self.try_target(
             s, v, a, s_c, v_p, max(v_max, v_p), a_max, j_max, b, w
@@ -427,7 +445,8 @@ class Targets:
         j_max: float, b: int, w: int,
     ) -> None:  # fmt: skip
         """An event's re-plan (`Tracker.set_state`) chose a profile that dips and no profile
-        is in hand (the producer's is the queue tail's, not the path's). Where the path is
+        is in hand (the producer's is the queue tail's, not the path's), or (elsewhere) one
+        that `_unpin` could not replace. Where the path is
         on the exact brake to the target, the brake reaching b within EPS_S, that brake is
         planned: ruckig's velocity interface, time-optimal from (v, a) to the target, with b
         as its goal. It is the profile the path followed before the event (from a state
@@ -437,8 +456,8 @@ class Targets:
         100 → 77 % while braking from 196 mm/s to 4.82 mm/s 3.663 mm on, the brake
         3e-17 m longer than the distance, a profile through 3.09 mm/s, 44.27 ms, where the
         brake takes 39.90; CAM seed 956: 46.3 → 2.68 mm/s, 1.15 mm/s and 21.65 against 17.61
-        ms). Elsewhere the dip stays: a profile that leaves the brake may reach a lift's
-        boundary sooner than planned (a lower target, tried: wide seed 767, Z 0.2 ms late)."""
+        ms). Only the exact brake: a profile that leaves it (a lower target, tried) may reach
+        a lift's boundary sooner than planned (wide seed 767, Z 0.2 ms late)."""
         if abs(s + brake_distance(v, a, target, a_max, j_max) - s_c) > EPS_S:
             return
         try:

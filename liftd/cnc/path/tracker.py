@@ -289,6 +289,13 @@ class Tracker:
         over = self.tg.gap_over(cands, best_i, min(cap, ceiling), w) if gate else 0.0
         hard_b = self.tg.hard(b, w)
         target = self.tg.pick_target(v, a, v_p, d, cap, ceiling, a_max, j_max, hard_b, over)
+        if (
+            over > 0.0
+            and target > min(cap, ceiling) * (1.0 + CAP_TOL) + V_ROUND
+            and target > self.con.hard_reach(b, w)
+        ):
+            # x2 of the jerk gap would lose a stop or a hard cap after b: x1 (a cold review)
+            target = self.tg.pick_target(v, a, v_p, d, cap, ceiling, a_max, j_max, hard_b)
         soft_from = b
         shifted = False
         horizon = max(self.con.horizon(v, a, a_max, j_max, dt), d)
@@ -316,6 +323,16 @@ class Tracker:
             # a cap before b may bind once b is passed above its cap (its first is the next
             # constraint; within the braking horizon, also for a forced re-plan)
             tail = self.con.collect(s, seg, horizon, first=b + 1)
+            if not tail and forced and target < GAP_FLOOR * min(cap, ceiling):
+                # a forced re-plan, none within the brake to rest from here, and b's target
+                # with zero acceleration at the low end of the jerk gap: the candidates after
+                # b as far as the window reaches may still cap it. A forced re-plan 5.04 mm
+                # before a feed cap of 100 mm/s, 0.5 mm before an M00 beyond the brake to
+                # rest, at 72.2 mm/s and +7.6 m/s², aimed at 46.29 there, which it could not
+                # reach from below (the brake to a velocity is longer than the brake to
+                # rest), and passed the cap at 1.38 mm/s (feeds seed 915); it now aims at the
+                # M00, passing the cap as it brakes
+                tail = self.con.collect(s, seg, INF, first=b + 1)
             if not tail:
                 break
             nb, ns, _, ngate = tail[0]

@@ -8,10 +8,19 @@ within the boundary's hard cap and what the candidates after it allow."""
 
 from __future__ import annotations
 
+import dataclasses
+import math
+import re
+
 import pytest
 
+from liftd.cnc.geo_task import GeoTask
+from liftd.cnc.path.tracker import Tracker
+from liftd.cnc.path.velocity import brake_distance
 from tests.support.cam_cases import cam_scenario
 from tests.support.cam_runs import check
+from tests.support.channel import shipped
+from tests.support.feed_cases import feed_scenario
 from tests.support.scenarios import describe, wide_scenario
 
 
@@ -47,3 +56,76 @@ def test_an_exact_brake_ruckig_refuses_at_the_edge_ends_just_below_the_cap_not_a
     _, hard, slow, errors = check(sc)
     assert hard == [] and errors == 0, (hard, describe(sc))
     assert slow == [], (slow, describe(sc))
+
+
+# runs of tests/support/feed_cases.py whose target with zero acceleration at a boundary lay in
+# the gap and which took x1, a near-stop, on 756cfb7 (thirteenth round): 915 (a forced re-plan
+# toward a feed cap that an M00 beyond the brake to rest caps), 676 (x1 nearer the cap by 0.1
+# mm/s after an override drop), 942 (above a lowered ceiling that ends before the boundary)
+_FINDING = re.compile(r"at ([0-9.]+) mm/s, expected ([0-9.]+)")
+
+
+@pytest.mark.parametrize("seed", [676, 915, 942])
+def test_a_cap_in_the_gap_is_no_near_stop(seed: int) -> None:
+    """Seed 915: 72.2 mm/s at +7.6 m/s², 5.04 mm before an F6000 boundary that an M00 0.5 mm
+    after it caps at 46.3 mm/s with zero acceleration; the brake to 46.3 is longer than the
+    brake to rest, and the path passed the boundary at 1.38 mm/s. It aims at the M00 now,
+    passing the boundary as it brakes. Seed 676: override 180 → 100 % 2.9 mm before a run
+    boundary of 50 mm/s; reachable with zero acceleration there 10.09 or 90.0, and the path
+    took 10.09 (nearer by 0.1 mm/s), dipping to 3.84. Seed 942: override 100 → 10 % at
+    38.9 mm/s, 0.4 mm before a run boundary of 29.3 mm/s, the 10 mm/s ceiling ending 0.2 mm
+    before it; the path dipped to 0.75 mm/s. No dip now, and no boundary below half of what
+    the check expects; no overrun, no tracker error."""
+    sc = feed_scenario(seed)
+    _, hard, slow, errors = check(sc)
+    assert hard == [] and errors == 0, (hard, describe(sc))
+    assert not any(f.startswith("dip") for f in slow), slow
+    for f in slow:
+        m = _FINDING.search(f)
+        assert m is not None and float(m.group(1)) >= 0.5 * float(m.group(2)), f
+
+
+def _kinked(look_ahead: int, corner_deg: float, lift_stops: set[int]) -> Tracker:
+    """F6000 on X with a slight kink at X10 (boundary 1) and a kink of `corner_deg` at X10.5
+    (boundary 2), then 9.5 mm on: the tracker of that program."""
+    ch = dataclasses.replace(shipped(), cycle_time=1e-3, look_ahead_blocks=look_ahead)
+    dy = 0.5 * math.tan(math.radians(corner_deg))
+    text = f"G01 X0 Y0 F6000\nG01 X10 Y0\nG01 X10.5 Y0.001\nG01 X20 Y{0.001 + 19 * dy:.4f}\nM30\n"
+    return Tracker(GeoTask(ch, text).interp.table, look_ahead, lift_stops=lift_stops)
+
+
+@pytest.mark.parametrize(("look_ahead", "corner_deg", "stops"), [(3, 0.0, {2}), (2, 0.0, {2}),
+                                                                 (3, 30.0, set())])  # fmt: skip
+def test_what_a_run_boundary_holds_for_after_it_is_kept_by_the_gap_rule(
+    look_ahead: int, corner_deg: float, stops: set[int]
+) -> None:
+    """A cold review: the gap rule's x2 may pass a run boundary above its feed cap, within
+    its hard cap, but never so fast that a stop or a hard cap after it is lost (a lift's stop
+    0.5 mm on, also where it is the window's end; a corner 0.5 mm on). `hard_reach` is the
+    highest velocity at the boundary, with zero acceleration there, that keeps them: the brake
+    from it to the stop (the corner's transition cap) fits within the 0.5 mm, and from 1 %
+    more it does not."""
+    tr = _kinked(look_ahead, corner_deg, stops)
+    tb = tr.con.tb
+    w = min(1 + look_ahead, tb.n)
+    v = tr.con.hard_reach(1, w)
+    end = 0.0 if stops else min(tb.point_cap[2], tb.cap[2])
+    a_max, j_max = tr.con.limits(1)
+    room = tb.s[2] - tb.s[1]
+    assert end < 0.5 * min(tb.point_cap[1], tb.cap[1])  # the case: it binds at boundary 1
+    assert brake_distance(v, 0.0, end, a_max, j_max) <= room
+    assert brake_distance(1.01 * v, 0.0, end, a_max, j_max) > room
+
+
+@pytest.mark.parametrize("seed", [48, 381])
+def test_x1_is_reached_without_a_dip(seed: int) -> None:
+    """Feeds seed 48: override 150 → 40 % 2.09 mm before a run boundary of 20 mm/s, x1 =
+    9.62 mm/s computed within the distance + 1 nm; ruckig's profile to it braked to 3.64 and
+    came back. Seed 381: from a cruise at 73.0 mm/s (override 10 %) to x1 = 2.19 mm/s 1 mm
+    on, ruckig's profile went down to 1.40 (the exact brake and a cruise at its end is not
+    in its profile family) and `_unpin` found none without the dip. x1 is now within the
+    distance itself, and the exact brake is planned where `_unpin` finds nothing: no dip."""
+    sc = feed_scenario(seed)
+    _, hard, slow, errors = check(sc)
+    assert hard == [] and errors == 0, (hard, describe(sc))
+    assert not any(f.startswith("dip") for f in slow), slow
