@@ -331,8 +331,12 @@ class Tracker:
                 # rest, at 72.2 mm/s and +7.6 m/s², aimed at 46.29 there, which it could not
                 # reach from below (the brake to a velocity is longer than the brake to
                 # rest), and passed the cap at 1.38 mm/s (feeds seed 915); it now aims at the
-                # M00, passing the cap as it brakes
-                tail = self.con.collect(s, seg, INF, first=b + 1)
+                # M00, passing the cap as it brakes. Only toward a stop: toward a corner of
+                # 2.6 mm/s 0.1 mm after a feed cap the shift braked through the cap at once
+                # (3.77 mm/s for 13.6; 9.86 without it, feeds seed 310)
+                far = self.con.collect(s, seg, INF, first=b + 1)
+                if far and self.con.is_stop(far[0][0]):
+                    tail = far
             if not tail:
                 break
             nb, ns, _, ngate = tail[0]
