@@ -202,6 +202,27 @@ class Targets:
         plan.soft_from = min(self.st.soft_from, b)
         return True
 
+    def boundary_target(
+        self, cands: list[tuple[int, float, float, bool]], i: int, cap: float, v: float, a: float,
+        v_p: float, ceiling: float, a_max: float, j_max: float, w: int,
+    ) -> float:  # fmt: skip
+        """The target at candidate i (cap: its chain's, `Constraints.target_cap`) from the
+        path's state (v, a; v_p after ramping a out): `pick_target`, a run boundary with the
+        jerk gap's bound (`gap_over`), and x1 where the gap's x2 above the cap would lose a
+        stop or a hard cap after it (`Constraints.hard_reach`; a cold review)."""
+        b, s_c, _, gate = cands[i]
+        d = s_c - self.st.s
+        over = self.gap_over(cands, i, min(cap, ceiling), w) if gate else 0.0
+        hard_b = self.hard(b, w)
+        target = self.pick_target(v, a, v_p, d, cap, ceiling, a_max, j_max, hard_b, over)
+        if (
+            over > 0.0
+            and target > min(cap, ceiling) * (1.0 + CAP_TOL) + V_ROUND
+            and target > self.con.hard_reach(b, w)
+        ):
+            target = self.pick_target(v, a, v_p, d, cap, ceiling, a_max, j_max, hard_b)
+        return target
+
     def pick_target(
         self, v: float, a: float, v_p: float, d: float, cap: float, ceiling: float,
         a_max: float, j_max: float, hard: float, over: float = 0.0,

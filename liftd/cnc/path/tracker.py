@@ -286,16 +286,7 @@ class Tracker:
             return
         cap = self.con.target_cap(cands, best_i)
         d = s_c - s
-        over = self.tg.gap_over(cands, best_i, min(cap, ceiling), w) if gate else 0.0
-        hard_b = self.tg.hard(b, w)
-        target = self.tg.pick_target(v, a, v_p, d, cap, ceiling, a_max, j_max, hard_b, over)
-        if (
-            over > 0.0
-            and target > min(cap, ceiling) * (1.0 + CAP_TOL) + V_ROUND
-            and target > self.con.hard_reach(b, w)
-        ):
-            # x2 of the jerk gap would lose a stop or a hard cap after b: x1 (a cold review)
-            target = self.tg.pick_target(v, a, v_p, d, cap, ceiling, a_max, j_max, hard_b)
+        target = self.tg.boundary_target(cands, best_i, cap, v, a, v_p, ceiling, a_max, j_max, w)
         soft_from = b
         shifted = False
         horizon = max(self.con.horizon(v, a, a_max, j_max, dt), d)
