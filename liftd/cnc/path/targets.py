@@ -46,6 +46,7 @@ from liftd.cnc.ruckig1 import (
 )
 
 DIP_TOL = 1e-4  # relative: a profile this much below the lower of its ends' velocities dips
+AIMS = 4  # profiles `Targets.aim_through` tries at most (one `settle` each)
 HOLD_TOP_GAIN = 1e-6  # s: `Targets._hold_top` takes the other profile where it is this shorter
 
 
@@ -222,6 +223,85 @@ class Targets:
         ):
             target = self.pick_target(v, a, v_p, d, cap, ceiling, a_max, j_max, hard_b)
         return target
+
+    def aim_through(
+        self, cands: list[tuple[int, float, float, bool]], i: int, v: float, a: float,
+        v_p: float, ceiling: float, a_max: float, j_max: float, w: int, passed: Plan | None,
+        held: Plan | None, event: bool,
+    ) -> bool:  # fmt: skip
+        """Candidate i, a feed drop (no run boundary), binds, but a later candidate of its run
+        lowers its target (`Constraints.target_cap`): zero acceleration at i, below its
+        own cap, is no rule of the CNC; one brake toward the later one passes i faster (known
+        deviation 8 of docs/geo-core.md: start-up over 0.2 mm blocks at F60000 toward an
+        F3000 block before a corner of 3.5 mm/s, a pause in the brake at the F3000 boundary
+        held the boundary before it at 34.6 for 38.7 mm/s, feeds seed 125). Plans toward the
+        candidate that lowers i's target (and on to the one that lowers that one's) and keeps
+        that profile where it passes every candidate before it below its cap, braking at i
+        (their feed caps are then the profile's, `Plan.soft_from`); where it passes one from
+        i on too fast, toward that one instead, at most AIMS profiles. False, nothing changed,
+        where none is kept, and where the aim's goal may rise or fall as the path moves on:
+        there zero acceleration at i leaves the next plan its room."""
+        ext = list(cands)
+        for _ in range(AIMS):
+            # the list ends within the brake from the path's state (`Constraints.horizon`);
+            # the aim's goal must keep what lies after it within the brake from its cap (the
+            # aim passed a feed drop at 72 where a rest at the window's end 0.4 mm after its
+            # goal allowed 49 mm/s, feeds seed 950)
+            last = ext[-1]
+            if last[3]:
+                break
+            seen = last[1] - self.st.s + brake_distance(last[2], 0.0, 0.0, a_max, j_max)
+            more = self.con.collect(self.st.s, self.con.seg, seen, first=last[0] + 1)
+            if not more:
+                break
+            ext += more
+        k, e = i, self.con.target_cap(ext, i)
+        while True:
+            nk = self.con.binding(ext, k, e)
+            if nk <= k:
+                break
+            k, e = nk, self.con.target_cap(ext, nk)
+            if ext[k][3] or e >= ext[k][2] * (1.0 - CAP_TOL):
+                break
+        if k <= i or (k + 1 == len(ext) and not ext[k][3] and len(ext) > len(cands)):
+            return False  # (what lies beyond the extended list may lower it still)
+        if ext[k][3] and self.con.chain_open(ext):
+            # a run's end that stands for the window's end (rest, or the floor its chain
+            # leaves): it rises as the window moves, and a profile aimed at it has no room to
+            # reach the higher end (rest at look-ahead 8 0.5 mm after a drop to F6000, then a
+            # corner of 1.62 mm/s there, reachable only at rest: feeds seed 577)
+            return False
+        st = self.st
+        errors, msg, soft, prev = st.errors, st.last_error, st.soft_from, st.plan
+        for _ in range(AIMS):
+            b, s_c, _, _ = ext[k]
+            target = self.boundary_target(ext, k, e, v, a, v_p, ceiling, a_max, j_max, w)
+            if abs(target - e) > CAP_TOL * e + V_ROUND:
+                break  # out of reach exactly (the jerk gap): i's own target keeps it
+            v_max = max(ceiling, target, v_p) if v <= ceiling else max(ceiling, target, v, v_p)
+            st.soft_from = ext[i][0]
+            self.settle(st.s, v, a, v_p, s_c, target, e, v_max, a_max, j_max, b, w,
+                        self.hard(b, w), passed, held, event, ceiling)  # fmt: skip
+            plan = st.plan
+            if plan is None or plan.goal != b or st.errors != errors:
+                break
+            fast = self.passed_above(plan, ext[i:k], k - i)
+            if fast < 0:
+                if plan.at(plan.time_at(ext[i][1], INF))[2] > -GATE_TOL or any(
+                    plan.at(plan.time_at(c[1], INF))[1] > c[2] * (1.0 + CAP_TOL) + V_ROUND
+                    for c in ext[:i]
+                ):
+                    # zero acceleration at i after all (from inside the brake to its cap:
+                    # ruckig's profile may rise after it, 92.4692 in a block of 92.4667 mm/s,
+                    # feeds seed 940), or a cap before i passed too fast
+                    break
+                return True
+            k = i + fast  # passed too fast: toward that one (its target lowered for the later)
+            if k <= i:
+                break
+            e = self.con.target_cap(ext, k)
+        st.plan, st.errors, st.last_error, st.soft_from = prev, errors, msg, soft
+        return False
 
     def pick_target(
         self, v: float, a: float, v_p: float, d: float, cap: float, ceiling: float,

@@ -285,6 +285,16 @@ class Tracker:
             # acceleration goes below it first and comes back: the target profile stays)
             return
         cap = self.con.target_cap(cands, best_i)
+        if (
+            not gate
+            and not self.con.hold
+            and skip < 0
+            and cap < cands[best_i][2] * (1.0 - CAP_TOL)
+            and self.tg.aim_through(
+                cands, best_i, v, a, v_p, ceiling, a_max, j_max, w, passed, held, event
+            )
+        ):
+            return  # one brake through a feed drop a later cap lowers (known deviation 8)
         d = s_c - s
         target = self.tg.boundary_target(cands, best_i, cap, v, a, v_p, ceiling, a_max, j_max, w)
         soft_from = b
