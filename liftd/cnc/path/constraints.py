@@ -353,6 +353,25 @@ class Constraints:
                 return k
         return -1
 
+    def extend(
+        self, cands: list[tuple[int, float, float, bool]], s: float, a_max: float, j_max: float,
+        times: int,
+    ) -> list[tuple[int, float, float, bool]]:  # fmt: skip
+        """`cands` (collected from position s) and the constraints after its last within the
+        brake to rest from that one's cap, again from the new last, at most `times` times:
+        until the list ends at a run boundary or a stop, or nothing more is in reach."""
+        ext = list(cands)
+        for _ in range(times):
+            last = ext[-1]
+            if last[3]:
+                break
+            seen = last[1] - s + brake_distance(last[2], 0.0, 0.0, a_max, j_max)
+            more = self.collect(s, self.seg, seen, first=last[0] + 1)
+            if not more:
+                break
+            ext += more
+        return ext
+
     def _beyond(self, g: int, cap: float, w: int) -> float:
         """Velocity at run boundary g (zero acceleration) from which every constraint after it
         up to the window end stays reachable. Braking does not compose across run boundaries

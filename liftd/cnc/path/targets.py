@@ -16,6 +16,7 @@ only when nothing else is accepted.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 from liftd.cnc.path.constraints import (
@@ -237,24 +238,15 @@ class Targets:
         held the boundary before it at 34.6 for 38.7 mm/s, feeds seed 125). Plans toward the
         candidate that lowers i's target (and on to the one that lowers that one's) and keeps
         that profile where it passes every candidate before it below its cap, braking at i
-        (their feed caps are then the profile's, `Plan.soft_from`); where it passes one from
-        i on too fast, toward that one instead, at most AIMS profiles. False, nothing changed,
+        (their feed caps are then the profile's, `Plan.soft_from`); where it passes one after
+        i too fast, toward that one instead, at most AIMS profiles; where it passes i itself
+        too fast, toward i's cap still braking (`_brake_state`). False, nothing changed,
         where none is kept, and where the aim's goal may rise or fall as the path moves on:
         there zero acceleration at i leaves the next plan its room."""
-        ext = list(cands)
-        for _ in range(AIMS):
-            # the list ends within the brake from the path's state (`Constraints.horizon`);
-            # the aim's goal must keep what lies after it within the brake from its cap (the
-            # aim passed a feed drop at 72 where a rest at the window's end 0.4 mm after its
-            # goal allowed 49 mm/s, feeds seed 950)
-            last = ext[-1]
-            if last[3]:
-                break
-            seen = last[1] - self.st.s + brake_distance(last[2], 0.0, 0.0, a_max, j_max)
-            more = self.con.collect(self.st.s, self.con.seg, seen, first=last[0] + 1)
-            if not more:
-                break
-            ext += more
+        # the list ends within the brake from the path's state (`Constraints.horizon`); the
+        # aim's goal must keep what lies after it (the aim passed a feed drop at 72 where a
+        # rest at the window's end 0.4 mm after its goal allowed 49 mm/s, feeds seed 950)
+        ext = self.con.extend(cands, self.st.s, a_max, j_max, AIMS)
         k, e = i, self.con.target_cap(ext, i)
         while True:
             nk = self.con.binding(ext, k, e)
@@ -265,11 +257,15 @@ class Targets:
                 break
         if k <= i or (k + 1 == len(ext) and not ext[k][3] and len(ext) > len(cands)):
             return False  # (what lies beyond the extended list may lower it still)
-        if ext[k][3] and self.con.chain_open(ext):
-            # a run's end that stands for the window's end (rest, or the floor its chain
-            # leaves): it rises as the window moves, and a profile aimed at it has no room to
-            # reach the higher end (rest at look-ahead 8 0.5 mm after a drop to F6000, then a
-            # corner of 1.62 mm/s there, reachable only at rest: feeds seed 577)
+        if (
+            ext[k][3]
+            and e < self.con.tb.entry_cap(ext[k][0], self.con.ov) * (1.0 - CAP_TOL)
+            and self.con.chain_open(ext)
+        ):
+            # a run's end lowered for the window's end (rest, or the floor its chain leaves):
+            # it rises as the window moves, and a profile aimed at it has no room to reach the
+            # higher end (rest at look-ahead 8 0.5 mm after a drop to F6000, then a corner of
+            # 1.62 mm/s there, reachable only at rest: feeds seed 577)
             return False
         st = self.st
         errors, msg, soft, prev = st.errors, st.last_error, st.soft_from, st.plan
@@ -286,10 +282,11 @@ class Targets:
             if plan is None or plan.goal != b or st.errors != errors:
                 break
             fast = self.passed_above(plan, ext[i:k], k - i)
+            if fast == 0 and self._brake_state(ext, i, k, e, v_p, ceiling, a_max, j_max, w):
+                return True
             if fast < 0:
-                if plan.at(plan.time_at(ext[i][1], INF))[2] > -GATE_TOL or any(
-                    plan.at(plan.time_at(c[1], INF))[1] > c[2] * (1.0 + CAP_TOL) + V_ROUND
-                    for c in ext[:i]
+                if plan.at(plan.time_at(ext[i][1], INF))[2] > -GATE_TOL or not self.below(
+                    plan, ext[:i]
                 ):
                     # zero acceleration at i after all (from inside the brake to its cap:
                     # ruckig's profile may rise after it, 92.4692 in a block of 92.4667 mm/s,
@@ -302,6 +299,43 @@ class Targets:
             e = self.con.target_cap(ext, k)
         st.plan, st.errors, st.last_error, st.soft_from = prev, errors, msg, soft
         return False
+
+    def _brake_state(
+        self, ext: list[tuple[int, float, float, bool]], i: int, k: int, e: float, v_p: float,
+        ceiling: float, a_max: float, j_max: float, w: int,
+    ) -> bool:  # fmt: skip
+        """The one brake toward k's target e passes feed drop i above its cap (or does not
+        brake there), and zero acceleration at i at its cap loses e: the path passes i at its
+        cap still braking, with the least deceleration from which e at k stays reachable
+        (the block after i is capped at i's cap, so that is the fastest way through both;
+        feeds seed 17: the F6000 boundary 1 mm before a corner of 0.41 mm/s held at zero
+        acceleration at 69.5 mm/s, the boundary before it at 100.8 where the rules allow
+        109.1). A plan toward i with that acceleration there (`Plan.a_end`); False where
+        none, nothing changed."""
+        st = self.st
+        b_i, s_i, c_i, _ = ext[i]
+        room = ext[k][1] - s_i - CHAIN_MARGIN
+        if room <= 0.0 or c_i <= e or brake_distance(c_i, 0.0, e, a_max, j_max) <= room:
+            return False
+        a_lo = -min(a_max, math.sqrt(2.0 * j_max * (c_i - e)) * (1.0 - 1e-9))
+        if brake_distance(c_i, a_lo, e, a_max, j_max) > room:
+            return False
+        a_i = highest(a_lo, 0.0, 40, lambda x: brake_distance(c_i, x, e, a_max, j_max) <= room)
+        v_max = max(ceiling, c_i, v_p) if st.v <= ceiling else max(ceiling, c_i, st.v, v_p)
+        try:
+            traj = self.calc.position(st.s, st.v, st.a, s_i, c_i, v_max, a_max, j_max, a1=a_i)
+        except ProfileError:
+            return False
+        plan = Plan(traj, st.t, b_i, w, s_i, c_i)
+        plan.a_end = a_i
+        plan.ev.prepare()
+        ph = plan.ev.phases
+        assert ph is not None
+        if lowest_velocity(ph) < min(st.v, c_i) * (1.0 - DIP_TOL) or not self.below(plan, ext[:i]):
+            return False
+        plan.soft_from = min(st.soft_from, b_i)
+        st.plan = plan
+        return True
 
     def pick_target(
         self, v: float, a: float, v_p: float, d: float, cap: float, ceiling: float,
@@ -619,6 +653,13 @@ class Targets:
             if j == 0 and aj > GATE_TOL:
                 return j
         return -1
+
+    @staticmethod
+    def below(plan: Plan, cands: list[tuple[int, float, float, bool]]) -> bool:
+        """`plan` passes every one of `cands` at most at its cap."""
+        return all(
+            plan.at(plan.time_at(c[1], INF))[1] <= c[2] * (1.0 + CAP_TOL) + V_ROUND for c in cands
+        )
 
     def rises_above(self, plan: Plan, cand: tuple[int, float, float, bool]) -> bool:
         """`plan` speeds up again after `cand`'s boundary above the ceiling of its block

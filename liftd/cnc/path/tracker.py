@@ -518,7 +518,7 @@ class Tracker:
                 b += 1
             if cut >= 0 and cut == plan.goal:
                 t_end = plan.t0 + plan.dur
-                s1, v1, a1 = tb.s[cut], plan.v_end, 0.0
+                s1, v1, a1 = tb.s[cut], plan.v_end, plan.a_end
                 seg1 = cut
             elif cut >= 0:
                 t_end = min(max(plan.time_at(tb.s[cut], t_end), self.st.t), t_end)

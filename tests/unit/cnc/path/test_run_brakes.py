@@ -116,12 +116,16 @@ def test_the_brake_at_once_never_rests_or_crawls_where_no_rule_says(
         assert t_core <= 1.01 * bound
 
 
-@pytest.mark.parametrize("seed", [125, 185, 604])
+@pytest.mark.parametrize("seed", [125, 185, 604, 17, 213, 456, 709, 976])
 def test_a_feed_drop_a_later_cap_lowers_is_passed_in_one_brake(seed: int) -> None:
-    """Feeds seeds whose start-up over 0.2 mm blocks (F60000, look-ahead 120 and 200) brakes
-    for an F3000 block before a corner: the tracker planned zero acceleration at the F3000
-    boundary, below its cap, and braked again after it (seed 125: the boundary before it at
-    34.6 where one brake allows 38.7 mm/s). `Targets.aim_through` plans the one brake."""
+    """Feeds seeds whose start-up over short blocks brakes for a feed drop just before a
+    corner: the tracker planned zero acceleration at the drop, below its cap, and braked
+    again after it (seed 125: 0.2 mm blocks at F60000, an F3000 block before a corner, the
+    boundary before it at 34.6 where one brake allows 38.7 mm/s). `Targets.aim_through`
+    plans the one brake; where that passes the drop above its cap, the drop at its cap still
+    braking (`Targets._brake_state`; seed 17: 1 mm blocks at F30000, F6000 1 mm before a
+    corner of 0.41 mm/s, 100.8 for 109.1 mm/s). Seeds 709 and 976: a corner whose chain
+    reaches the window's end, its own cap binding."""
     _, hard, slow, errors = check(feed_scenario(seed))
     assert (hard, slow, errors) == ([], [], 0)
 
