@@ -275,7 +275,11 @@ class Targets:
             if abs(target - e) > CAP_TOL * e + V_ROUND:
                 break  # out of reach exactly (the jerk gap): i's own target keeps it
             v_max = max(ceiling, target, v_p) if v <= ceiling else max(ceiling, target, v, v_p)
-            st.soft_from = ext[i][0]
+            # the caps before k are the profile's (checked here, `below`): a step's check of
+            # them with zero acceleration there would force a re-plan at each one passed
+            # braking (feeds seed 921: a brake state toward one drop and toward the one before
+            # it, in turns, then the shift passed the drop at 76.1 for 74.4 mm/s)
+            st.soft_from = ext[0][0]
             self.settle(st.s, v, a, v_p, s_c, target, e, v_max, a_max, j_max, b, w,
                         self.hard(b, w), passed, held, event, ceiling)  # fmt: skip
             plan = st.plan
@@ -286,7 +290,7 @@ class Targets:
                 return True
             if fast < 0:
                 if plan.at(plan.time_at(ext[i][1], INF))[2] > -GATE_TOL or not self.below(
-                    plan, ext[:i]
+                    plan, ext[:k]
                 ):
                     # zero acceleration at i after all (from inside the brake to its cap:
                     # ruckig's profile may rise after it, 92.4692 in a block of 92.4667 mm/s,
@@ -317,6 +321,12 @@ class Targets:
         room = ext[k][1] - s_i - CHAIN_MARGIN
         if room <= 0.0 or c_i <= e or brake_distance(c_i, 0.0, e, a_max, j_max) <= room:
             return False
+        if k != i + 1:
+            # a cap between i and k: a step's check reads it with zero acceleration there
+            # (`Constraints.need`), which the brake state passes braking; from the path's
+            # states before i it read as lost, forced re-plans took turns with the shift, and
+            # the shift passed a drop at 71.40 for 71.32 mm/s (feeds seed 394)
+            return False
         a_lo = -min(a_max, math.sqrt(2.0 * j_max * (c_i - e)) * (1.0 - 1e-9))
         if brake_distance(c_i, a_lo, e, a_max, j_max) > room:
             return False
@@ -333,7 +343,7 @@ class Targets:
         assert ph is not None
         if lowest_velocity(ph) < min(st.v, c_i) * (1.0 - DIP_TOL) or not self.below(plan, ext[:i]):
             return False
-        plan.soft_from = min(st.soft_from, b_i)
+        plan.soft_from = min(st.soft_from, ext[0][0])
         st.plan = plan
         return True
 
@@ -654,11 +664,15 @@ class Targets:
                 return j
         return -1
 
-    @staticmethod
-    def below(plan: Plan, cands: list[tuple[int, float, float, bool]]) -> bool:
-        """`plan` passes every one of `cands` at most at its cap."""
+    def below(self, plan: Plan, cands: list[tuple[int, float, float, bool]]) -> bool:
+        """`plan` passes every one of `cands` at most at its cap and does not speed up again
+        above the ceiling of the block after it (`rises_above`: a profile toward a feed drop
+        two blocks on passed the one before it at its cap of 171.25 mm/s and rose to 171.30
+        in its block, feeds seed 86)."""
         return all(
-            plan.at(plan.time_at(c[1], INF))[1] <= c[2] * (1.0 + CAP_TOL) + V_ROUND for c in cands
+            plan.at(plan.time_at(c[1], INF))[1] <= c[2] * (1.0 + CAP_TOL) + V_ROUND
+            and not self.rises_above(plan, c)
+            for c in cands
         )
 
     def rises_above(self, plan: Plan, cand: tuple[int, float, float, bool]) -> bool:
