@@ -38,6 +38,7 @@ class Plan:
 
     __slots__ = (
         "a_end",
+        "aim",
         "dur",
         "ev",
         "goal",
@@ -77,6 +78,9 @@ class Plan:
         # the acceleration at the goal: 0 but for `Targets.aim_through`'s brake state (read
         # where the step reaches the goal; after the end the plan runs on at v_end)
         self.a_end = 0.0
+        # the candidate an aimed profile keeps beyond its goal (`Targets.aim_through`; -1 for
+        # none): a re-plan from inside it collects its candidates at least that far
+        self.aim = -1
 
     @property
     def keeps(self) -> int:

@@ -296,6 +296,7 @@ class Targets:
                     # ruckig's profile may rise after it, 92.4692 in a block of 92.4667 mm/s,
                     # feeds seed 940), or a cap before i passed too fast
                     break
+                plan.aim = b
                 return True
             k = i + fast  # passed too fast: toward that one (its target lowered for the later)
             if k <= i:
@@ -344,6 +345,7 @@ class Targets:
         if lowest_velocity(ph) < min(st.v, c_i) * (1.0 - DIP_TOL) or not self.below(plan, ext[:i]):
             return False
         plan.soft_from = min(st.soft_from, ext[0][0])
+        plan.aim = ext[k][0]
         st.plan = plan
         return True
 

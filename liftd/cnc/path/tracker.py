@@ -231,6 +231,13 @@ class Tracker:
         best: tuple[int, float, float, bool] | None = None
         best_slack = INF
         reach = INF if force is not None else self.con.horizon(v, a, a_max, j_max, dt)
+        for aimed in (held, passed):
+            if aimed is not None and aimed.aim > seg:
+                # inside an aimed profile: as far as its aim, or the re-plan plans for the
+                # drop it passes braking with zero acceleration there, out of reach from the
+                # aim's state (a forced re-plan's aim 5.6 mm before an M00, the next re-plan
+                # without it: 7.0 mm/s in the jerk gap for a cap of 75, feeds seed 713)
+                reach = max(reach, tb.s[aimed.aim] - s)
         cands = self.con.collect(s, seg, reach, keep=-1 if force is None else force)
         if force is not None and all(c[0] != force for c in cands):
             force = None  # not a constraint from here: the most binding one
