@@ -29,8 +29,9 @@ Tolerances: rounding only. A velocity within `OVER_REL` (1e-6, relative) plus `O
 (1e-9 m/s) above its cap is at it (the core reads a crossing within 1e-6 of its cap as at the
 cap: path/constraints.py CAP_TOL). The velocity at a boundary is taken from the sample
 nearer to it, v + a·Δt (Δt the time between them, from the distance), which the jerk can
-move by J·Δt²/2 at most (J the higher of the two runs' jerk limits; Δt ≤ half a cycle):
-a boundary is over its cap only where that lower bound is.
+move by J·Δt²/2, and through the crossing's time by (|a| + J·Δt)·J·Δt³/6 / v, at most (J
+the higher of the two runs' jerk limits; Δt ≤ half a cycle): a boundary is over its cap
+only where that lower bound is (`boundary_velocity`).
 """
 
 from __future__ import annotations
