@@ -359,17 +359,18 @@ class Constraints:
     ) -> list[tuple[int, float, float, bool]]:  # fmt: skip
         """`cands` (collected from position s) and the constraints after its last within the
         brake to rest from that one's cap, again from the new last, at most `times` times:
-        until the list ends at a run boundary or a stop, or nothing more is in reach."""
+        until the list ends at a run boundary or a stop, or nothing more is in reach; at most
+        MAX_CANDIDATES long (its users' loops are quadratic in it: `Targets.aim_through`)."""
         ext = list(cands)
         for _ in range(times):
             last = ext[-1]
-            if last[3]:
+            if last[3] or len(ext) >= MAX_CANDIDATES:
                 break
             seen = last[1] - s + brake_distance(last[2], 0.0, 0.0, a_max, j_max)
             more = self.collect(s, self.seg, seen, first=last[0] + 1)
             if not more:
                 break
-            ext += more
+            ext += more[: MAX_CANDIDATES - len(ext)]
         return ext
 
     def _beyond(self, g: int, cap: float, w: int) -> float:
