@@ -338,6 +338,10 @@ class Targets:
         except ProfileError:
             return False
         plan = Plan(traj, st.t, b_i, w, s_i, c_i)
+        if plan.p_end != s_i or plan.v_end != c_i:
+            # not snapped to its goal (ruckig's end more than 1 nm or 1 nm/s off): the step
+            # would end it between boundaries, where a plan runs on with zero acceleration
+            return False  # (a cold review: an acceleration jump of a_i there)
         plan.a_end = a_i
         plan.ev.prepare()
         ph = plan.ev.phases
