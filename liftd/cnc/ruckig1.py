@@ -43,8 +43,9 @@ class Ruckig1:
         self._vel.target_acceleration = [0.0]
         self._vel.min_velocity = None
         self._vel.minimum_duration = None
-        # (target velocity, v_max, forward only, a_max, j_max, minimum duration) last set
-        self._last_pos: tuple[float, float, bool, float, float, float | None] | None = None
+        # (target velocity, v_max, forward only, a_max, j_max, minimum duration, target
+        # acceleration) last set
+        self._last_pos: tuple[float, float, bool, float, float, float | None, float] | None = None
         self._last_vel: tuple[float, float, float] | None = None  # (v_max, a_max, j_max)
         self.calls = 0
 
@@ -62,8 +63,10 @@ class Ruckig1:
         forward_only: bool = True,
         min_duration: float | None = None,
         into: Trajectory | None = None,
+        a1: float = 0.0,
     ) -> Trajectory:
-        """Time-optimal (or at least `min_duration` long) profile from (p0, v0, a0) to (p1, v1, 0).
+        """Time-optimal (or at least `min_duration` long) profile from (p0, v0, a0) to (p1, v1, a1)
+        (a1 = 0 but for `Targets.aim_through`'s brake state).
         `forward_only`: the velocity never becomes negative (a path never moves backwards).
         `into`: a trajectory to overwrite (a throwaway profile saves its allocation)."""
         if forward_only and v1 < 0.0:
@@ -79,7 +82,7 @@ class Ruckig1:
         inp.current_acceleration = [a0]
         inp.target_position = [p1]
         last = self._last_pos
-        if last is None or last != (v1, v_max, forward_only, a_max, j_max, min_duration):
+        if last is None or last != (v1, v_max, forward_only, a_max, j_max, min_duration, a1):
             if last is None or last[0] != v1:
                 inp.target_velocity = [v1]
             if last is None or last[1] != v_max:
@@ -92,7 +95,9 @@ class Ruckig1:
                 inp.max_jerk = [j_max]
             if last is None or last[5] != min_duration:
                 inp.minimum_duration = min_duration
-            self._last_pos = (v1, v_max, forward_only, a_max, j_max, min_duration)
+            if last is None or last[6] != a1:
+                inp.target_acceleration = [a1]
+            self._last_pos = (v1, v_max, forward_only, a_max, j_max, min_duration, a1)
         return self._solve(inp, into)
 
     def velocity(

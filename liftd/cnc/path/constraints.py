@@ -296,7 +296,7 @@ class Constraints:
             v = min(v, reach_velocity(c, max(s_h - s_b - CHAIN_MARGIN, 0.0), a_max, j_max))
         return v
 
-    def _chain_open(self, cands: list[tuple[int, float, float, bool]]) -> bool:
+    def chain_open(self, cands: list[tuple[int, float, float, bool]]) -> bool:
         """Whether the chain of `cands` ends at the window's end (or its run boundary's chain
         does): its end may rise as the window moves on (`_beyond`)."""
         last = cands[-1][0]
@@ -334,13 +334,44 @@ class Constraints:
         (the same jerk phase first, its ramp out later), so the least over them keeps all."""
         s_i = cands[i][1]
         e = cands[i][2]
-        is_open = self._chain_open(cands)
+        is_open = self.chain_open(cands)
         for k in range(i + 1, len(cands)):
             bk, sk, ck, gate = cands[k]
             # a cap inside the run is its own (no later window raises it): the exact reach; the
             # run's end is lowered for what lies after it, which a later window may raise
             e = min(e, self._link(ck, s_i, bk, sk, is_open and gate))
         return e
+
+    def binding(self, cands: list[tuple[int, float, float, bool]], i: int, e: float) -> int:
+        """The first candidate after i whose brake alone from i gives i's target e
+        (`target_cap`), -1 where none does (e is i's own cap)."""
+        is_open = self.chain_open(cands)
+        s_i = cands[i][1]
+        for k in range(i + 1, len(cands)):
+            bk, sk, ck, gate = cands[k]
+            if self._link(ck, s_i, bk, sk, is_open and gate) <= e:
+                return k
+        return -1
+
+    def extend(
+        self, cands: list[tuple[int, float, float, bool]], s: float, a_max: float, j_max: float,
+        times: int,
+    ) -> list[tuple[int, float, float, bool]]:  # fmt: skip
+        """`cands` (collected from position s) and the constraints after its last within the
+        brake to rest from that one's cap, again from the new last, at most `times` times:
+        until the list ends at a run boundary or a stop, or nothing more is in reach; at most
+        MAX_CANDIDATES long (its users' loops are quadratic in it: `Targets.aim_through`)."""
+        ext = list(cands)
+        for _ in range(times):
+            last = ext[-1]
+            if last[3] or len(ext) >= MAX_CANDIDATES:
+                break
+            seen = last[1] - s + brake_distance(last[2], 0.0, 0.0, a_max, j_max)
+            more = self.collect(s, self.seg, seen, first=last[0] + 1)
+            if not more:
+                break
+            ext += more[: MAX_CANDIDATES - len(ext)]
+        return ext
 
     def _beyond(self, g: int, cap: float, w: int) -> float:
         """Velocity at run boundary g (zero acceleration) from which every constraint after it

@@ -231,6 +231,13 @@ class Tracker:
         best: tuple[int, float, float, bool] | None = None
         best_slack = INF
         reach = INF if force is not None else self.con.horizon(v, a, a_max, j_max, dt)
+        for aimed in (held, passed):
+            if aimed is not None and aimed.aim > seg:
+                # inside an aimed profile: as far as its aim, or the re-plan plans for the
+                # drop it passes braking with zero acceleration there, out of reach from the
+                # aim's state (a forced re-plan's aim 5.6 mm before an M00, the next re-plan
+                # without it: 7.0 mm/s in the jerk gap for a cap of 75, feeds seed 713)
+                reach = max(reach, tb.s[aimed.aim] - s)
         cands = self.con.collect(s, seg, reach, keep=-1 if force is None else force)
         if force is not None and all(c[0] != force for c in cands):
             force = None  # not a constraint from here: the most binding one
@@ -285,6 +292,16 @@ class Tracker:
             # acceleration goes below it first and comes back: the target profile stays)
             return
         cap = self.con.target_cap(cands, best_i)
+        if (
+            not gate
+            and not self.con.hold
+            and skip < 0
+            and cap < cands[best_i][2] * (1.0 - CAP_TOL)
+            and self.tg.aim_through(
+                cands, best_i, v, a, v_p, ceiling, a_max, j_max, w, passed, held, event
+            )
+        ):
+            return  # one brake through a feed drop a later cap lowers (known deviation 8)
         d = s_c - s
         target = self.tg.boundary_target(cands, best_i, cap, v, a, v_p, ceiling, a_max, j_max, w)
         soft_from = b
@@ -508,7 +525,7 @@ class Tracker:
                 b += 1
             if cut >= 0 and cut == plan.goal:
                 t_end = plan.t0 + plan.dur
-                s1, v1, a1 = tb.s[cut], plan.v_end, 0.0
+                s1, v1, a1 = tb.s[cut], plan.v_end, plan.a_end
                 seg1 = cut
             elif cut >= 0:
                 t_end = min(max(plan.time_at(tb.s[cut], t_end), self.st.t), t_end)

@@ -12,6 +12,8 @@ from liftd.cnc.plc import Schedule, SimPlc, parse_override_spec
 from liftd.sim.simulate import run_cycles
 from tests.support.channel import shipped
 from tests.support.motion_check import Recorder, Sample, check_motion
+from tests.support.motion_overrun import boundary_velocity
+from tests.support.motion_rules import PathRules
 from tests.unit.cnc.path.test_dense_constraints import poisoned
 from tests.unit.cnc.path.test_motion_check import at, drive
 
@@ -242,3 +244,42 @@ def test_a_brake_through_a_run_boundary_has_zero_acceleration_there_without_a_pa
     assert overruns(findings(task, samples(1))) == []
     found = overruns(findings(task, samples(2)))
     assert len(found) == 1 and "paused" in found[0], found
+
+
+def _state(v: float, a: float, j: float, t: float) -> tuple[float, float, float]:
+    """(s, v, a) t after a state at s = 0 under constant jerk j (t < 0: before it)."""
+    return v * t + a * t * t / 2.0 + j * t**3 / 6.0, v + a * t + j * t * t / 2.0, a + j * t
+
+
+def test_the_bound_on_a_crossing_holds_for_every_jerk_within_the_limit() -> None:
+    """`boundary_velocity` reads the velocity at a boundary from the nearer sample and bounds
+    how far the jerk can have moved it; the true crossing lies within that bound for every
+    jerk history within J. Its first form (J·Δt²/2) left out that the jerk moves the
+    crossing's time too: a brake state passes a feed drop at its cap at −2.8 m/s², and the
+    check read 100.0001 mm/s for a crossing at 100.0000 (feeds seed 956, 0.7 ms from the
+    sample). Here: crossings at 100 mm/s at −4 … +4 m/s², jerks ±J on either side, samples
+    1 ms apart, the boundary 0.1 … 0.7 ms after the first: within 1e-8 (relative; one
+    Newton step's rounding, 2.3e-9 at most here, the check's tolerance is 1e-6; the first
+    form was off by up to 7.2e-7)."""
+    task = line_task()
+    path = Recorder(task).program
+    rules = PathRules(path, task.interp.table, 30)
+    b = 1
+    s_b = task.interp.table.s[b]
+    j_lim = rules.run_jerk(b)
+    base = Sample(0.0, 0.0, 0.0, 0.0, 0, None, False, 1.0, False, frozenset(), frozenset(), True)
+    for a in (-4.0, -2.8, -1.0, 0.0, 1.0, 4.0):
+        for j1, j2 in ((j_lim, j_lim), (-j_lim, -j_lim), (j_lim, -j_lim), (-j_lim, j_lim)):
+            for near in (1e-4, 3e-4, 5e-4, 7e-4):
+                for before in (True, False):
+                    t0, t1 = (-near, DT - near) if before else (near - DT, near)
+                    states = [_state(0.1, a, j1 if t < 0 else j2, t) for t in (t0, t1)]
+                    last, smp = (
+                        dataclasses.replace(base, t=t, s=s_b + st[0], v=st[1], a=st[2], seg=k)
+                        for t, st, k in zip((t0, t1), states, (b - 1, b), strict=True)
+                    )
+                    v_b, moved = boundary_velocity(rules, last, smp, b)
+                    assert v_b - moved <= 0.1 * (1.0 + 1e-8), (a, j1, j2, near, before, v_b)
+                    assert v_b + moved >= 0.1 * (1.0 - 1e-8), (
+                        a, j1, j2, near, before, v_b, moved,
+                    )  # fmt: skip

@@ -9,7 +9,6 @@ tests/support/motion_check.py and the cycle checker (limits, tracker errors)."""
 from __future__ import annotations
 
 import dataclasses
-import re
 
 import pytest
 
@@ -18,6 +17,7 @@ from liftd.cnc.plc import Schedule
 from tests.support.cam_cases import cam_scenario
 from tests.support.cam_runs import check, core_time
 from tests.support.channel import shipped
+from tests.support.feed_cases import feed_scenario
 from tests.support.reference_bound import lower_bound_time
 from tests.support.scenarios import Scenario
 
@@ -60,17 +60,15 @@ def test_cam_programs_pass_a_runs_feed_drops_in_one_brake(seed: int) -> None:
 def test_falling_feeds_brake_to_the_corner_or_the_stop_with_no_stop_or_overrun(
     look_ahead: int, step_mm: float, feeds: tuple[int, ...], end: str
 ) -> None:
-    """No rest, overrun or tracker error, and the feed drops within 15 % of what one brake to
-    the lowest of the caps after them allows (main before the composition: 29 % below). What
-    remains below it is known deviation 8's: the tracker plans zero acceleration at a feed
-    drop whose target a later cap lowers (82.1 for 95.7 mm/s at worst here)."""
+    """No rest, overrun or tracker error, and no slowdown the rules do not explain: each feed
+    drop is passed as one brake to the lowest of the caps after it allows (main before the
+    composition: 29 % below; after it, until `Targets.aim_through`, up to 14 % below, 82.1
+    for 95.7 mm/s: zero acceleration at a feed drop whose target a later cap lowers, known
+    deviation 8)."""
     ch = dataclasses.replace(shipped(), look_ahead_blocks=look_ahead)
     text = falling_feeds(step_mm, feeds, end)
     _, hard, slow, errors = check(Scenario(0, ch, text, Schedule()))
-    assert (hard, errors) == ([], 0)
-    for finding in slow:
-        m = re.search(r"at ([0-9.]+) mm/s, expected ([0-9.]+)", finding)
-        assert m is not None and float(m.group(1)) >= 0.85 * float(m.group(2)), finding
+    assert (hard, slow, errors) == ([], [], 0)
 
 
 FEED_DROP_BEFORE_M00 = "\n".join(
@@ -116,3 +114,58 @@ def test_the_brake_at_once_never_rests_or_crawls_where_no_rule_says(
         t_core, _ = core_time(task, 1.0)
         bound = lower_bound_time(task.prog.path, task.prog.table, look_ahead, 1.0)
         assert t_core <= 1.01 * bound
+
+
+@pytest.mark.parametrize("seed", [125, 185, 604, 17, 213, 456, 709, 976])
+def test_a_feed_drop_a_later_cap_lowers_is_passed_in_one_brake(seed: int) -> None:
+    """Feeds seeds whose start-up over short blocks brakes for a feed drop just before a
+    corner: the tracker planned zero acceleration at the drop, below its cap, and braked
+    again after it (seed 125: 0.2 mm blocks at F60000, an F3000 block before a corner, the
+    boundary before it at 34.6 where one brake allows 38.7 mm/s). `Targets.aim_through`
+    plans the one brake; where that passes the drop above its cap, the drop at its cap still
+    braking (`Targets._brake_state`; seed 17: 1 mm blocks at F30000, F6000 1 mm before a
+    corner of 0.41 mm/s, 100.8 for 109.1 mm/s). Seeds 709 and 976: a corner whose chain
+    reaches the window's end, its own cap binding."""
+    _, hard, slow, errors = check(feed_scenario(seed))
+    assert (hard, slow, errors) == ([], [], 0)
+
+
+@pytest.mark.parametrize("seed", [39, 577, 940, 950, 86, 921, 394, 713, 956])
+def test_the_aim_through_a_feed_drop_keeps_what_its_goal_cannot(seed: int) -> None:
+    """Programs that versions of `Targets.aim_through` without one of its guards broke (each
+    clean on main before it): an aim at the window end's rest, whose end rose to a corner of
+    1.62 mm/s reachable then only at rest (seed 577: 0.0035 mm/s; seed 39: a tracker error);
+    a profile from inside the brake to the drop's own cap, zero acceleration there, that rose
+    after it (seed 940: 92.4692 in a block of 92.4667 mm/s); an aim whose goal a rest 0.4 mm
+    after it, beyond the list, lowered (seed 950: 22.8 for 24.8 mm/s after it); a profile
+    that rose above a cap before the drop in its block (seed 86: 171.30 for 171.25); caps
+    before the goal or between the drop and the goal that the steps read with zero
+    acceleration there, forced re-plans in turns and the shift past them (seeds 921 and 394:
+    76.1 for 74.4 and 71.40 for 71.32 mm/s); an aim from a forced re-plan that the next
+    re-plan did not see (seed 713: a target of 7.0 mm/s in the jerk gap); and the check's
+    bound on a crossing braking at its cap (seed 956). Seed 940's one slowdown, boundary 16
+    at 38.8 for 43.6 mm/s 1.2 s before, is main's too."""
+    _, hard, slow, errors = check(feed_scenario(seed))
+    assert (hard, errors) == ([], 0)
+    assert [f for f in slow if not (seed == 940 and f.startswith("boundary 16 "))] == []
+
+
+FALLING_BEFORE_A_KINK = "\n".join(
+    ["G01 X110 Y300 F3000", "G01 X113 Y300 F36000"]
+    + [f"G01 X{113 + 0.1 * i:.1f} Y300 F{f}" for i, f in enumerate((30000, 15000, 9000), 1)]
+    + [f"G01 X{113.3 + 0.1 * i:.1f} Y300 F{f}" for i, f in enumerate((4800, 2400, 1000), 1)]
+    + ["G01 X114.5553 Y300.2955 F1800", "M30"]
+)
+
+
+@pytest.mark.parametrize("look_ahead", [8, 12, 30])
+@pytest.mark.parametrize("cycle", [5e-4, 1e-3])
+def test_drops_between_the_brake_state_and_its_goal_are_kept(look_ahead: int, cycle: float) -> None:
+    """A cold review's program (0.1 mm blocks falling from F36000 to F1000 before a kink): a
+    brake state at one drop with more drops before its goal left the next one out of reach
+    as the steps read it; forced re-plans took turns between the two, and the shift passed
+    two drops above their caps (40.29 for 40.00 and 24.93 for 16.67 mm/s). Clean on main."""
+    ch = dataclasses.replace(shipped(), look_ahead_blocks=look_ahead, cycle_time=cycle)
+    _, hard, slow, errors = check(Scenario(0, ch, FALLING_BEFORE_A_KINK, Schedule()))
+    assert (hard, errors) == ([], 0)
+    assert slow == []
