@@ -31,6 +31,7 @@ COMPILED: tuple[str, ...] = (
     "liftd.cnc.lift.path_based",
     "liftd.cnc.lift.profile",
     "liftd.cnc.path.bounds",
+    "liftd.cnc.path.aims",
     "liftd.cnc.path.brakes",
     "liftd.cnc.path.constraints",
     "liftd.cnc.path.geometry",

@@ -66,7 +66,7 @@ class Ruckig1:
         a1: float = 0.0,
     ) -> Trajectory:
         """Time-optimal (or at least `min_duration` long) profile from (p0, v0, a0) to (p1, v1, a1)
-        (a1 = 0 but for `Targets.aim_through`'s brake state).
+        (a1 = 0 but for `Aims.through`'s brake state).
         `forward_only`: the velocity never becomes negative (a path never moves backwards).
         `into`: a trajectory to overwrite (a throwaway profile saves its allocation)."""
         if forward_only and v1 < 0.0:

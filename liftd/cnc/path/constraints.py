@@ -360,7 +360,7 @@ class Constraints:
         """`cands` (collected from position s) and the constraints after its last within the
         brake to rest from that one's cap, again from the new last, at most `times` times:
         until the list ends at a run boundary or a stop, or nothing more is in reach; at most
-        MAX_CANDIDATES long (its users' loops are quadratic in it: `Targets.aim_through`)."""
+        MAX_CANDIDATES long (its users' loops are quadratic in it: `Aims.through`)."""
         ext = list(cands)
         for _ in range(times):
             last = ext[-1]

@@ -75,10 +75,10 @@ class Plan:
         p_end, v_end = float(p[0]), float(v[0])
         self.p_end = p_goal if p_goal is not None and abs(p_end - p_goal) <= 1e-9 else p_end
         self.v_end = v_goal if abs(v_end - v_goal) <= 1e-9 else max(v_end, 0.0)
-        # the acceleration at the goal: 0 but for `Targets.aim_through`'s brake state (read
+        # the acceleration at the goal: 0 but for `Aims.through`'s brake state (read
         # where the step reaches the goal; after the end the plan runs on at v_end)
         self.a_end = 0.0
-        # the candidate an aimed profile keeps beyond its goal (`Targets.aim_through`; -1 for
+        # the candidate an aimed profile keeps beyond its goal (`Aims.through`; -1 for
         # none): a re-plan from inside it collects its candidates at least that far
         self.aim = -1
 

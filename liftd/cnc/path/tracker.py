@@ -29,6 +29,7 @@ answered with a brake (never expected; the closed-loop tests count them).
 
 from __future__ import annotations
 
+from liftd.cnc.path.aims import Aims
 from liftd.cnc.path.brakes import Brakes, rests_before
 from liftd.cnc.path.constraints import (
     CAP_TOL,
@@ -88,6 +89,7 @@ class Tracker:
         self.st = PathState(table.s[0] if table.s else 0.0)
         self.tg = Targets(self.con, self.st)
         self.br = Brakes(self.con, self.st, self.tg)
+        self.aim = Aims(self.con, self.st, self.tg)
         self.stopped_at: int | None = 0  # resting at this boundary until `resume`
         self.parked = False  # at rest under a hold, not at a stop
         self._passed: Plan | None = None  # the target plan of the boundary just passed
@@ -297,7 +299,7 @@ class Tracker:
             and not self.con.hold
             and skip < 0
             and cap < cands[best_i][2] * (1.0 - CAP_TOL)
-            and self.tg.aim_through(
+            and self.aim.through(
                 cands, best_i, v, a, v_p, ceiling, a_max, j_max, w, passed, held, event
             )
         ):

@@ -62,7 +62,7 @@ def test_falling_feeds_brake_to_the_corner_or_the_stop_with_no_stop_or_overrun(
 ) -> None:
     """No rest, overrun or tracker error, and no slowdown the rules do not explain: each feed
     drop is passed as one brake to the lowest of the caps after it allows (main before the
-    composition: 29 % below; after it, until `Targets.aim_through`, up to 14 % below, 82.1
+    composition: 29 % below; after it, until `Aims.through`, up to 14 % below, 82.1
     for 95.7 mm/s: zero acceleration at a feed drop whose target a later cap lowers, known
     deviation 8)."""
     ch = dataclasses.replace(shipped(), look_ahead_blocks=look_ahead)
@@ -121,9 +121,9 @@ def test_a_feed_drop_a_later_cap_lowers_is_passed_in_one_brake(seed: int) -> Non
     """Feeds seeds whose start-up over short blocks brakes for a feed drop just before a
     corner: the tracker planned zero acceleration at the drop, below its cap, and braked
     again after it (seed 125: 0.2 mm blocks at F60000, an F3000 block before a corner, the
-    boundary before it at 34.6 where one brake allows 38.7 mm/s). `Targets.aim_through`
+    boundary before it at 34.6 where one brake allows 38.7 mm/s). `Aims.through`
     plans the one brake; where that passes the drop above its cap, the drop at its cap still
-    braking (`Targets._brake_state`; seed 17: 1 mm blocks at F30000, F6000 1 mm before a
+    braking (`Aims._brake_state`; seed 17: 1 mm blocks at F30000, F6000 1 mm before a
     corner of 0.41 mm/s, 100.8 for 109.1 mm/s). Seeds 709 and 976: a corner whose chain
     reaches the window's end, its own cap binding."""
     _, hard, slow, errors = check(feed_scenario(seed))
@@ -132,7 +132,7 @@ def test_a_feed_drop_a_later_cap_lowers_is_passed_in_one_brake(seed: int) -> Non
 
 @pytest.mark.parametrize("seed", [39, 577, 940, 950, 86, 921, 394, 713, 956])
 def test_the_aim_through_a_feed_drop_keeps_what_its_goal_cannot(seed: int) -> None:
-    """Programs that versions of `Targets.aim_through` without one of its guards broke (each
+    """Programs that versions of `Aims.through` without one of its guards broke (each
     clean on main before it): an aim at the window end's rest, whose end rose to a corner of
     1.62 mm/s reachable then only at rest (seed 577: 0.0035 mm/s; seed 39: a tracker error);
     a profile from inside the brake to the drop's own cap, zero acceleration there, that rose

@@ -1,0 +1,177 @@
+"""The one brake through a feed drop (`Aims`, a part of the tracker, `Tracker.aim`, that holds
+the constraint queries, the path's state and the target profiles of `targets.py`). Inside a
+run the path acceleration is continuous: where the candidate that binds is a feed drop whose
+target a later cap of its run lowers, zero acceleration at the drop, below its cap, is no
+rule of the CNC (known deviation 8 of docs/geo-core.md). The path brakes toward the later cap
+at once, passing the drop below its cap (`Aims.through`), or passes the drop at its cap still
+braking (`Aims._brake_state`, a target acceleration). Each guard is a program a version
+without it broke (tests/unit/cnc/path/test_run_brakes.py).
+"""
+
+from __future__ import annotations
+
+import math
+
+from liftd.cnc.path.constraints import (
+    CAP_TOL,
+    CHAIN_MARGIN,
+    GATE_TOL,
+    INF,
+    V_ROUND,
+    Constraints,
+)
+from liftd.cnc.path.plan import PathState, Plan
+from liftd.cnc.path.targets import DIP_TOL, Targets, highest, lowest_velocity
+from liftd.cnc.path.velocity import brake_distance
+from liftd.cnc.ruckig1 import ProfileError
+
+AIMS = 4  # profiles `Aims.through` tries at most (one `Targets.settle` each)
+
+
+class Aims:
+    """The aim through a feed drop, for the path state `st` under the constraints `con`, with
+    the profiles of `tg`; `Tracker` holds it and tries it before the drop's own target."""
+
+    def __init__(self, con: Constraints, st: PathState, tg: Targets) -> None:
+        self.con = con
+        self.st = st
+        self.tg = tg
+
+    def through(
+        self, cands: list[tuple[int, float, float, bool]], i: int, v: float, a: float,
+        v_p: float, ceiling: float, a_max: float, j_max: float, w: int, passed: Plan | None,
+        held: Plan | None, event: bool,
+    ) -> bool:  # fmt: skip
+        """Candidate i, a feed drop (no run boundary), binds, but a later candidate of its run
+        lowers its target (`Constraints.target_cap`): zero acceleration at i, below its
+        own cap, is no rule of the CNC; one brake toward the later one passes i faster (known
+        deviation 8 of docs/geo-core.md: start-up over 0.2 mm blocks at F60000 toward an
+        F3000 block before a corner of 3.5 mm/s, a pause in the brake at the F3000 boundary
+        held the boundary before it at 34.6 for 38.7 mm/s, feeds seed 125). Plans toward the
+        candidate that lowers i's target (and on to the one that lowers that one's) and keeps
+        that profile where it passes every candidate before it below its cap, braking at i
+        (their feed caps are then the profile's, `Plan.soft_from`); where it passes one after
+        i too fast, toward that one instead, at most AIMS profiles; where it passes i itself
+        too fast, toward i's cap still braking (`_brake_state`). False, nothing changed,
+        where none is kept, and where the aim's goal may rise or fall as the path moves on:
+        there zero acceleration at i leaves the next plan its room."""
+        # the list ends within the brake from the path's state (`Constraints.horizon`); the
+        # aim's goal must keep what lies after it (the aim passed a feed drop at 72 where a
+        # rest at the window's end 0.4 mm after its goal allowed 49 mm/s, feeds seed 950)
+        ext = self.con.extend(cands, self.st.s, a_max, j_max, AIMS)
+        k, e = i, self.con.target_cap(ext, i)
+        while True:
+            nk = self.con.binding(ext, k, e)
+            if nk <= k:
+                break
+            k, e = nk, self.con.target_cap(ext, nk)
+            if ext[k][3] or e >= ext[k][2] * (1.0 - CAP_TOL):
+                break
+        if k <= i or (k + 1 == len(ext) and not ext[k][3] and len(ext) > len(cands)):
+            return False  # (what lies beyond the extended list may lower it still)
+        if (
+            ext[k][3]
+            and e < self.con.tb.entry_cap(ext[k][0], self.con.ov) * (1.0 - CAP_TOL)
+            and self.con.chain_open(ext)
+        ):
+            # a run's end lowered for the window's end (rest, or the floor its chain leaves):
+            # it rises as the window moves, and a profile aimed at it has no room to reach the
+            # higher end (rest at look-ahead 8 0.5 mm after a drop to F6000, then a corner of
+            # 1.62 mm/s there, reachable only at rest: feeds seed 577)
+            return False
+        st = self.st
+        errors, msg, soft, prev = st.errors, st.last_error, st.soft_from, st.plan
+        for _ in range(AIMS):
+            b, s_c, _, _ = ext[k]
+            target = self.tg.boundary_target(ext, k, e, v, a, v_p, ceiling, a_max, j_max, w)
+            if abs(target - e) > CAP_TOL * e + V_ROUND:
+                break  # out of reach exactly (the jerk gap): i's own target keeps it
+            v_max = max(ceiling, target, v_p) if v <= ceiling else max(ceiling, target, v, v_p)
+            # the caps before k are the profile's (checked here, `below`): a step's check of
+            # them with zero acceleration there would force a re-plan at each one passed
+            # braking (feeds seed 921: a brake state toward one drop and toward the one before
+            # it, in turns, then the shift passed the drop at 76.1 for 74.4 mm/s)
+            st.soft_from = ext[0][0]
+            self.tg.settle(st.s, v, a, v_p, s_c, target, e, v_max, a_max, j_max, b, w,
+                           self.tg.hard(b, w), passed, held, event, ceiling)  # fmt: skip
+            plan = st.plan
+            if plan is None or plan.goal != b or st.errors != errors:
+                break
+            fast = self.tg.passed_above(plan, ext[i:k], k - i)
+            if fast == 0 and self._brake_state(ext, i, k, e, v_p, ceiling, a_max, j_max, w):
+                return True
+            if fast < 0:
+                if plan.at(plan.time_at(ext[i][1], INF))[2] > -GATE_TOL or not self.below(
+                    plan, ext[:k]
+                ):
+                    # zero acceleration at i after all (from inside the brake to its cap:
+                    # ruckig's profile may rise after it, 92.4692 in a block of 92.4667 mm/s,
+                    # feeds seed 940), or a cap before i passed too fast
+                    break
+                plan.aim = b
+                return True
+            k = i + fast  # passed too fast: toward that one (its target lowered for the later)
+            if k <= i:
+                break
+            e = self.con.target_cap(ext, k)
+        st.plan, st.errors, st.last_error, st.soft_from = prev, errors, msg, soft
+        return False
+
+    def _brake_state(
+        self, ext: list[tuple[int, float, float, bool]], i: int, k: int, e: float, v_p: float,
+        ceiling: float, a_max: float, j_max: float, w: int,
+    ) -> bool:  # fmt: skip
+        """The one brake toward k's target e passes feed drop i above its cap (or does not
+        brake there), and zero acceleration at i at its cap loses e: the path passes i at its
+        cap still braking, with the least deceleration from which e at k stays reachable
+        (the block after i is capped at i's cap, so that is the fastest way through both;
+        feeds seed 17: the F6000 boundary 1 mm before a corner of 0.41 mm/s held at zero
+        acceleration at 69.5 mm/s, the boundary before it at 100.8 where the rules allow
+        109.1). A plan toward i with that acceleration there (`Plan.a_end`); False where
+        none, nothing changed."""
+        st = self.st
+        b_i, s_i, c_i, _ = ext[i]
+        room = ext[k][1] - s_i - CHAIN_MARGIN
+        if room <= 0.0 or c_i <= e or brake_distance(c_i, 0.0, e, a_max, j_max) <= room:
+            return False
+        if k != i + 1:
+            # a cap between i and k: a step's check reads it with zero acceleration there
+            # (`Constraints.need`), which the brake state passes braking; from the path's
+            # states before i it read as lost, forced re-plans took turns with the shift, and
+            # the shift passed a drop at 71.40 for 71.32 mm/s (feeds seed 394)
+            return False
+        a_lo = -min(a_max, math.sqrt(2.0 * j_max * (c_i - e)) * (1.0 - 1e-9))
+        if brake_distance(c_i, a_lo, e, a_max, j_max) > room:
+            return False
+        a_i = highest(a_lo, 0.0, 40, lambda x: brake_distance(c_i, x, e, a_max, j_max) <= room)
+        v_max = max(ceiling, c_i, v_p) if st.v <= ceiling else max(ceiling, c_i, st.v, v_p)
+        try:
+            traj = self.tg.calc.position(st.s, st.v, st.a, s_i, c_i, v_max, a_max, j_max, a1=a_i)
+        except ProfileError:
+            return False
+        plan = Plan(traj, st.t, b_i, w, s_i, c_i)
+        if plan.p_end != s_i or plan.v_end != c_i:
+            # not snapped to its goal (ruckig's end more than 1 nm or 1 nm/s off): the step
+            # would end it between boundaries, where a plan runs on with zero acceleration
+            return False  # (a cold review: an acceleration jump of a_i there)
+        plan.a_end = a_i
+        plan.ev.prepare()
+        ph = plan.ev.phases
+        assert ph is not None
+        if lowest_velocity(ph) < min(st.v, c_i) * (1.0 - DIP_TOL) or not self.below(plan, ext[:i]):
+            return False
+        plan.soft_from = min(st.soft_from, ext[0][0])
+        plan.aim = ext[k][0]
+        st.plan = plan
+        return True
+
+    def below(self, plan: Plan, cands: list[tuple[int, float, float, bool]]) -> bool:
+        """`plan` passes every one of `cands` at most at its cap and does not speed up again
+        above the ceiling of the block after it (`rises_above`: a profile toward a feed drop
+        two blocks on passed the one before it at its cap of 171.25 mm/s and rose to 171.30
+        in its block, feeds seed 86)."""
+        return all(
+            plan.at(plan.time_at(c[1], INF))[1] <= c[2] * (1.0 + CAP_TOL) + V_ROUND
+            and not self.tg.rises_above(plan, c)
+            for c in cands
+        )
