@@ -4,8 +4,9 @@ run the path acceleration is continuous: where the candidate that binds is a fee
 target a later cap of its run lowers, zero acceleration at the drop, below its cap, is no
 rule of the CNC (known deviation 8 of docs/geo-core.md). The path brakes toward the later cap
 at once, passing the drop below its cap (`Aims.through`), or passes the drop at its cap still
-braking (`Aims._brake_state`, a target acceleration). Each guard is a program a version
-without it broke (tests/unit/cnc/path/test_run_brakes.py).
+braking (`Aims._brake_state`, a target acceleration); so it does where the drop's own cap
+lies in the jerk gap and the boundary after it wants the path slower still (`Aims.gap_state`).
+Each guard is a program a version without it broke (tests/unit/cnc/path/test_run_brakes.py).
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from liftd.cnc.path.velocity import brake_distance
 from liftd.cnc.ruckig1 import ProfileError
 
 AIMS = 4  # profiles `Aims.through` tries at most (one `Targets.settle` each)
+GAP_STEPS = 10  # `Aims.gap_state`: its deceleration within 2^-10 of a_max (a solve each)
 
 
 class Aims:
@@ -163,6 +165,73 @@ class Aims:
         plan.soft_from = min(st.soft_from, ext[0][0])
         plan.aim = ext[k][0]
         st.plan = plan
+        return True
+
+    def gap_state(
+        self, cands: list[tuple[int, float, float, bool]], i: int, target: float, v_p: float,
+        ceiling: float, a_max: float, j_max: float, w: int,
+    ) -> bool:  # fmt: skip
+        """Feed drop i's own cap lies in the jerk gap (`Targets.pick_target` took x1 below it:
+        after an override change the path cannot reach the cap with zero acceleration
+        there), and the candidate after it wants the path slower still: the path passes i
+        at its cap still braking, with the least deceleration ruckig reaches from the
+        path's state (bisection, GAP_STEPS solves at most), from which the next candidate's
+        target stays reachable and is not undercut by the ramp-out alone. Feeds seed 249:
+        override 30 → 200 % at 292.9 mm/s and −5.0 m/s², 6.2 mm before an F3000 drop of
+        100 mm/s 2 mm before a corner of 0.14 mm/s: x1 = 50.0 there, where one brake passes
+        the drop at 100. False, nothing changed, where none fits."""
+        st = self.st
+        b_i, s_i, c_i, _ = cands[i]
+        if ceiling < c_i or v_p <= c_i or target >= c_i * (1.0 - CAP_TOL) - V_ROUND:
+            return False
+        # the boundary after i must want the path slower still, or the ramp-out after i dips
+        # below its target (it may lie beyond the brake from here: feeds seed 247, a corner
+        # of 0.41 mm/s 0.5 mm after an F1200 drop, override 100 → 150 % in the brake)
+        nxt = self.con.collect(st.s, self.con.seg, self.con.tb.s[b_i + 1] - st.s, first=b_i + 1)
+        if not nxt or nxt[0][0] != b_i + 1:
+            return False
+        nb, ns, _, ngate = nxt[0]
+        e = self.con.target_cap(nxt, 0)
+        room = ns - s_i - CHAIN_MARGIN
+        v_max = max(ceiling, st.v, v_p)
+
+        def plan_for(x: float) -> Plan | None:
+            """The profile to (s_i, c_i, x) where it keeps everything it is checked for."""
+            if (
+                c_i + x * abs(x) / (2.0 * j_max) < e
+                or (ngate and brake_distance(c_i, x, e, a_max, j_max) > room)
+                or (not ngate and self.con.need(c_i, x, e, False, a_max, j_max) > room)
+            ):
+                return None  # the ramp-out undercuts the next target, or loses it
+            try:
+                traj = self.tg.calc.position(st.s, st.v, st.a, s_i, c_i, v_max, a_max, j_max, a1=x)
+            except ProfileError:
+                return None
+            plan = Plan(traj, st.t, b_i, w, s_i, c_i)
+            if plan.p_end != s_i or plan.v_end != c_i:
+                return None  # not snapped to its goal
+            plan.ev.prepare()
+            ph = plan.ev.phases
+            assert ph is not None
+            if lowest_velocity(ph) < c_i * (1.0 - DIP_TOL) or not self.below(plan, cands[:i]):
+                return None
+            return plan
+
+        good, bad = -min(a_max, math.sqrt(2.0 * j_max * (c_i - e)) * (1.0 - 1e-9)), 0.0
+        best = plan_for(good)
+        if best is None:
+            return False
+        for _ in range(GAP_STEPS):
+            mid = 0.5 * (good + bad)
+            found = plan_for(mid)
+            if found is not None:
+                good, best = mid, found
+            else:
+                bad = mid
+        best.a_end = good
+        best.soft_from = min(st.soft_from, cands[0][0])
+        best.aim = nb
+        st.plan = best
         return True
 
     def below(self, plan: Plan, cands: list[tuple[int, float, float, bool]]) -> bool:

@@ -306,6 +306,14 @@ class Tracker:
             return  # one brake through a feed drop a later cap lowers (known deviation 8)
         d = s_c - s
         target = self.tg.boundary_target(cands, best_i, cap, v, a, v_p, ceiling, a_max, j_max, w)
+        if (
+            not gate
+            and not self.con.hold
+            and skip < 0
+            and cap >= cands[best_i][2] * (1.0 - CAP_TOL)
+            and self.aim.gap_state(cands, best_i, target, v_p, ceiling, a_max, j_max, w)
+        ):
+            return  # a feed drop's own cap in the jerk gap: passed at its cap, braking
         soft_from = b
         shifted = False
         horizon = max(self.con.horizon(v, a, a_max, j_max, dt), d)

@@ -169,3 +169,12 @@ def test_drops_between_the_brake_state_and_its_goal_are_kept(look_ahead: int, cy
     _, hard, slow, errors = check(Scenario(0, ch, FALLING_BEFORE_A_KINK, Schedule()))
     assert (hard, errors) == ([], 0)
     assert slow == []
+
+
+def test_a_feed_drop_whose_own_cap_is_in_the_jerk_gap_is_passed_at_it_braking() -> None:
+    """Feeds seed 249: override 30 → 200 % as the path brakes at 292.9 mm/s and −5.0 m/s²,
+    6.2 mm before an F3000 drop (100 mm/s) 2 mm before a corner of 0.14 mm/s. Zero
+    acceleration at the drop was out of reach at its cap, and the tracker took x1 = 50.0
+    mm/s there; it now passes the drop at 100 still braking (`Aims.gap_state`)."""
+    _, hard, slow, errors = check(feed_scenario(249))
+    assert (hard, slow, errors) == ([], [], 0)
