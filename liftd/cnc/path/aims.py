@@ -132,7 +132,7 @@ class Aims:
         109.1). A plan toward i with that acceleration there (`Plan.a_end`); False where
         none, nothing changed."""
         st = self.st
-        b_i, s_i, c_i, _ = ext[i]
+        _, s_i, c_i, _ = ext[i]
         room = ext[k][1] - s_i - CHAIN_MARGIN
         if room <= 0.0 or c_i <= e or brake_distance(c_i, 0.0, e, a_max, j_max) <= room:
             return False
@@ -147,20 +147,8 @@ class Aims:
             return False
         a_i = highest(a_lo, 0.0, 40, lambda x: brake_distance(c_i, x, e, a_max, j_max) <= room)
         v_max = max(ceiling, c_i, v_p) if st.v <= ceiling else max(ceiling, c_i, st.v, v_p)
-        try:
-            traj = self.tg.calc.position(st.s, st.v, st.a, s_i, c_i, v_max, a_max, j_max, a1=a_i)
-        except ProfileError:
-            return False
-        plan = Plan(traj, st.t, b_i, w, s_i, c_i)
-        if plan.p_end != s_i or plan.v_end != c_i:
-            # not snapped to its goal (ruckig's end more than 1 nm or 1 nm/s off): the step
-            # would end it between boundaries, where a plan runs on with zero acceleration
-            return False  # (a cold review: an acceleration jump of a_i there)
-        plan.a_end = a_i
-        plan.ev.prepare()
-        ph = plan.ev.phases
-        assert ph is not None
-        if lowest_velocity(ph) < min(st.v, c_i) * (1.0 - DIP_TOL) or not self.below(plan, ext[:i]):
+        plan = self._state_plan(ext, i, a_i, v_max, min(st.v, c_i), a_max, j_max, w)
+        if plan is None:
             return False
         plan.soft_from = min(st.soft_from, ext[0][0])
         plan.aim = ext[k][0]
@@ -203,19 +191,7 @@ class Aims:
                 or (not ngate and self.con.need(c_i, x, e, False, a_max, j_max) > room)
             ):
                 return None  # the ramp-out undercuts the next target, or loses it
-            try:
-                traj = self.tg.calc.position(st.s, st.v, st.a, s_i, c_i, v_max, a_max, j_max, a1=x)
-            except ProfileError:
-                return None
-            plan = Plan(traj, st.t, b_i, w, s_i, c_i)
-            if plan.p_end != s_i or plan.v_end != c_i:
-                return None  # not snapped to its goal
-            plan.ev.prepare()
-            ph = plan.ev.phases
-            assert ph is not None
-            if lowest_velocity(ph) < c_i * (1.0 - DIP_TOL) or not self.below(plan, cands[:i]):
-                return None
-            return plan
+            return self._state_plan(cands, i, x, v_max, c_i, a_max, j_max, w)
 
         good, bad = -min(a_max, math.sqrt(2.0 * j_max * (c_i - e)) * (1.0 - 1e-9)), 0.0
         best = plan_for(good)
@@ -228,11 +204,36 @@ class Aims:
                 good, best = mid, found
             else:
                 bad = mid
-        best.a_end = good
         best.soft_from = min(st.soft_from, cands[0][0])
         best.aim = nb
         st.plan = best
         return True
+
+    def _state_plan(
+        self, cands: list[tuple[int, float, float, bool]], i: int, x: float, v_max: float,
+        floor: float, a_max: float, j_max: float, w: int,
+    ) -> Plan | None:  # fmt: skip
+        """The profile from the path's state to candidate i at its cap with acceleration x
+        there (`Plan.a_end`), where ruckig reaches it, it snaps to its goal, it does not dip
+        below `floor` and it passes the candidates before i below their caps; else None."""
+        st = self.st
+        b_i, s_i, c_i, _ = cands[i]
+        try:
+            traj = self.tg.calc.position(st.s, st.v, st.a, s_i, c_i, v_max, a_max, j_max, a1=x)
+        except ProfileError:
+            return None
+        plan = Plan(traj, st.t, b_i, w, s_i, c_i)
+        if plan.p_end != s_i or plan.v_end != c_i:
+            # not snapped to its goal (ruckig's end more than 1 nm or 1 nm/s off): the step
+            # would end it between boundaries, where a plan runs on with zero acceleration
+            return None  # (a cold review: an acceleration jump of x there)
+        plan.a_end = x
+        plan.ev.prepare()
+        ph = plan.ev.phases
+        assert ph is not None
+        if lowest_velocity(ph) < floor * (1.0 - DIP_TOL) or not self.below(plan, cands[:i]):
+            return None
+        return plan
 
     def below(self, plan: Plan, cands: list[tuple[int, float, float, bool]]) -> bool:
         """`plan` passes every one of `cands` at most at its cap and does not speed up again
