@@ -19,7 +19,12 @@ The rules (docs/geo-core.md, "Which rule decides a slowdown", linked from docs/a
   from where it was found too slow). The window is the one the brake toward the boundary
   began under, at least the one that ended a block after it. Where the window's last move
   raised the cap, the path is held to the cap under the window before and to the higher one
-  only as far as it can reach it from its state when the window moved.
+  only as far as it can reach it from its state when the window moved. At a run boundary
+  (zero acceleration there) whose value lies in the jerk gap from the path's state at the
+  last input change (no brake has it there with zero acceleration: the path passes at most
+  at x1 below it or at least at x2 above it, `motion_rules.jerk_gap`), x1 where it is the
+  nearer side by ratio; from a run boundary passed at a side of such a gap, the gaps after
+  it open from its state there.
 * **Between two boundaries** it never goes below the lower of its velocities at the two.
 * **Never faster** than the rules let it be (tests/support/motion_overrun.py): at most the
   ceiling of its block in every cycle, at most the transition cap and both blocks' ceilings at
@@ -46,6 +51,7 @@ every link, the 24th constraint taken as a stop): those are the slowdowns it is 
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
@@ -54,7 +60,7 @@ from liftd.cnc.path.program import PathProgram
 from liftd.cnc.path.table import PathTable
 from liftd.cnc.snapshot import ChannelState, GeoSnapshot
 from tests.support.motion_overrun import overruns
-from tests.support.motion_rules import INF, PathRules, Sample, reach, reach_from
+from tests.support.motion_rules import INF, PathRules, Sample, jerk_gap, reach, reach_from
 
 # Sample and reach_from are the tests' too (the samples' type; the check's arithmetic)
 __all__ = ["Expected", "Recorder", "Sample", "check_motion", "reach_from"]
@@ -145,6 +151,7 @@ class Expected(NamedTuple):
     held_by: float
     forward: float
     ramp: float
+    gap: float = INF  # x1, where the jerk gap after an input change explains a lower velocity
 
 
 def _ramp_at(ramp: tuple[float, float, float, float], s_b: float) -> float:
@@ -160,6 +167,28 @@ def _ramp_at(ramp: tuple[float, float, float, float], s_b: float) -> float:
             hi = tau
     tau = 0.5 * (lo + hi)
     return max(v0 + tau * (a0 + tau * j / 2.0), 0.0)
+
+
+def _gap_side(path: PathRules, changed: Sample, b: int, expect: float) -> tuple[float, float]:
+    """At run boundary b, where the path has zero acceleration, and `expect` lies in the jerk
+    gap from the state `changed` (the state the path re-planned from at the last input
+    change, or where it last passed a run boundary at a side of a gap): (the velocity
+    expected instead, the gap's x2); (inf, inf) where there is no gap. From that state no
+    brake has `expect` at b with zero acceleration there (`jerk_gap`): the path passes b at
+    most at x1, or at least at x2 (above the cap: the brake from above a ceiling an input
+    lowered, tests/support/motion_overrun.py), or dips below x1 before it. Which side is the
+    core's judgement (`Targets.pick_target`, known deviation 6 of docs/geo-core.md); the
+    check holds it to the side nearer by ratio (x1 where x2 / expect ≥ expect / x1 or x2 is
+    above b's hard cap, else `expect`), so a core that takes x1 where x2 is nearer is still
+    found (CAM seeds 74, 465, 629: x1 for a cap of 43.4 mm/s where x2 is nearer)."""
+    a_max, j_max = path.limits(changed.seg, b + 1)
+    gap = jerk_gap(changed.v, changed.a, path.bounds[b].s - changed.s, expect, a_max, j_max)
+    if gap is None:
+        return INF, INF
+    x1, x2 = gap
+    if x1 < 0.0 or (x2 <= path.hard(b) and (x1 == 0.0 or x2 * x1 < expect * expect)):
+        return expect, x2  # x2 is the nearer (or the only) side: the cap is expected
+    return x1, x2
 
 
 def check_motion(
@@ -196,6 +225,7 @@ def check_motion(
     ramp = (0.0, 0.0, 0.0, 0.0)  # that ramp: the state (s, v, a) it starts from, the jerk
     last: Sample | None = None
     pending: tuple[int, str] | None = None  # a rest just before a stop, and that stop
+    changed: Sample | None = None  # the state the path re-planned from at the last event
     for smp in samples:
         if last is None:
             last = smp
@@ -238,6 +268,7 @@ def check_motion(
             # was not checked: a dip planned at an event passed unseen)
             entry_v, interval_min, fresh = min(smp.v, anchor_v), INF, False
             entered.clear()
+            changed = last
             last = smp
             continue
         held = smp.hold or smp.override <= 0.0 or smp.parked or last.parked
@@ -309,9 +340,24 @@ def check_motion(
                 a_k, j_k = path.limits(k, b)
                 forward = min(forward, reach(cap_k, s_b - s_k, a_k, j_k, path.v_top))
             expect = min(held_by, forward)
+            x1 = INF
+            if path.gate[b] and changed is not None and changed.seg < b:
+                side, x2 = _gap_side(path, changed, b, expect)
+                if side < expect:
+                    x1 = side
+                if x2 < INF and (
+                    abs(v_b - side) <= side * 1e-3 + tol or expect <= v_b <= x2 * 1.001 + tol
+                ):
+                    # passed at a side of the gap, as near the cap as it could (x2: as slowly
+                    # as it could above it): the gaps after b open from b's state (feeds seed
+                    # 383: override 100 → 10 % at 126.3 mm/s, 1.27 mm before run boundary 16,
+                    # passed at its x2 of 115.3, from which 16.6 mm/s at boundary 17 lies in
+                    # the gap, x1 = 5.75)
+                    changed = dataclasses.replace(smp, s=s_b, v=v_b, a=0.0, seg=b)
+                expect = min(expect, x1)
             slow = v_b < expect * (1.0 - REL_TOL) - tol
             if trace is not None:
-                trace.append(Expected(b, window, v_b, held_by, forward, INF))
+                trace.append(Expected(b, window, v_b, held_by, forward, INF, x1))
             if slow:
                 out.append(
                     f"boundary {b} (line {path.bounds[b].line}) at {v_b * 1e3:.4f} mm/s, "
