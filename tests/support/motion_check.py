@@ -169,26 +169,54 @@ def _ramp_at(ramp: tuple[float, float, float, float], s_b: float) -> float:
     return max(v0 + tau * (a0 + tau * j / 2.0), 0.0)
 
 
-def _gap_side(path: PathRules, changed: Sample, b: int, expect: float) -> tuple[float, float]:
+def _gap(
+    path: PathRules, changed: Sample | None, b: int, expect: float, v_b: float, tol: float,
+    smp: Sample,
+) -> tuple[float, Sample | None]:  # fmt: skip
     """At run boundary b, where the path has zero acceleration, and `expect` lies in the jerk
     gap from the state `changed` (the state the path re-planned from at the last input
     change, or where it last passed a run boundary at a side of a gap): (the velocity
-    expected instead, the gap's x2); (inf, inf) where there is no gap. From that state no
-    brake has `expect` at b with zero acceleration there (`jerk_gap`): the path passes b at
-    most at x1, or at least at x2 (above the cap: the brake from above a ceiling an input
-    lowered, tests/support/motion_overrun.py), or dips below x1 before it. Which side is the
-    core's judgement (`Targets.pick_target`, known deviation 6 of docs/geo-core.md); the
-    check holds it to the side nearer by ratio (x1 where x2 / expect ≥ expect / x1 or x2 is
-    above b's hard cap, else `expect`), so a core that takes x1 where x2 is nearer is still
-    found (CAM seeds 74, 465, 629: x1 for a cap of 43.4 mm/s where x2 is nearer)."""
+    expected there instead, the state the next gaps open from); (inf, `changed`) where there
+    is no gap. From that state no brake has `expect` at b with zero acceleration there
+    (`jerk_gap`): the path passes b at most at x1, or at least at x2 (above the cap: the
+    brake from above a ceiling an input lowered, tests/support/motion_overrun.py), or dips
+    below x1 before it. Which side is the core's judgement (`Targets.pick_target`, known
+    deviation 6 of docs/geo-core.md); the check holds it to the side nearer by ratio (x1
+    where x2 / expect ≥ expect / x1 or x2 is above b's hard cap, else `expect`), so a core
+    that takes x1 where x2 is nearer is still found (CAM seeds 74, 465, 629: x1 for a cap of
+    43.4 mm/s where x2 is nearer). Where the path passed b at a side of the gap, as near the
+    cap as it could (at x2: as slowly as it could above it), the next gaps open from b's
+    state (feeds seed 383: override 100 → 10 % at 126.3 mm/s, 1.27 mm before run boundary
+    16, passed at its x2 of 115.3, from which 16.6 mm/s at boundary 17 lies in the gap,
+    x1 = 5.75)."""
+    if not path.gate[b] or changed is None or changed.seg >= b:
+        return INF, changed
     a_max, j_max = path.limits(changed.seg, b + 1)
     gap = jerk_gap(changed.v, changed.a, path.bounds[b].s - changed.s, expect, a_max, j_max)
     if gap is None:
-        return INF, INF
+        return INF, changed
     x1, x2 = gap
+    side = x1
     if x1 < 0.0 or (x2 <= path.hard(b) and (x1 == 0.0 or x2 * x1 < expect * expect)):
-        return expect, x2  # x2 is the nearer (or the only) side: the cap is expected
-    return x1, x2
+        side = expect  # x2 is the nearer (or the only) side: the cap is expected
+    if x2 < INF and (abs(v_b - side) <= side * 1e-3 + tol or expect <= v_b <= x2 * 1.001 + tol):
+        changed = dataclasses.replace(smp, s=path.bounds[b].s, v=v_b, a=0.0, seg=b)
+    return (side if side < expect else INF), changed
+
+
+def _gap_dip(path: PathRules, b: int, x1: float, low: float, tol: float, smp: Sample) -> list[str]:
+    """Where run boundary b is expected at x1 of a jerk gap (`_gap`): the brake to x1 goes no
+    lower on the way, so a path that went lower before b (`low`: since the event or the
+    boundary before b) and came back is found (feeds
+    seed 193: down to 0.001 mm/s after an override raise, back to 9.1 at the boundary,
+    where the brake to x1 passes it at 8.0; inside the event's ramp, which the interval's
+    own dip rule does not read)."""
+    if x1 == INF or low >= x1 * (1.0 - REL_TOL) - tol:
+        return []
+    return [
+        f"dip to {low * 1e3:.4f} mm/s before boundary {b} (line {path.bounds[b].line}) in "
+        f"the jerk gap, x1 {x1 * 1e3:.4f} (t={smp.t:.4f} s)"
+    ]
 
 
 def check_motion(
@@ -226,6 +254,7 @@ def check_motion(
     last: Sample | None = None
     pending: tuple[int, str] | None = None  # a rest just before a stop, and that stop
     changed: Sample | None = None  # the state the path re-planned from at the last event
+    gap_low = INF  # the lowest velocity since the last event or boundary crossed
     for smp in samples:
         if last is None:
             last = smp
@@ -268,7 +297,7 @@ def check_motion(
             # was not checked: a dip planned at an event passed unseen)
             entry_v, interval_min, fresh = min(smp.v, anchor_v), INF, False
             entered.clear()
-            changed = last
+            changed, gap_low = last, min(last.v, smp.v)
             last = smp
             continue
         held = smp.hold or smp.override <= 0.0 or smp.parked or last.parked
@@ -290,9 +319,10 @@ def check_motion(
             s_b = path.bounds[b].s
             if held or path.is_stop(b, smp):
                 anchor_s, anchor_v, anchor_seg = s_b, 0.0, b
-                interval_min, fresh = INF, True
+                interval_min, fresh, gap_low = INF, True, INF
                 continue
             v_b = _at(last, smp, s_b)
+            low, gap_low = gap_low, v_b  # since the event or the boundary before
             tol = _slack(path, b, dt)
             # the look-ahead window as it was when the path began braking toward b: its end was a
             # stop the path had to be able to make, and a cap that came into view later may lie
@@ -320,9 +350,17 @@ def check_motion(
                 # 0.28 mm/s inside the ramp), from where the forward pass starts again. Not
                 # checked before (every boundary inside the ramp passed)
                 on_ramp = _ramp_at(ramp, s_b)
-                if trace is not None:
-                    trace.append(Expected(b, window, v_b, held_by, INF, on_ramp))
                 expect = min(on_ramp, held_by)
+                # a run boundary inside the ramp: zero acceleration there, its velocity in the
+                # gap (feeds seed 193: override 40 → 200 % at 48.0 mm/s and −3.46 m/s², 0.36 mm
+                # before run boundary 23, the ramp's 14.9 mm/s there: ramping out alone ends
+                # beyond it, x1 = 9.18, no x2)
+                x1, gap_from = _gap(path, changed, b, expect, v_b, tol, smp)
+                out += _gap_dip(path, b, x1, low, tol, smp)
+                changed = gap_from
+                expect = min(expect, x1)
+                if trace is not None:
+                    trace.append(Expected(b, window, v_b, held_by, INF, on_ramp, x1))
                 if v_b < expect * (1.0 - REL_TOL) - tol:
                     out.append(
                         f"boundary {b} (line {path.bounds[b].line}) at {v_b * 1e3:.4f} mm/s, "
@@ -340,21 +378,10 @@ def check_motion(
                 a_k, j_k = path.limits(k, b)
                 forward = min(forward, reach(cap_k, s_b - s_k, a_k, j_k, path.v_top))
             expect = min(held_by, forward)
-            x1 = INF
-            if path.gate[b] and changed is not None and changed.seg < b:
-                side, x2 = _gap_side(path, changed, b, expect)
-                if side < expect:
-                    x1 = side
-                if x2 < INF and (
-                    abs(v_b - side) <= side * 1e-3 + tol or expect <= v_b <= x2 * 1.001 + tol
-                ):
-                    # passed at a side of the gap, as near the cap as it could (x2: as slowly
-                    # as it could above it): the gaps after b open from b's state (feeds seed
-                    # 383: override 100 → 10 % at 126.3 mm/s, 1.27 mm before run boundary 16,
-                    # passed at its x2 of 115.3, from which 16.6 mm/s at boundary 17 lies in
-                    # the gap, x1 = 5.75)
-                    changed = dataclasses.replace(smp, s=s_b, v=v_b, a=0.0, seg=b)
-                expect = min(expect, x1)
+            x1, gap_from = _gap(path, changed, b, expect, v_b, tol, smp)
+            out += _gap_dip(path, b, x1, low, tol, smp)
+            changed = gap_from
+            expect = min(expect, x1)
             slow = v_b < expect * (1.0 - REL_TOL) - tol
             if trace is not None:
                 trace.append(Expected(b, window, v_b, held_by, forward, INF, x1))
@@ -422,6 +449,7 @@ def check_motion(
                 entered[k] = last
         if not held and smp.s > ramp_ends:
             interval_min = min(interval_min, smp.v) if smp.seg == last.seg else smp.v
+        gap_low = min(gap_low, smp.v)
         if smp.a >= 0.0 or smp.v == 0.0:
             braking_from = smp.seg
         interval_from = min(interval_from, braking_from)

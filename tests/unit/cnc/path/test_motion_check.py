@@ -232,13 +232,16 @@ def _recorded(sc: Scenario) -> tuple[Recorder, list[Sample]]:
     return rec, rec.samples
 
 
-def _slowed_at(rec: Recorder, samples: list[Sample], b: int, factor: float) -> list[str]:
+def _slowed_at(
+    rec: Recorder, samples: list[Sample], b: int, factor: float, before: int = 0
+) -> list[str]:
     """The check of `samples` with the velocity of the two samples around boundary b scaled
-    by `factor` (a made-up path that passes b slower), and what it expected at b."""
+    by `factor` (a made-up path that passes b slower; with `before`, of the `before`
+    samples before those two instead: a path that dips before b and comes back)."""
     s_b = rec.table.s[b]
     k = next(i for i, smp in enumerate(samples) if smp.s >= s_b)
     out = list(samples)
-    for i in (k - 1, k):
+    for i in range(k - 1 - before, k - 1) if before else (k - 1, k):
         out[i] = dataclasses.replace(out[i], v=out[i].v * factor)
     ch = rec.task.ch
     return check_motion(rec.program, rec.table, ch.look_ahead_blocks, ch.cycle_time, out)
@@ -257,7 +260,8 @@ def test_a_run_boundary_in_the_jerk_gap_is_expected_at_x1_where_x1_is_nearer(
     has: now x1, and a path slower than x1 is still found. Feeds seed 383, the gap from a
     run boundary passed at x2: override 100 → 10 % at 126.3 mm/s 1.27 mm before run
     boundary 16 (its cap 12.6 mm/s out of reach, passed at its x2 of 115.3), from where
-    boundary 17's cap of 16.6 lies in the gap (x1 = 5.75)."""
+    boundary 17's cap of 16.6 lies in the gap (x1 = 5.75). A path that goes below x1
+    before the boundary and comes back is found too."""
     rec, samples = _recorded(feed_scenario(seed))
     ch = rec.task.ch
     trace: list[Expected] = []
@@ -269,6 +273,8 @@ def test_a_run_boundary_in_the_jerk_gap_is_expected_at_x1_where_x1_is_nearer(
     assert at_b.gap == pytest.approx(at_b.v, rel=0.01) and at_b.gap < 0.5 * cap
     slower = _slowed_at(rec, samples, b, 0.5)
     assert any(f.startswith(f"boundary {b} ") for f in slower), slower
+    dipped = _slowed_at(rec, samples, b, 0.5, before=2)  # the brake to x1 goes no lower
+    assert any(f.startswith("dip") and f"boundary {b} " in f for f in dipped), dipped
 
 
 def test_x1_is_found_where_x2_is_the_nearer_side_of_the_jerk_gap() -> None:
