@@ -418,6 +418,13 @@ def check_motion(
                 if j != INF:
                     t_r = -smp.a / j
                     ramp_s = smp.s + t_r * (smp.v + t_r * (smp.a / 2.0 + t_r * j / 6.0))
+                    # the deceleration at b: a linear reading between the samples misses a
+                    # peak between them; the jerk limit bounds it from either sample (feeds
+                    # seed 247: −2.33 and −2.45 m/s² a cycle apart, the peak −2.55 at b,
+                    # ramped out from there to 9.92 mm/s where the linear reading expected
+                    # 11.0)
+                    dt_s = smp.t - last.t
+                    a_b = min(a_b, max(last.a - j * frac * dt_s, smp.a - j * (1.0 - frac) * dt_s))
                     ramp_v = max(smp.v + smp.a * t_r / 2.0, v_b - a_b * a_b / (2.0 * j), 0.0)
                     ramp, ramp_ends = (smp.s, smp.v, smp.a, j), ramp_s
                     anchor_s, anchor_v, anchor_seg = ramp_s, ramp_v, b

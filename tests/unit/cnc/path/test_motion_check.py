@@ -339,3 +339,24 @@ def test_the_jerk_gap_is_what_ruckig_can_reach() -> None:
             assert _min_velocity(v, a, length, x2, a_max, j_max) is not None, (v, a, length, x2)
         low = _min_velocity(v, a, length, v1, a_max, j_max)
         assert low is None or low <= x1 * (1.0 + 1e-6) + 1e-9, (v, a, length, v1, x1, low)
+
+
+def test_the_deceleration_at_a_boundary_is_read_within_the_jerk_limit() -> None:
+    """Feeds seed 247: override 150 → 40 % 0.3 mm before the end of an F1200 block whose
+    ceiling drops to 8 mm/s; the path brakes from 28.7 mm/s and passes into the F60000 block
+    after it at 20.0 mm/s, its deceleration at its peak there (−2.55 m/s²), and ramps it out
+    at full jerk to 9.92. The samples a cycle apart read −2.33 and −2.45 m/s²; a linear
+    reading between them gave −2.41 at the boundary and a ramp to 11.0, and the ramp's own
+    end was a dip. The deceleration at the boundary is now the lowest the jerk limit allows
+    from either sample: no finding. A path 10 % below that, after the ramp, is a dip."""
+    rec, samples = _recorded(feed_scenario(247))
+    ch = rec.task.ch
+    assert check_motion(rec.program, rec.table, ch.look_ahead_blocks, ch.cycle_time,
+                        samples) == []  # fmt: skip
+    s_b = rec.table.s[13]
+    k = next(i for i, smp in enumerate(samples) if smp.s >= s_b)
+    lower = list(samples)
+    for i in range(k + 6, k + 10):  # about the ramp's end, 7.5 ms after the boundary
+        lower[i] = dataclasses.replace(lower[i], v=lower[i].v * 0.9)
+    found = check_motion(rec.program, rec.table, ch.look_ahead_blocks, ch.cycle_time, lower)
+    assert any(f.startswith("dip") and "boundary 14 " in f for f in found), found
