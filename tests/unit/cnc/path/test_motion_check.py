@@ -360,3 +360,23 @@ def test_the_deceleration_at_a_boundary_is_read_within_the_jerk_limit() -> None:
         lower[i] = dataclasses.replace(lower[i], v=lower[i].v * 0.9)
     found = check_motion(rec.program, rec.table, ch.look_ahead_blocks, ch.cycle_time, lower)
     assert any(f.startswith("dip") and "boundary 14 " in f for f in found), found
+
+
+def test_a_brake_the_window_s_move_releases_ramps_out_after_the_boundary() -> None:
+    """Feeds seed 46 (look-ahead 3, override 180 %): the path brakes for the window's end and
+    passes an F3000 drop at 86.5 mm/s and −2.0 m/s², what the rules expect there; entering
+    the block after it moves the window a block on and releases the brake, whose
+    deceleration is ramped out at full jerk to 81.5 mm/s before the path speeds up to 86.0
+    at the next boundary. That ramp was a dip finding; it is the jerk limit's, as after an
+    event. A path 10 % below that after the ramp is still a dip."""
+    rec, samples = _recorded(feed_scenario(46))
+    ch = rec.task.ch
+    assert check_motion(rec.program, rec.table, ch.look_ahead_blocks, ch.cycle_time,
+                        samples) == []  # fmt: skip
+    s_b = rec.table.s[16]
+    k = next(i for i, smp in enumerate(samples) if smp.s >= s_b)
+    lower = list(samples)
+    for i in range(k + 12, k + 18):  # after the ramp's end, 5 ms (10 cycles) after the boundary
+        lower[i] = dataclasses.replace(lower[i], v=lower[i].v * 0.9)
+    found = check_motion(rec.program, rec.table, ch.look_ahead_blocks, ch.cycle_time, lower)
+    assert any(f.startswith("dip") and "boundary 17 " in f for f in found), found
