@@ -549,7 +549,7 @@ class Targets:
     def rises_above(self, plan: Plan, cand: tuple[int, float, float, bool]) -> bool:
         """`plan` speeds up again after `cand`'s boundary above the ceiling of its block
         before the block ends (`passed_above` reads the boundary alone): a profile toward a
-        goal beyond it, with v_max at the velocity it had before it (`Tracker._replan`'s
+        goal beyond it, with v_max at the velocity it had before it (`Shift.toward`'s
         shift), passed an F5548 boundary at its cap still braking and came back to 2.5 µm/s
         above it in the block (feeds seed 940)."""
         tb = self.con.tb
