@@ -191,18 +191,26 @@ def _gap(
     cap as it could (at x2: as slowly as it could above it), the next gaps open from b's
     state (feeds seed 383: override 100 → 10 % at 126.3 mm/s, 1.27 mm before run boundary
     16, passed at its x2 of 115.3, from which 16.6 mm/s at boundary 17 lies in the gap,
-    x1 = 5.75)."""
+    x1 = 5.75); so they do from a run boundary without a gap passed at what the rules
+    expect there."""
     if not path.gate[b] or changed is None or changed.seg >= b:
         return INF, changed
     a_max, j_max = path.limits(changed.seg, b + 1)
     gap = jerk_gap(changed.v, changed.a, path.bounds[b].s - changed.s, expect, a_max, j_max)
     if gap is None:
+        if expect * (1.0 - REL_TOL) - tol <= v_b <= expect * (1.0 + 1e-3) + tol:
+            # passed at what the rules expect there (zero acceleration): what lies after b
+            # is reachable from b's state, not from the older one (CAM seed 619: override 35
+            # → 122 % braking at 392 mm/s, 18 mm before a run boundary passed at its cap of
+            # 1.29 mm/s, two more after it; from the event's state the third one's cap of
+            # 70.7 lay in a gap with x1 = 59.9, and the second's cap of 49.6 read as a dip)
+            changed = dataclasses.replace(smp, s=path.bounds[b].s, v=v_b, a=0.0, seg=b)
         return INF, changed
     x1, x2 = gap
     side = x1
     if x1 < 0.0 or (x2 <= path.hard(b) and (x1 == 0.0 or x2 * x1 < expect * expect)):
         side = expect  # x2 is the nearer (or the only) side: the cap is expected
-    if x2 < INF and (abs(v_b - side) <= side * 1e-3 + tol or expect <= v_b <= x2 * 1.001 + tol):
+    if abs(v_b - side) <= side * 1e-3 + tol or (x2 < INF and expect <= v_b <= x2 * 1.001 + tol):
         changed = dataclasses.replace(smp, s=path.bounds[b].s, v=v_b, a=0.0, seg=b)
     return (side if side < expect else INF), changed
 

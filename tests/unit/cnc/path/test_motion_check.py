@@ -380,3 +380,14 @@ def test_a_brake_the_window_s_move_releases_ramps_out_after_the_boundary() -> No
         lower[i] = dataclasses.replace(lower[i], v=lower[i].v * 0.9)
     found = check_motion(rec.program, rec.table, ch.look_ahead_blocks, ch.cycle_time, lower)
     assert any(f.startswith("dip") and "boundary 17 " in f for f in found), found
+
+
+def test_the_gap_s_anchor_moves_to_each_run_boundary_passed_as_expected() -> None:
+    """CAM seed 619: override 35 → 122 % while the path brakes at 392 mm/s, 18 mm before a
+    run boundary it passes at its cap of 1.29 mm/s, two more after it. From the event's
+    state the third one's cap of 70.7 mm/s lay in a jerk gap (x1 = 59.9), and the second
+    one's cap of 49.6 before it read as a dip below x1. What lies after a run boundary
+    passed at what the rules expect there is reachable from that boundary's state: no
+    finding, and the run has no other problem."""
+    _, hard, slow, errors = check(cam_scenario(619))
+    assert (hard, slow, errors) == ([], [], 0)
