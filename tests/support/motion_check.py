@@ -195,7 +195,10 @@ def _gap(
     expect there."""
     if not path.gate[b] or changed is None or changed.seg >= b:
         return INF, changed
-    a_max, j_max = path.limits(changed.seg, b + 1)
+    # the limits the path brakes toward b under: the segments before b (with b's own, lower
+    # ones a gap appeared that the path does not have: a cold review's tangent arc of a
+    # third of the line's jerk after it, a made-up path at 2.4 mm/s for a cap of 60.8)
+    a_max, j_max = path.limits(changed.seg, b)
     gap = jerk_gap(changed.v, changed.a, path.bounds[b].s - changed.s, expect, a_max, j_max)
     if gap is None:
         if expect * (1.0 - REL_TOL) - tol <= v_b <= expect * (1.0 + 1e-3) + tol:
@@ -422,11 +425,14 @@ def check_motion(
                     or (
                         # or a brake for the window's end that the window's move at b
                         # releases (the path enters b's segment: the window ends a block
-                        # further on), passed at what the rules expect: its deceleration is
-                        # ramped out after b as well (feeds seed 46, look-ahead 3: 86.5 mm/s
-                        # and −2.0 m/s² at an F3000 drop at 180 %, 81.5 at the ramp's end, 86.0
-                        # at the next boundary)
-                        not slow
+                        # further on), passed above what zero acceleration there allows, so
+                        # braking as it must: its deceleration is ramped out after b as well
+                        # (feeds seed 46, look-ahead 3: 86.5 mm/s for 69.4 with zero
+                        # acceleration, −2.0 m/s² at an F3000 drop at 180 %, 81.5 at the ramp's
+                        # end, 86.0 at the next boundary). Not where zero acceleration at b
+                        # would do: a brake there for nothing, ramped out, is a dip (a cold
+                        # review's made-up path at −4 m/s² through a boundary of 43.6 mm/s)
+                        v_b > held_by * (1.0 + REL_TOL)
                         and backward == held_by < forward
                         and path.backward(b, smp, b + path.look_ahead) > backward * (1.0 + REL_TOL)
                     )

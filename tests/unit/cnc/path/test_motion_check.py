@@ -391,3 +391,39 @@ def test_the_gap_s_anchor_moves_to_each_run_boundary_passed_as_expected() -> Non
     finding, and the run has no other problem."""
     _, hard, slow, errors = check(cam_scenario(619))
     assert (hard, slow, errors) == ([], [], 0)
+
+
+def test_a_gap_is_read_with_the_limits_before_the_boundary() -> None:
+    """A cold review's program: a line at F12000 (8 m/s², 400 m/s³ on X) into a tangent arc of
+    4 mm (its cap 60.8 mm/s, 3.2 m/s² and 160 m/s³). With the arc's lower limits, 60.8 mm/s
+    at the arc lay in a jerk gap from 200 mm/s 8.2 mm before it, and a made-up path that
+    brakes to 8 mm/s after an override step of 1 % and crawls into the arc passed. The path
+    brakes toward the arc under the line's limits, which reach 60.8: found."""
+    ch = dataclasses.replace(shipped(), cycle_time=1e-3)
+    task = GeoTask(ch, "G01 X0 Y0 F600\nG01 X40 F12000\nG03 X44 Y4 I0 J4\nM30\n")
+    # the state the path re-plans from at the override step (cycle 159), 8.254 mm before the
+    # arc at 199.66 mm/s: with the arc's limits x1 = 3.0 and x2 = 61.0 mm/s, above the arc's
+    # own cap
+    v0 = 0.19966
+    samples = drive(task, v0, ch.cycle_time, 1300, lambda i: -8.0 if 161 <= i < 185 else 0.0,
+                    lambda i: 1.0 if i < 160 else 1.01)  # fmt: skip
+    found = check_motion(task.interp.program, task.interp.table, 30, ch.cycle_time, samples)
+    assert any(f.startswith("boundary 1 ") for f in found), found
+
+
+def test_a_brake_zero_acceleration_would_spare_is_no_window_release() -> None:
+    """A cold review's made-up path: 0.5 mm blocks at F12000, look-ahead 3 (the window's end
+    holds the path at 43.6 mm/s with zero acceleration at each boundary); the path passes
+    boundary 30 there but braking at −4 m/s², goes down to about 23 mm/s and comes back. Zero
+    acceleration at 30 would have done, so the window's move there releases no brake it
+    needed: the dip is found."""
+    ch = dataclasses.replace(shipped(), cycle_time=1e-3)
+    text = "G01 X0 Y0 F600\n" + "".join(f"G01 X{(i + 1) * 0.5:.1f} F12000\n" for i in range(80))
+    task = GeoTask(ch, text + "M30\n")
+
+    def accel(i: int) -> float:
+        return -4.0 if 344 <= i < 349 else 4.0 if 349 <= i < 354 else 0.0  # b30 in cycle 344
+
+    samples = drive(task, 0.0437, ch.cycle_time, 400, accel)
+    found = check_motion(task.interp.program, task.interp.table, 3, ch.cycle_time, samples)
+    assert any(f.startswith(("dip", "boundary 31 ")) for f in found), found
