@@ -40,6 +40,7 @@ COMPILED: tuple[str, ...] = (
     "liftd.cnc.path.nominal",
     "liftd.cnc.path.plan",
     "liftd.cnc.path.program",
+    "liftd.cnc.path.shift",
     "liftd.cnc.path.table",
     "liftd.cnc.path.targets",
     "liftd.cnc.path.tracker",

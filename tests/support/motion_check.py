@@ -19,7 +19,12 @@ The rules (docs/geo-core.md, "Which rule decides a slowdown", linked from docs/a
   from where it was found too slow). The window is the one the brake toward the boundary
   began under, at least the one that ended a block after it. Where the window's last move
   raised the cap, the path is held to the cap under the window before and to the higher one
-  only as far as it can reach it from its state when the window moved.
+  only as far as it can reach it from its state when the window moved. At a run boundary
+  (zero acceleration there) whose value lies in the jerk gap from the path's state at the
+  last input change (no brake has it there with zero acceleration: the path passes at most
+  at x1 below it or at least at x2 above it, `motion_rules.jerk_gap`), x1 where it is the
+  nearer side by ratio; from a run boundary passed at a side of such a gap, the gaps after
+  it open from its state there.
 * **Between two boundaries** it never goes below the lower of its velocities at the two.
 * **Never faster** than the rules let it be (tests/support/motion_overrun.py): at most the
   ceiling of its block in every cycle, at most the transition cap and both blocks' ceilings at
@@ -31,8 +36,11 @@ full jerk first (a boundary inside that ramp is expected at the ramp's velocity 
 lower where a cap needs it); the forward pass starts again where the ramp ends (or at the
 event's state), and the interval goes on from there: no dip below the lower of the ramp's end
 and the next boundary. The same where the brake from above a ceiling an input lowered passes
-the end of that ceiling's block still decelerating into a higher ceiling: the ramp-out after
-that boundary is the jerk limit's, not a dip.
+the end of that ceiling's block still decelerating into a higher ceiling, and where a brake
+for the look-ahead window's end passes a boundary, at what the rules expect there, whose
+crossing moves the window on and releases it: the ramp-out after that boundary is the jerk
+limit's, not a dip (its deceleration there read as the lowest the jerk limit allows from the
+samples either side).
 
 What the rules allow is tests/support/motion_rules.py, in the checker's own arithmetic (a
 jerk-limited velocity change with zero acceleration at both ends, inverted by bisection), not
@@ -46,6 +54,7 @@ every link, the 24th constraint taken as a stop): those are the slowdowns it is 
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
@@ -54,7 +63,7 @@ from liftd.cnc.path.program import PathProgram
 from liftd.cnc.path.table import PathTable
 from liftd.cnc.snapshot import ChannelState, GeoSnapshot
 from tests.support.motion_overrun import overruns
-from tests.support.motion_rules import INF, PathRules, Sample, reach, reach_from
+from tests.support.motion_rules import INF, PathRules, Sample, jerk_gap, reach, reach_from
 
 # Sample and reach_from are the tests' too (the samples' type; the check's arithmetic)
 __all__ = ["Expected", "Recorder", "Sample", "check_motion", "reach_from"]
@@ -145,6 +154,7 @@ class Expected(NamedTuple):
     held_by: float
     forward: float
     ramp: float
+    gap: float = INF  # x1, where the jerk gap after an input change explains a lower velocity
 
 
 def _ramp_at(ramp: tuple[float, float, float, float], s_b: float) -> float:
@@ -160,6 +170,67 @@ def _ramp_at(ramp: tuple[float, float, float, float], s_b: float) -> float:
             hi = tau
     tau = 0.5 * (lo + hi)
     return max(v0 + tau * (a0 + tau * j / 2.0), 0.0)
+
+
+def _gap(
+    path: PathRules, changed: Sample | None, b: int, expect: float, v_b: float, tol: float,
+    smp: Sample,
+) -> tuple[float, Sample | None]:  # fmt: skip
+    """At run boundary b, where the path has zero acceleration, and `expect` lies in the jerk
+    gap from the state `changed` (the state the path re-planned from at the last input
+    change, or where it last passed a run boundary at a side of a gap): (the velocity
+    expected there instead, the state the next gaps open from); (inf, `changed`) where there
+    is no gap. From that state no brake has `expect` at b with zero acceleration there
+    (`jerk_gap`): the path passes b at most at x1, or at least at x2 (above the cap: the
+    brake from above a ceiling an input lowered, tests/support/motion_overrun.py), or dips
+    below x1 before it. Which side is the core's judgement (`Targets.pick_target`, known
+    deviation 6 of docs/geo-core.md); the check holds it to the side nearer by ratio (x1
+    where x2 / expect ≥ expect / x1 or x2 is above b's hard cap, else `expect`), so a core
+    that takes x1 where x2 is nearer is still found (CAM seeds 74, 465, 629: x1 for a cap of
+    43.4 mm/s where x2 is nearer). Where the path passed b at a side of the gap, as near the
+    cap as it could (at x2: as slowly as it could above it), the next gaps open from b's
+    state (feeds seed 383: override 100 → 10 % at 126.3 mm/s, 1.27 mm before run boundary
+    16, passed at its x2 of 115.3, from which 16.6 mm/s at boundary 17 lies in the gap,
+    x1 = 5.75); so they do from a run boundary without a gap passed at what the rules
+    expect there."""
+    if not path.gate[b] or changed is None or changed.seg >= b:
+        return INF, changed
+    # the limits the path brakes toward b under: the segments before b (with b's own, lower
+    # ones a gap appeared that the path does not have: a cold review's tangent arc of a
+    # third of the line's jerk after it, a made-up path at 2.4 mm/s for a cap of 60.8)
+    a_max, j_max = path.limits(changed.seg, b)
+    gap = jerk_gap(changed.v, changed.a, path.bounds[b].s - changed.s, expect, a_max, j_max)
+    if gap is None:
+        if expect * (1.0 - REL_TOL) - tol <= v_b <= expect * (1.0 + 1e-3) + tol:
+            # passed at what the rules expect there (zero acceleration): what lies after b
+            # is reachable from b's state, not from the older one (CAM seed 619: override 35
+            # → 122 % braking at 392 mm/s, 18 mm before a run boundary passed at its cap of
+            # 1.29 mm/s, two more after it; from the event's state the third one's cap of
+            # 70.7 lay in a gap with x1 = 59.9, and the second's cap of 49.6 read as a dip)
+            changed = dataclasses.replace(smp, s=path.bounds[b].s, v=v_b, a=0.0, seg=b)
+        return INF, changed
+    x1, x2 = gap
+    side = x1
+    if x1 < 0.0 or (x2 <= path.hard(b) and (x1 == 0.0 or x2 * x1 < expect * expect)):
+        side = expect  # x2 is the nearer (or the only) side: the cap is expected
+    if abs(v_b - side) <= side * 1e-3 + tol or (x2 < INF and expect <= v_b <= x2 * 1.001 + tol):
+        changed = dataclasses.replace(smp, s=path.bounds[b].s, v=v_b, a=0.0, seg=b)
+    return (side if side < expect else INF), changed
+
+
+def _gap_dip(path: PathRules, b: int, x1: float, low: float, tol: float, smp: Sample) -> list[str]:
+    """Where run boundary b is expected at x1 of a jerk gap (`_gap`): the brake to x1 goes no
+    lower on the way, so a path that went lower before b (`low`: since the event or the
+    boundary before b) and came back is found (feeds
+    seed 193: down to 0.001 mm/s after an override raise, back to 9.1 at the boundary,
+    where the brake to x1 passes it at 8.0; inside the event's ramp, which the interval's
+    own dip rule does not read)."""
+    if x1 == INF or low >= x1 * (1.0 - REL_TOL) - tol:
+        return []
+    return [
+        f"dip to {low * 1e3:.4f} mm/s before boundary {b} (line {path.bounds[b].line}) in "
+        f"the jerk gap, x1 {x1 * 1e3:.4f} (t={smp.t:.4f} s)"
+    ]
 
 
 def check_motion(
@@ -196,6 +267,8 @@ def check_motion(
     ramp = (0.0, 0.0, 0.0, 0.0)  # that ramp: the state (s, v, a) it starts from, the jerk
     last: Sample | None = None
     pending: tuple[int, str] | None = None  # a rest just before a stop, and that stop
+    changed: Sample | None = None  # the state the path re-planned from at the last event
+    gap_low = INF  # the lowest velocity since the last event or boundary crossed
     for smp in samples:
         if last is None:
             last = smp
@@ -238,6 +311,7 @@ def check_motion(
             # was not checked: a dip planned at an event passed unseen)
             entry_v, interval_min, fresh = min(smp.v, anchor_v), INF, False
             entered.clear()
+            changed, gap_low = last, min(last.v, smp.v)
             last = smp
             continue
         held = smp.hold or smp.override <= 0.0 or smp.parked or last.parked
@@ -259,9 +333,10 @@ def check_motion(
             s_b = path.bounds[b].s
             if held or path.is_stop(b, smp):
                 anchor_s, anchor_v, anchor_seg = s_b, 0.0, b
-                interval_min, fresh = INF, True
+                interval_min, fresh, gap_low = INF, True, INF
                 continue
             v_b = _at(last, smp, s_b)
+            low, gap_low = gap_low, v_b  # since the event or the boundary before
             tol = _slack(path, b, dt)
             # the look-ahead window as it was when the path began braking toward b: its end was a
             # stop the path had to be able to make, and a cap that came into view later may lie
@@ -289,9 +364,17 @@ def check_motion(
                 # 0.28 mm/s inside the ramp), from where the forward pass starts again. Not
                 # checked before (every boundary inside the ramp passed)
                 on_ramp = _ramp_at(ramp, s_b)
-                if trace is not None:
-                    trace.append(Expected(b, window, v_b, held_by, INF, on_ramp))
                 expect = min(on_ramp, held_by)
+                # a run boundary inside the ramp: zero acceleration there, its velocity in the
+                # gap (feeds seed 193: override 40 → 200 % at 48.0 mm/s and −3.46 m/s², 0.36 mm
+                # before run boundary 23, the ramp's 14.9 mm/s there: ramping out alone ends
+                # beyond it, x1 = 9.18, no x2)
+                x1, gap_from = _gap(path, changed, b, expect, v_b, tol, smp)
+                out += _gap_dip(path, b, x1, low, tol, smp)
+                changed = gap_from
+                expect = min(expect, x1)
+                if trace is not None:
+                    trace.append(Expected(b, window, v_b, held_by, INF, on_ramp, x1))
                 if v_b < expect * (1.0 - REL_TOL) - tol:
                     out.append(
                         f"boundary {b} (line {path.bounds[b].line}) at {v_b * 1e3:.4f} mm/s, "
@@ -309,9 +392,13 @@ def check_motion(
                 a_k, j_k = path.limits(k, b)
                 forward = min(forward, reach(cap_k, s_b - s_k, a_k, j_k, path.v_top))
             expect = min(held_by, forward)
+            x1, gap_from = _gap(path, changed, b, expect, v_b, tol, smp)
+            out += _gap_dip(path, b, x1, low, tol, smp)
+            changed = gap_from
+            expect = min(expect, x1)
             slow = v_b < expect * (1.0 - REL_TOL) - tol
             if trace is not None:
-                trace.append(Expected(b, window, v_b, held_by, forward, INF))
+                trace.append(Expected(b, window, v_b, held_by, forward, INF, x1))
             if slow:
                 out.append(
                     f"boundary {b} (line {path.bounds[b].line}) at {v_b * 1e3:.4f} mm/s, "
@@ -330,8 +417,26 @@ def check_motion(
             if (
                 a_b < 0.0
                 and smp.a < 0.0
-                and v_b > path.ceiling(b - 1, smp.override) * (1.0 + REL_TOL)
-                and path.ceiling(b, smp.override) > path.ceiling(b - 1, smp.override)
+                and (
+                    (
+                        v_b > path.ceiling(b - 1, smp.override) * (1.0 + REL_TOL)
+                        and path.ceiling(b, smp.override) > path.ceiling(b - 1, smp.override)
+                    )
+                    or (
+                        # or a brake for the window's end that the window's move at b
+                        # releases (the path enters b's segment: the window ends a block
+                        # further on), passed above what zero acceleration there allows, so
+                        # braking as it must: its deceleration is ramped out after b as well
+                        # (feeds seed 46, look-ahead 3: 86.5 mm/s for 69.4 with zero
+                        # acceleration, −2.0 m/s² at an F3000 drop at 180 %, 81.5 at the ramp's
+                        # end, 86.0 at the next boundary). Not where zero acceleration at b
+                        # would do: a brake there for nothing, ramped out, is a dip (a cold
+                        # review's made-up path at −4 m/s² through a boundary of 43.6 mm/s)
+                        v_b > held_by * (1.0 + REL_TOL)
+                        and backward == held_by < forward
+                        and path.backward(b, smp, b + path.look_ahead) > backward * (1.0 + REL_TOL)
+                    )
+                )
             ):
                 # the brake from above a lowered ceiling (after an input change: above it
                 # otherwise, motion_overrun fails the run) that ends where the ceiling rises
@@ -345,6 +450,13 @@ def check_motion(
                 if j != INF:
                     t_r = -smp.a / j
                     ramp_s = smp.s + t_r * (smp.v + t_r * (smp.a / 2.0 + t_r * j / 6.0))
+                    # the deceleration at b: a linear reading between the samples misses a
+                    # peak between them; the jerk limit bounds it from either sample (feeds
+                    # seed 247: −2.33 and −2.45 m/s² a cycle apart, the peak −2.55 at b,
+                    # ramped out from there to 9.92 mm/s where the linear reading expected
+                    # 11.0)
+                    dt_s = smp.t - last.t
+                    a_b = min(a_b, max(last.a - j * frac * dt_s, smp.a - j * (1.0 - frac) * dt_s))
                     ramp_v = max(smp.v + smp.a * t_r / 2.0, v_b - a_b * a_b / (2.0 * j), 0.0)
                     ramp, ramp_ends = (smp.s, smp.v, smp.a, j), ramp_s
                     anchor_s, anchor_v, anchor_seg = ramp_s, ramp_v, b
@@ -376,6 +488,7 @@ def check_motion(
                 entered[k] = last
         if not held and smp.s > ramp_ends:
             interval_min = min(interval_min, smp.v) if smp.seg == last.seg else smp.v
+        gap_low = min(gap_low, smp.v)
         if smp.a >= 0.0 or smp.v == 0.0:
             braking_from = smp.seg
         interval_from = min(interval_from, braking_from)

@@ -153,6 +153,44 @@ def brake_distance(v: float, a: float, v1: float, a_max: float, j_max: float) ->
     return d + u * t3 - peak * t3 * t3 / 2.0 + j_max * t3**3 / 6.0
 
 
+def jerk_gap(
+    v: float, a: float, length: float, v1: float, a_max: float, j_max: float
+) -> tuple[float, float] | None:
+    """Where v1 lies in the jerk gap `length` ahead of (v, a): the path must brake to have v1
+    there (v1 below the velocity ramping the acceleration out alone gives) and no brake has
+    it there with zero acceleration (`brake_distance` longer than `length`). Then the nearest
+    velocities it can have there with zero acceleration, (x1, x2): x1 below v1, x2 above it,
+    by bisection (`brake_distance` rises from v1 = 0 to about a third of v and falls after
+    it, so the velocities within `length` are [0, x1] and [x2, v + a·|a|/2J]; x2 is inf
+    where not even ramping the acceleration out fits, x1 is −1 where not even rest is within
+    `length`). Else None."""
+    if j_max == INF or length <= 0.0:
+        return None
+    v_p = v + a * abs(a) / (2.0 * j_max)
+    if v1 >= v_p or brake_distance(v, a, v1, a_max, j_max) <= length:
+        return None
+    x1 = -1.0  # none: not even rest is within length
+    if brake_distance(v, a, 0.0, a_max, j_max) <= length:
+        lo, hi = 0.0, v1  # x1: the highest velocity below v1 within length
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            if brake_distance(v, a, mid, a_max, j_max) <= length:
+                lo = mid
+            else:
+                hi = mid
+        x1 = lo
+    if brake_distance(v, a, v_p, a_max, j_max) > length:
+        return x1, INF  # not even the ramp-out alone fits: nothing above v1
+    lo, hi = v1, v_p  # x2: the lowest above it (v_p is: the ramp-out alone)
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        if brake_distance(v, a, mid, a_max, j_max) <= length:
+            hi = mid
+        else:
+            lo = mid
+    return x1, hi
+
+
 def reach_from(v: float, a: float, length: float, a_max: float, j_max: float, top: float) -> float:
     """The highest velocity ≤ top the path can have with zero acceleration `length` ahead of
     (v, a) (bisection on `_raise_distance`, increasing in the end velocity); where ramping the

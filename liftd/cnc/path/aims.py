@@ -28,6 +28,9 @@ from liftd.cnc.ruckig1 import ProfileError
 
 AIMS = 4  # profiles `Aims.through` tries at most (one `Targets.settle` each)
 GAP_STEPS = 10  # `Aims.gap_state`: its deceleration within 2^-10 of a_max (a solve each)
+# `Aims._brake_state`, where ruckig refuses the drop at its cap: the velocities below the cap
+# it tries there (a fraction below it; a solve each)
+BELOW = (0.01, 0.03, 0.06, 0.1)
 
 
 class Aims:
@@ -145,15 +148,51 @@ class Aims:
         a_lo = -min(a_max, math.sqrt(2.0 * j_max * (c_i - e)) * (1.0 - 1e-9))
         if brake_distance(c_i, a_lo, e, a_max, j_max) > room:
             return False
-        a_i = highest(a_lo, 0.0, 40, lambda x: brake_distance(c_i, x, e, a_max, j_max) <= room)
-        v_max = max(ceiling, c_i, v_p) if st.v <= ceiling else max(ceiling, c_i, st.v, v_p)
-        plan = self._state_plan(ext, i, a_i, v_max, min(st.v, c_i), a_max, j_max, w)
+        at_cap = self._state_at(ext, i, c_i, e, room, v_p, ceiling, a_max, j_max, w)
+        plan = at_cap if at_cap is not None else self._below_cap(ext, i, e, room, v_p, ceiling,
+                                                                 a_max, j_max, w)  # fmt: skip
         if plan is None:
             return False
         plan.soft_from = min(st.soft_from, ext[0][0])
         plan.aim = ext[k][0]
         st.plan = plan
         return True
+
+    def _below_cap(
+        self, ext: list[tuple[int, float, float, bool]], i: int, e: float, room: float,
+        v_p: float, ceiling: float, a_max: float, j_max: float, w: int,
+    ) -> Plan | None:  # fmt: skip
+        """Where ruckig refuses drop i at its cap braking (`_brake_state`), at the edge of what
+        it reaches (its first step, with the velocity kept ≥ 0): i a little below its cap,
+        still braking, with the least deceleration from there, BELOW (feeds seed 101: from a
+        run boundary at 51.3 mm/s, 0.6 mm before an F1200 drop 0.2 mm before a corner of 0.51
+        mm/s, 36 mm/s at the drop and every deceleration that keeps the corner refused; the
+        shift's brake at once passed the drop at 14.3 mm/s; now 35.6). Not below i's target
+        with zero acceleration there (`Constraints.target_cap`), the fallback's."""
+        c_i = ext[i][2]
+        floor = self.con.target_cap(ext, i)
+        for f in BELOW:
+            v_i = c_i * (1.0 - f)
+            if v_i <= floor:
+                return None
+            plan = self._state_at(ext, i, v_i, e, room, v_p, ceiling, a_max, j_max, w)
+            if plan is not None:
+                return plan
+        return None
+
+    def _state_at(
+        self, ext: list[tuple[int, float, float, bool]], i: int, v_i: float, e: float,
+        room: float, v_p: float, ceiling: float, a_max: float, j_max: float, w: int,
+    ) -> Plan | None:  # fmt: skip
+        """The profile to candidate i at v_i (at most its cap) with the least deceleration from
+        which e stays reachable within `room` after it (`_state_plan`); None where none."""
+        st = self.st
+        a_lo = -min(a_max, math.sqrt(2.0 * j_max * max(v_i - e, 0.0)) * (1.0 - 1e-9))
+        if brake_distance(v_i, a_lo, e, a_max, j_max) > room:
+            return None
+        a_i = highest(a_lo, 0.0, 40, lambda x: brake_distance(v_i, x, e, a_max, j_max) <= room)
+        v_max = max(ceiling, v_i, v_p) if st.v <= ceiling else max(ceiling, v_i, st.v, v_p)
+        return self._state_plan(ext, i, a_i, v_max, min(st.v, v_i), a_max, j_max, w, v_i)
 
     def gap_state(
         self, cands: list[tuple[int, float, float, bool]], i: int, target: float, v_p: float,
@@ -211,13 +250,15 @@ class Aims:
 
     def _state_plan(
         self, cands: list[tuple[int, float, float, bool]], i: int, x: float, v_max: float,
-        floor: float, a_max: float, j_max: float, w: int,
+        floor: float, a_max: float, j_max: float, w: int, v_i: float = INF,
     ) -> Plan | None:  # fmt: skip
-        """The profile from the path's state to candidate i at its cap with acceleration x
-        there (`Plan.a_end`), where ruckig reaches it, it snaps to its goal, it does not dip
-        below `floor` and it passes the candidates before i below their caps; else None."""
+        """The profile from the path's state to candidate i at its cap (or at v_i below it)
+        with acceleration x there (`Plan.a_end`), where ruckig reaches it, it snaps to its
+        goal, it does not dip below `floor` and it passes the candidates before i below their
+        caps; else None."""
         st = self.st
         b_i, s_i, c_i, _ = cands[i]
+        c_i = min(c_i, v_i)
         try:
             traj = self.tg.calc.position(st.s, st.v, st.a, s_i, c_i, v_max, a_max, j_max, a1=x)
         except ProfileError:

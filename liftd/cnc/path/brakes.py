@@ -2,7 +2,7 @@
 latest moment a time-optimal profile would (`Brakes`, a part of the tracker, `Tracker.br`,
 that holds the constraint queries, the path's state and the target profiles of
 `targets.py`). A CNC brakes at once after an override drop (known deviation 10 of
-docs/geo-core.md: `brake_first`, `brake_into`); where the shift of `Tracker._replan` would
+docs/geo-core.md: `brake_first`, `brake_into`); where the shift (`Shift.toward`) would
 give up a feed cap the path can still get below braking (deviation 12: `brake_through`,
 `keep_below`), or one that came into view too late for zero acceleration there (deviation
 13: `dip_through`). Each is slower than the late brake, never above a cap and never at
@@ -148,7 +148,7 @@ class Brakes:
         v_p: float, s_c: float, target: float, v_max: float, a_max: float, j_max: float, b: int,
         w: int,
     ) -> bool:  # fmt: skip
-        """The shift's profile toward b (`Tracker._replan`) passes a feed cap the path can
+        """The shift's profile toward b (`Shift.toward`) passes a feed cap the path can
         still get below above it, and the brake through to b's target is refused (b a stop,
         or the cruise after the brake too long): the target profile toward b with ruckig's
         v_max at the lowest feed cap before b that the path can still get down to with zero
@@ -391,7 +391,7 @@ class Brakes:
         the time-optimal profile toward k holds the velocity and passes a feed drop above its
         cap (CAM seed 0: boundary 52 at 34.19 for 33.09 mm/s 0.2 mm before a run boundary of
         25.82, its target at zero acceleration out of reach, its cap not; the shift of
-        `_replan` dropped that cap, known deviation 12 of docs/geo-core.md). Slower than a
+        `Shift.toward` dropped that cap, known deviation 12 of docs/geo-core.md). Slower than a
         late brake, never above a cap. Not toward rest or the window's end (a cruise at 0 is
         never re-planned: a review found the path stand still for good before an M00), and
         only where the cruise after the brake takes at most BRAKE_CRUISE of the way (one to a

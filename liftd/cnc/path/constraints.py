@@ -260,7 +260,7 @@ class Constraints:
         brake of its own), rest at a stop, and at w (not a stop) the least of its hard cap and
         what rest one block on allows (the window moves on). Feed caps are left out: after an
         override drop the path passes those it can no longer get down to above them. Read
-        where the jerk gap's rule would pass b above its cap (`Tracker._replan`: x2 above
+        where the jerk gap's rule would pass b above its cap (`Shift.toward`: x2 above
         this loses what lies after b; a cold review built it with a lift's stop 0.5 mm after
         b, and with a corner of 25 mm/s there)."""
         tb = self.tb

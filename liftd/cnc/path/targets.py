@@ -254,6 +254,12 @@ class Targets:
                 # × dz/ds for a coupled Z (path-based wide seeds 76, 399, 410: Z at up to
                 # 1.28 × j_max, crawling at 5 mm/s with dz/ds ≈ 39)
                 return max(min(top, reach_from(v, a, d, a_max, j_max)), 0.0)
+            if a < 0.0 and brake_distance(v, a, 0.0, a_max, j_max) <= d:
+                # the deceleration cannot be ramped out before b (an override raise inside a
+                # brake, 0.36 mm before a run boundary at 48.0 mm/s and −3.46 m/s²): zero
+                # acceleration at b only after a harder brake, at x1. Toward v_p ruckig's
+                # profile went down to 0.001 mm/s and came back to 9.1 (feeds seed 193)
+                return nearest_reachable(v, a, d, max(v_p, 0.0), a_max, j_max, False)
             return min(top, max(v_p, 0.0))
         if brake_distance(v, a, top, a_max, j_max) <= fits:
             return top
@@ -543,7 +549,7 @@ class Targets:
     def rises_above(self, plan: Plan, cand: tuple[int, float, float, bool]) -> bool:
         """`plan` speeds up again after `cand`'s boundary above the ceiling of its block
         before the block ends (`passed_above` reads the boundary alone): a profile toward a
-        goal beyond it, with v_max at the velocity it had before it (`Tracker._replan`'s
+        goal beyond it, with v_max at the velocity it had before it (`Shift.toward`'s
         shift), passed an F5548 boundary at its cap still braking and came back to 2.5 µm/s
         above it in the block (feeds seed 940)."""
         tb = self.con.tb

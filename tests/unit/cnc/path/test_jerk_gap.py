@@ -17,10 +17,13 @@ import pytest
 from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.path.tracker import Tracker
 from liftd.cnc.path.velocity import brake_distance
+from liftd.cnc.plc import SimPlc
+from liftd.sim.simulate import run_cycles
 from tests.support.cam_cases import cam_scenario
-from tests.support.cam_runs import check
+from tests.support.cam_runs import check, time_limit
 from tests.support.channel import shipped
 from tests.support.feed_cases import feed_scenario
+from tests.support.motion_check import Expected, Recorder, check_motion
 from tests.support.scenarios import describe, wide_scenario
 
 
@@ -131,3 +134,29 @@ def test_x1_is_reached_without_a_dip(seed: int) -> None:
     _, hard, slow, errors = check(sc)
     assert hard == [] and errors == 0, (hard, describe(sc))
     assert not any(f.startswith("dip") for f in slow), slow
+
+
+def test_a_deceleration_too_long_to_ramp_out_before_a_run_boundary_ends_at_x1() -> None:
+    """Feeds seed 193: override 40 → 200 % at 48.0 mm/s and −3.46 m/s², 0.36 mm before a
+    run boundary whose cap rises from 8 to 40 mm/s. Ramping the deceleration out alone ends
+    beyond the boundary, at 29.6 mm/s: zero acceleration there only after a harder brake,
+    at x1 = 8.0 or below, and no x2. The tracker aimed at 29.6, ruckig refused it, and the
+    fallback's profile went down to 0.0014 mm/s and came back to 9.1 at the boundary (a
+    near-stop); it now brakes to x1 and passes the boundary at it (`Targets.pick_target`).
+    The check's trace shows x1 expected there, met."""
+    sc = feed_scenario(193)
+    task = GeoTask(sc.channel, sc.text)
+    rec = Recorder(task)
+    for snap in run_cycles(task, SimPlc(0.02), sc.schedule, sc.channel.cycle_time,
+                           time_limit(task.prog.table, sc)):  # fmt: skip
+        rec(snap)
+    trace: list[Expected] = []
+    ch = sc.channel
+    found = check_motion(rec.program, rec.table, ch.look_ahead_blocks, ch.cycle_time,
+                         rec.samples, trace)  # fmt: skip
+    assert found == [] and task.interp.plan_errors == 0, found
+    (at_b,) = [e for e in trace if e.b == 23]
+    assert at_b.ramp < math.inf and at_b.gap == pytest.approx(0.008, rel=1e-3)
+    assert at_b.v == pytest.approx(at_b.gap, rel=1e-3)
+    low = min(smp.v for smp in rec.samples if smp.t >= 6.69 and smp.s <= rec.table.s[23])
+    assert low >= 0.99 * at_b.gap

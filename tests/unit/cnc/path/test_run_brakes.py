@@ -171,6 +171,18 @@ def test_drops_between_the_brake_state_and_its_goal_are_kept(look_ahead: int, cy
     assert slow == []
 
 
+def test_a_drop_whose_brake_state_ruckig_refuses_is_passed_just_below_its_cap() -> None:
+    """Feeds seed 101: from a run boundary at 51.3 mm/s, 0.6 mm before an F1200 drop (36 mm/s
+    at 180 %) 0.2 mm before a corner of 0.51 mm/s. The aim's profile toward the corner sped
+    up first and passed the drop above its cap, and ruckig refused the brake state (the drop
+    at 36 mm/s braking: every deceleration that keeps the corner, in its first step); the
+    shift's brake at once took over and passed the drop at 14.3 mm/s, where one brake passes
+    it at 36. The brake state now tries a little below the cap (`aims.BELOW`): 35.6 mm/s,
+    still braking. Fails on 8dcd176."""
+    _, hard, slow, errors = check(feed_scenario(101))
+    assert (hard, slow, errors) == ([], [], 0)
+
+
 def test_a_feed_drop_whose_own_cap_is_in_the_jerk_gap_is_passed_at_it_braking() -> None:
     """Feeds seed 249: override 30 → 200 % as the path brakes at 292.9 mm/s and −5.0 m/s²,
     6.2 mm before an F3000 drop (100 mm/s) 2 mm before a corner of 0.14 mm/s. Zero
