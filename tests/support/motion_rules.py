@@ -169,26 +169,26 @@ def jerk_gap(
     v_p = v + a * abs(a) / (2.0 * j_max)
     if v1 >= v_p or brake_distance(v, a, v1, a_max, j_max) <= length:
         return None
-    x1 = -1.0  # none: not even rest is within length
-    if brake_distance(v, a, 0.0, a_max, j_max) <= length:
-        lo, hi = 0.0, v1  # x1: the highest velocity below v1 within length
-        for _ in range(60):
-            mid = 0.5 * (lo + hi)
-            if brake_distance(v, a, mid, a_max, j_max) <= length:
-                lo = mid
-            else:
-                hi = mid
-        x1 = lo
-    if brake_distance(v, a, v_p, a_max, j_max) > length:
+
+    def fits(x: float) -> bool:
+        return brake_distance(v, a, x, a_max, j_max) <= length
+
+    x1 = _edge(fits, 0.0, v1) if fits(0.0) else -1.0  # -1: not even rest is within length
+    if not fits(v_p):
         return x1, INF  # not even the ramp-out alone fits: nothing above v1
-    lo, hi = v1, v_p  # x2: the lowest above it (v_p is: the ramp-out alone)
+    return x1, _edge(fits, v_p, v1)  # the ramp-out alone fits: x2 between it and v1
+
+
+def _edge(fits: Callable[[float], bool], good: float, bad: float) -> float:
+    """The value from `good` (one that fits) toward `bad` (one that does not) nearest `bad`
+    for which `fits` holds, by 60 bisection steps."""
     for _ in range(60):
-        mid = 0.5 * (lo + hi)
-        if brake_distance(v, a, mid, a_max, j_max) <= length:
-            hi = mid
+        mid = 0.5 * (good + bad)
+        if fits(mid):
+            good = mid
         else:
-            lo = mid
-    return x1, hi
+            bad = mid
+    return good
 
 
 def reach_from(v: float, a: float, length: float, a_max: float, j_max: float, top: float) -> float:

@@ -8,7 +8,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import random
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 import pytest
 import ruckig
@@ -232,19 +232,27 @@ def _recorded(sc: Scenario) -> tuple[Recorder, list[Sample]]:
     return rec, rec.samples
 
 
-def _slowed_at(
-    rec: Recorder, samples: list[Sample], b: int, factor: float, before: int = 0
+def _scaled(
+    rec: Recorder, samples: list[Sample], b: int, offsets: Sequence[int], factor: float
 ) -> list[str]:
-    """The check of `samples` with the velocity of the two samples around boundary b scaled
-    by `factor` (a made-up path that passes b slower; with `before`, of the `before`
-    samples before those two instead: a path that dips before b and comes back)."""
+    """The check of `samples` with the velocity of the samples at `offsets` from the first
+    one past boundary b scaled by `factor` (a made-up path, slower there)."""
     s_b = rec.table.s[b]
     k = next(i for i, smp in enumerate(samples) if smp.s >= s_b)
     out = list(samples)
-    for i in range(k - 1 - before, k - 1) if before else (k - 1, k):
-        out[i] = dataclasses.replace(out[i], v=out[i].v * factor)
+    for i in offsets:
+        out[k + i] = dataclasses.replace(out[k + i], v=out[k + i].v * factor)
     ch = rec.task.ch
     return check_motion(rec.program, rec.table, ch.look_ahead_blocks, ch.cycle_time, out)
+
+
+def _slowed_at(
+    rec: Recorder, samples: list[Sample], b: int, factor: float, before: int = 0
+) -> list[str]:
+    """`_scaled` at the two samples around boundary b (a made-up path that passes b slower;
+    with `before`, the `before` samples before those two instead: a path that dips before b
+    and comes back)."""
+    return _scaled(rec, samples, b, range(-1 - before, -1) if before else (-1, 0), factor)
 
 
 @pytest.mark.parametrize(("seed", "b", "cap"), [(48, 23, 0.02), (383, 17, 0.0165867)])
@@ -353,18 +361,14 @@ def test_the_deceleration_at_a_boundary_is_read_within_the_jerk_limit() -> None:
     ch = rec.task.ch
     assert check_motion(rec.program, rec.table, ch.look_ahead_blocks, ch.cycle_time,
                         samples) == []  # fmt: skip
-    s_b = rec.table.s[13]
-    k = next(i for i, smp in enumerate(samples) if smp.s >= s_b)
-    lower = list(samples)
-    for i in range(k + 6, k + 10):  # about the ramp's end, 7.5 ms after the boundary
-        lower[i] = dataclasses.replace(lower[i], v=lower[i].v * 0.9)
-    found = check_motion(rec.program, rec.table, ch.look_ahead_blocks, ch.cycle_time, lower)
+    found = _scaled(rec, samples, 13, range(6, 10), 0.9)  # the ramp's end, 7.5 ms after it
     assert any(f.startswith("dip") and "boundary 14 " in f for f in found), found
 
 
 def test_a_brake_the_window_s_move_releases_ramps_out_after_the_boundary() -> None:
     """Feeds seed 46 (look-ahead 3, override 180 %): the path brakes for the window's end and
-    passes an F3000 drop at 86.5 mm/s and −2.0 m/s², what the rules expect there; entering
+    passes an F3000 drop at 86.5 mm/s and −2.0 m/s², above the 69.4 zero acceleration there
+    would allow under that window, so braking as it must; entering
     the block after it moves the window a block on and releases the brake, whose
     deceleration is ramped out at full jerk to 81.5 mm/s before the path speeds up to 86.0
     at the next boundary. That ramp was a dip finding; it is the jerk limit's, as after an
@@ -373,12 +377,7 @@ def test_a_brake_the_window_s_move_releases_ramps_out_after_the_boundary() -> No
     ch = rec.task.ch
     assert check_motion(rec.program, rec.table, ch.look_ahead_blocks, ch.cycle_time,
                         samples) == []  # fmt: skip
-    s_b = rec.table.s[16]
-    k = next(i for i, smp in enumerate(samples) if smp.s >= s_b)
-    lower = list(samples)
-    for i in range(k + 12, k + 18):  # after the ramp's end, 5 ms (10 cycles) after the boundary
-        lower[i] = dataclasses.replace(lower[i], v=lower[i].v * 0.9)
-    found = check_motion(rec.program, rec.table, ch.look_ahead_blocks, ch.cycle_time, lower)
+    found = _scaled(rec, samples, 16, range(12, 18), 0.9)  # after the ramp's end (5 ms)
     assert any(f.startswith("dip") and "boundary 17 " in f for f in found), found
 
 
