@@ -201,19 +201,22 @@ def _gap(
     a_max, j_max = path.limits(changed.seg, b)
     gap = jerk_gap(changed.v, changed.a, path.bounds[b].s - changed.s, expect, a_max, j_max)
     if gap is None:
-        if expect * (1.0 - REL_TOL) - tol <= v_b <= expect * (1.0 + 1e-3) + tol:
-            # passed at what the rules expect there (zero acceleration): what lies after b
-            # is reachable from b's state, not from the older one (CAM seed 619: override 35
-            # → 122 % braking at 392 mm/s, 18 mm before a run boundary passed at its cap of
-            # 1.29 mm/s, two more after it; from the event's state the third one's cap of
-            # 70.7 lay in a gap with x1 = 59.9, and the second's cap of 49.6 read as a dip)
-            changed = dataclasses.replace(smp, s=path.bounds[b].s, v=v_b, a=0.0, seg=b)
-        return INF, changed
-    x1, x2 = gap
-    side = x1
-    if x1 < 0.0 or (x2 <= path.hard(b) and (x1 == 0.0 or x2 * x1 < expect * expect)):
-        side = expect  # x2 is the nearer (or the only) side: the cap is expected
-    if abs(v_b - side) <= side * 1e-3 + tol or (x2 < INF and expect <= v_b <= x2 * 1.001 + tol):
+        # passed at what the rules expect there (zero acceleration): what lies after b is
+        # reachable from b's state, not from the older one (CAM seed 619: override 35 → 122 %
+        # braking at 392 mm/s, 18 mm before a run boundary passed at its cap of 1.29 mm/s,
+        # two more after it; from the event's state the third one's cap of 70.7 lay in a gap
+        # with x1 = 59.9, and the second's cap of 49.6 read as a dip)
+        side = INF
+        at_side = expect * (1.0 - REL_TOL) - tol <= v_b <= expect * (1.0 + 1e-3) + tol
+    else:
+        x1, x2 = gap
+        side = x1
+        if x1 < 0.0 or (x2 <= path.hard(b) and (x1 == 0.0 or x2 * x1 < expect * expect)):
+            side = expect  # x2 is the nearer (or the only) side: the cap is expected
+        at_side = abs(v_b - side) <= side * 1e-3 + tol or (
+            x2 < INF and expect <= v_b <= x2 * 1.001 + tol
+        )
+    if at_side:
         changed = dataclasses.replace(smp, s=path.bounds[b].s, v=v_b, a=0.0, seg=b)
     return (side if side < expect else INF), changed
 
@@ -369,9 +372,8 @@ def check_motion(
                 # gap (feeds seed 193: override 40 → 200 % at 48.0 mm/s and −3.46 m/s², 0.36 mm
                 # before run boundary 23, the ramp's 14.9 mm/s there: ramping out alone ends
                 # beyond it, x1 = 9.18, no x2)
-                x1, gap_from = _gap(path, changed, b, expect, v_b, tol, smp)
+                x1, changed = _gap(path, changed, b, expect, v_b, tol, smp)
                 out += _gap_dip(path, b, x1, low, tol, smp)
-                changed = gap_from
                 expect = min(expect, x1)
                 if trace is not None:
                     trace.append(Expected(b, window, v_b, held_by, INF, on_ramp, x1))
@@ -392,9 +394,8 @@ def check_motion(
                 a_k, j_k = path.limits(k, b)
                 forward = min(forward, reach(cap_k, s_b - s_k, a_k, j_k, path.v_top))
             expect = min(held_by, forward)
-            x1, gap_from = _gap(path, changed, b, expect, v_b, tol, smp)
+            x1, changed = _gap(path, changed, b, expect, v_b, tol, smp)
             out += _gap_dip(path, b, x1, low, tol, smp)
-            changed = gap_from
             expect = min(expect, x1)
             slow = v_b < expect * (1.0 - REL_TOL) - tol
             if trace is not None:

@@ -62,14 +62,7 @@ def _highest(distance: Callable[[float], float], length: float, lo: float, top: 
     (lo's is), by 60 bisection steps."""
     if distance(top) <= length:
         return top
-    hi = top
-    for _ in range(60):
-        mid = 0.5 * (lo + hi)
-        if distance(mid) <= length:
-            lo = mid
-        else:
-            hi = mid
-    return lo
+    return _edge(lambda v1: distance(v1) <= length, lo, top)
 
 
 def reach_rising(v_end: float, length: float, a_max: float, j_max: float, top: float) -> float:

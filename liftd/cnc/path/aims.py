@@ -33,6 +33,12 @@ GAP_STEPS = 10  # `Aims.gap_state`: its deceleration within 2^-10 of a_max (a so
 BELOW = (0.01, 0.03, 0.06, 0.1)
 
 
+def hardest(v: float, e: float, a_max: float, j_max: float) -> float:
+    """The deceleration at v whose ramp-out alone, at full jerk, ends at e (the shortest brake
+    from v to e that ends with zero acceleration; a hair inside, 1e-9, for rounding)."""
+    return -min(a_max, math.sqrt(2.0 * j_max * max(v - e, 0.0)) * (1.0 - 1e-9))
+
+
 class Aims:
     """The aim through a feed drop, for the path state `st` under the constraints `con`, with
     the profiles of `tg`; `Tracker` holds it and tries it before the drop's own target."""
@@ -145,8 +151,7 @@ class Aims:
             # states before i it read as lost, forced re-plans took turns with the shift, and
             # the shift passed a drop at 71.40 for 71.32 mm/s (feeds seed 394)
             return False
-        a_lo = -min(a_max, math.sqrt(2.0 * j_max * (c_i - e)) * (1.0 - 1e-9))
-        if brake_distance(c_i, a_lo, e, a_max, j_max) > room:
+        if brake_distance(c_i, hardest(c_i, e, a_max, j_max), e, a_max, j_max) > room:
             return False
         at_cap = self._state_at(ext, i, c_i, e, room, v_p, ceiling, a_max, j_max, w)
         plan = at_cap if at_cap is not None else self._below_cap(ext, i, e, room, v_p, ceiling,
@@ -187,7 +192,7 @@ class Aims:
         """The profile to candidate i at v_i (at most its cap) with the least deceleration from
         which e stays reachable within `room` after it (`_state_plan`); None where none."""
         st = self.st
-        a_lo = -min(a_max, math.sqrt(2.0 * j_max * max(v_i - e, 0.0)) * (1.0 - 1e-9))
+        a_lo = hardest(v_i, e, a_max, j_max)
         if brake_distance(v_i, a_lo, e, a_max, j_max) > room:
             return None
         a_i = highest(a_lo, 0.0, 40, lambda x: brake_distance(v_i, x, e, a_max, j_max) <= room)
@@ -232,7 +237,7 @@ class Aims:
                 return None  # the ramp-out undercuts the next target, or loses it
             return self._state_plan(cands, i, x, v_max, c_i, a_max, j_max, w)
 
-        good, bad = -min(a_max, math.sqrt(2.0 * j_max * (c_i - e)) * (1.0 - 1e-9)), 0.0
+        good, bad = hardest(c_i, e, a_max, j_max), 0.0
         best = plan_for(good)
         if best is None:
             return False
