@@ -18,12 +18,13 @@ from liftd.cnc.path.constraints import (
     CHAIN_MARGIN,
     GATE_TOL,
     INF,
+    SLACK_MARGIN,
     V_ROUND,
     Constraints,
 )
 from liftd.cnc.path.plan import PathState, Plan
 from liftd.cnc.path.targets import DIP_TOL, Targets, highest, lowest_velocity
-from liftd.cnc.path.velocity import brake_distance
+from liftd.cnc.path.velocity import brake_crossing, brake_distance
 from liftd.cnc.ruckig1 import ProfileError
 
 AIMS = 4  # profiles `Aims.through` tries at most (one `Targets.settle` each)
@@ -37,6 +38,66 @@ def hardest(v: float, e: float, a_max: float, j_max: float) -> float:
     """The deceleration at v whose ramp-out alone, at full jerk, ends at e (the shortest brake
     from v to e that ends with zero acceleration; a hair inside, 1e-9, for rounding)."""
     return -min(a_max, math.sqrt(2.0 * j_max * max(v - e, 0.0)) * (1.0 - 1e-9))
+
+
+def _passes(
+    v: float, a: float, e: float, room: float, mid: list[tuple[float, float]], a_max: float,
+    j_max: float,
+) -> bool:  # fmt: skip
+    """The brake from (v, a) down to e with zero acceleration there ends within `room` and is
+    below each cap of `mid` (distance from its start, cap) by then, with SLACK_MARGIN."""
+    return brake_distance(v, a, e, a_max, j_max) <= room and all(
+        c >= e and d - brake_crossing(v, a, e, c, a_max, j_max) >= SLACK_MARGIN for d, c in mid
+    )
+
+
+def least_brake(v: float, e: float, room: float, a_max: float, j_max: float) -> float | None:
+    """The least deceleration at v from which the brake down to e ends within `room`
+    (bisection within 2^-40 of a_max); None where not even the hardest does."""
+    a_lo = hardest(v, e, a_max, j_max)
+    if brake_distance(v, a_lo, e, a_max, j_max) > room:
+        return None
+    if brake_distance(v, 0.0, e, a_max, j_max) <= room:
+        return 0.0
+    return highest(a_lo, 0.0, 40, lambda x: brake_distance(v, x, e, a_max, j_max) <= room)
+
+
+def frees(
+    ext: list[tuple[int, float, float, bool]], j: int, k: int, e: float, a_max: float,
+    j_max: float,
+) -> bool:  # fmt: skip
+    """From drop j at its cap, the brake with the least deceleration that reaches e at k
+    (the brake state's continuation) passes every cap between j and k below it. Where one
+    of them binds instead, that brake crosses it too late, and a brake state at j that
+    keeps it (a harder deceleration) is at its edge: only the brake at once from j keeps
+    it, ruckig does not reach that drop at its cap from there, and the brake reaches e
+    before k (feeds seed 726: 0.5 mm before an F8229 drop at 163.7 mm/s and −7.88 m/s²,
+    every profile to it refused, the shift's dip went down to 61.3 mm/s four drops on;
+    feeds seeds 776 and 936 the same, the brake at once from such a state went down to
+    a corner's 7.2 mm/s early and dipped)."""
+    _, s_j, c_j, _ = ext[j]
+    room = ext[k][1] - s_j - CHAIN_MARGIN
+    if room <= 0.0 or c_j <= e:
+        return False
+    a_e = least_brake(c_j, e, room, a_max, j_max)
+    mid = [(c[1] - s_j, c[2]) for c in ext[j + 1 : k]]
+    return a_e is not None and _passes(c_j, a_e, e, room, mid, a_max, j_max)
+
+
+def _keeps(
+    held: Plan, ext: list[tuple[int, float, float, bool]], j: int, k: int, e: float,
+    a_max: float, j_max: float,
+) -> bool:  # fmt: skip
+    """`held` is a brake state at drop j aimed at k (`Aims._brake_state`) whose state there
+    still keeps e at k, passing the drops between below their caps."""
+    b_j, s_j, c_j, _ = ext[j]
+    if held.goal != b_j or held.aim != ext[k][0] or held.v_end > c_j or held.a_end >= 0.0:
+        return False
+    room = ext[k][1] - s_j - CHAIN_MARGIN
+    mid = [(c[1] - s_j, c[2]) for c in ext[j + 1 : k]]
+    if not mid and brake_distance(c_j, 0.0, e, a_max, j_max) <= room:
+        return False  # zero acceleration at j keeps e now: no state needed (a cold review)
+    return _passes(held.v_end, held.a_end, e, room, mid, a_max, j_max)
 
 
 class Aims:
@@ -109,7 +170,7 @@ class Aims:
             if plan is None or plan.goal != b or st.errors != errors:
                 break
             fast = self.tg.passed_above(plan, ext[i:k], k - i)
-            if fast == 0 and self._brake_state(ext, i, k, e, v_p, ceiling, a_max, j_max, w):
+            if fast == 0 and self._brake_state(ext, i, k, e, v_p, ceiling, a_max, j_max, w, held):
                 return True
             if fast < 0:
                 if plan.at(plan.time_at(ext[i][1], INF))[2] > -GATE_TOL or not self.below(
@@ -130,7 +191,7 @@ class Aims:
 
     def _brake_state(
         self, ext: list[tuple[int, float, float, bool]], i: int, k: int, e: float, v_p: float,
-        ceiling: float, a_max: float, j_max: float, w: int,
+        ceiling: float, a_max: float, j_max: float, w: int, held: Plan | None = None,
     ) -> bool:  # fmt: skip
         """The one brake toward k's target e passes feed drop i above its cap (or does not
         brake there), and zero acceleration at i at its cap loses e: the path passes i at its
@@ -139,23 +200,29 @@ class Aims:
         feeds seed 17: the F6000 boundary 1 mm before a corner of 0.41 mm/s held at zero
         acceleration at 69.5 mm/s, the boundary before it at 100.8 where the rules allow
         109.1). A plan toward i with that acceleration there (`Plan.a_end`); False where
-        none, nothing changed."""
+        none, nothing changed. Where ruckig refuses the state from the profile in hand that
+        leads to it (`held`, the window moved on: a re-plan on the way, 0.5 mm before an F9120
+        drop at 171.1 mm/s and −1.88 m/s², refused the same state it had planned 3 ms before,
+        and the fallback passed the drop at 152.9 for 152.0 mm/s, feeds seed 50), that one,
+        where its state still keeps e."""
         st = self.st
-        _, s_i, c_i, _ = ext[i]
-        room = ext[k][1] - s_i - CHAIN_MARGIN
-        if room <= 0.0 or c_i <= e or brake_distance(c_i, 0.0, e, a_max, j_max) <= room:
-            return False
-        if k != i + 1:
-            # a cap between i and k: a step's check reads it with zero acceleration there
-            # (`Constraints.need`), which the brake state passes braking; from the path's
-            # states before i it read as lost, forced re-plans took turns with the shift, and
-            # the shift passed a drop at 71.40 for 71.32 mm/s (feeds seed 394)
-            return False
-        if brake_distance(c_i, hardest(c_i, e, a_max, j_max), e, a_max, j_max) > room:
-            return False
-        at_cap = self._state_at(ext, i, c_i, e, room, v_p, ceiling, a_max, j_max, w)
-        plan = at_cap if at_cap is not None else self._below_cap(ext, i, e, room, v_p, ceiling,
-                                                                 a_max, j_max, w)  # fmt: skip
+        plan = None
+        tried = 0
+        for j in range(i, min(k, i + AIMS)):
+            # with drops between i and k: anchored at the first drop from which the brake to e
+            # passes the rest below their caps (`frees`), with the ones before it passed below
+            # theirs by the profile to it (`_state_plan`); at most AIMS drops looked at (each
+            # a bisection of the closed-form brake: over every drop up to k, a falling-feeds
+            # cycle took 3.6 ms where main's took 0.4, `bench_step.py`)
+            if not frees(ext, j, k, e, a_max, j_max):
+                continue
+            plan = self._state_for(ext, j, k, e, v_p, ceiling, a_max, j_max, w, tried == 0)
+            if plan is None and held is not None and _keeps(held, ext, j, k, e, a_max, j_max):
+                plan = held
+                plan.window = w
+            tried += 1
+            if plan is not None or tried >= AIMS:
+                break
         if plan is None:
             return False
         plan.soft_from = min(st.soft_from, ext[0][0])
@@ -163,9 +230,33 @@ class Aims:
         st.plan = plan
         return True
 
+    def _state_for(
+        self, ext: list[tuple[int, float, float, bool]], i: int, k: int, e: float, v_p: float,
+        ceiling: float, a_max: float, j_max: float, w: int, below: bool,
+    ) -> Plan | None:  # fmt: skip
+        """The brake state at drop i toward e at k (`_brake_state`), at i's cap or, where
+        `below` (the first anchor tried: 4 solves more), a little below it (`_below_cap`);
+        None where none. The drops between i and k are the brake's
+        (`frees`; the steps read them so, `Constraints.violated` with `Plan.aim`: read with
+        zero acceleration there, forced re-plans took turns with the shift, which passed a
+        drop at 71.40 for 71.32 mm/s, feeds seed 394); with drops between, i's own target is
+        lowered for them with zero acceleration at each, and the plan to i at its cap is kept
+        also where it needs none at i (feeds seed 441: toward an F5182 drop one block before
+        an F4295 drop and a rest chain, boundary 38 held at 89.4 for 97.7 mm/s)."""
+        _, s_i, c_i, _ = ext[i]
+        room = ext[k][1] - s_i - CHAIN_MARGIN
+        mid = [(c[1] - s_i, c[2]) for c in ext[i + 1 : k]]
+        if not mid and brake_distance(c_i, 0.0, e, a_max, j_max) <= room:
+            return None  # zero acceleration at i at its cap keeps e
+        plan = self._state_at(ext, i, c_i, e, room, mid, v_p, ceiling, a_max, j_max, w)
+        if plan is None and below:
+            plan = self._below_cap(ext, i, e, room, mid, v_p, ceiling, a_max, j_max, w)
+        return plan
+
     def _below_cap(
         self, ext: list[tuple[int, float, float, bool]], i: int, e: float, room: float,
-        v_p: float, ceiling: float, a_max: float, j_max: float, w: int,
+        mid: list[tuple[float, float]], v_p: float, ceiling: float, a_max: float,
+        j_max: float, w: int,
     ) -> Plan | None:  # fmt: skip
         """Where ruckig refuses drop i at its cap braking (`_brake_state`), at the edge of what
         it reaches (its first step, with the velocity kept ≥ 0): i a little below its cap,
@@ -180,22 +271,23 @@ class Aims:
             v_i = c_i * (1.0 - f)
             if v_i <= floor:
                 return None
-            plan = self._state_at(ext, i, v_i, e, room, v_p, ceiling, a_max, j_max, w)
+            plan = self._state_at(ext, i, v_i, e, room, mid, v_p, ceiling, a_max, j_max, w)
             if plan is not None:
                 return plan
         return None
 
     def _state_at(
         self, ext: list[tuple[int, float, float, bool]], i: int, v_i: float, e: float,
-        room: float, v_p: float, ceiling: float, a_max: float, j_max: float, w: int,
+        room: float, mid: list[tuple[float, float]], v_p: float, ceiling: float, a_max: float,
+        j_max: float, w: int,
     ) -> Plan | None:  # fmt: skip
         """The profile to candidate i at v_i (at most its cap) with the least deceleration from
-        which e stays reachable within `room` after it (`_state_plan`); None where none."""
+        which e stays reachable within `room` after it, where that brake passes the caps `mid`
+        below them (`frees`; `_state_plan`); None where none."""
         st = self.st
-        a_lo = hardest(v_i, e, a_max, j_max)
-        if brake_distance(v_i, a_lo, e, a_max, j_max) > room:
+        a_i = least_brake(v_i, e, room, a_max, j_max)
+        if a_i is None or not _passes(v_i, a_i, e, room, mid, a_max, j_max):
             return None
-        a_i = highest(a_lo, 0.0, 40, lambda x: brake_distance(v_i, x, e, a_max, j_max) <= room)
         v_max = max(ceiling, v_i, v_p) if st.v <= ceiling else max(ceiling, v_i, st.v, v_p)
         return self._state_plan(ext, i, a_i, v_max, min(st.v, v_i), a_max, j_max, w, v_i)
 

@@ -379,7 +379,9 @@ class Tracker:
                 ):
                     violated = cut  # the step ends on a constraint it does not keep
                 if violated is None:
-                    violated = self.con.violated(s1, v1, a1, seg1, dt, plan.serves, plan.soft_from)
+                    violated = self.con.violated(
+                        s1, v1, a1, seg1, dt, plan.serves, plan.soft_from, plan.aim
+                    )
                 if violated is None and plan.goal >= 0:
                     violated = self.con.window_end_lost(
                         plan.goal, plan.v_end, self.st.s, self.st.v, self.st.a, s1, v1, a1, seg1
