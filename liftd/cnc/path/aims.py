@@ -62,26 +62,36 @@ def least_brake(v: float, e: float, room: float, a_max: float, j_max: float) -> 
     return highest(a_lo, 0.0, 40, lambda x: brake_distance(v, x, e, a_max, j_max) <= room)
 
 
-def frees(
+def _after(
+    ext: list[tuple[int, float, float, bool]], j: int, k: int
+) -> tuple[float, list[tuple[float, float]]]:
+    """From drop j to candidate k: the room for the brake (to k, CHAIN_MARGIN left) and the
+    caps between them (distance from j, cap)."""
+    s_j = ext[j][1]
+    return ext[k][1] - s_j - CHAIN_MARGIN, [(c[1] - s_j, c[2]) for c in ext[j + 1 : k]]
+
+
+def free_brake(
     ext: list[tuple[int, float, float, bool]], j: int, k: int, e: float, a_max: float,
     j_max: float,
-) -> bool:  # fmt: skip
-    """From drop j at its cap, the brake with the least deceleration that reaches e at k
-    (the brake state's continuation) passes every cap between j and k below it. Where one
-    of them binds instead, that brake crosses it too late, and a brake state at j that
-    keeps it (a harder deceleration) is at its edge: only the brake at once from j keeps
-    it, ruckig does not reach that drop at its cap from there, and the brake reaches e
-    before k (feeds seed 726: 0.5 mm before an F8229 drop at 163.7 mm/s and −7.88 m/s²,
-    every profile to it refused, the shift's dip went down to 61.3 mm/s four drops on;
-    feeds seeds 776 and 936 the same, the brake at once from such a state went down to
+) -> float | None:  # fmt: skip
+    """The least deceleration at drop j's cap from which the brake reaches e at k (the brake
+    state's continuation), where that brake passes every cap between j and k below it; None
+    where not. Where one of them binds instead, that brake crosses it too late, and a brake
+    state at j that keeps it (a harder deceleration) is at its edge: only the brake at once
+    from j keeps it, ruckig does not reach that drop at its cap from there, and the brake
+    reaches e before k (feeds seed 726: 0.5 mm before an F8229 drop at 163.7 mm/s and −7.88
+    m/s², every profile to it refused, the shift's dip went down to 61.3 mm/s four drops
+    on; feeds seeds 776 and 936 the same, the brake at once from such a state went down to
     a corner's 7.2 mm/s early and dipped)."""
-    _, s_j, c_j, _ = ext[j]
-    room = ext[k][1] - s_j - CHAIN_MARGIN
+    c_j = ext[j][2]
+    room, mid = _after(ext, j, k)
     if room <= 0.0 or c_j <= e:
-        return False
+        return None
     a_e = least_brake(c_j, e, room, a_max, j_max)
-    mid = [(c[1] - s_j, c[2]) for c in ext[j + 1 : k]]
-    return a_e is not None and _passes(c_j, a_e, e, room, mid, a_max, j_max)
+    if a_e is None or not _passes(c_j, a_e, e, room, mid, a_max, j_max):
+        return None
+    return a_e
 
 
 def _keeps(
@@ -90,11 +100,10 @@ def _keeps(
 ) -> bool:  # fmt: skip
     """`held` is a brake state at drop j aimed at k (`Aims._brake_state`) whose state there
     still keeps e at k, passing the drops between below their caps."""
-    b_j, s_j, c_j, _ = ext[j]
+    b_j, _, c_j, _ = ext[j]
     if held.goal != b_j or held.aim != ext[k][0] or held.v_end > c_j or held.a_end >= 0.0:
         return False
-    room = ext[k][1] - s_j - CHAIN_MARGIN
-    mid = [(c[1] - s_j, c[2]) for c in ext[j + 1 : k]]
+    room, mid = _after(ext, j, k)
     if not mid and brake_distance(c_j, 0.0, e, a_max, j_max) <= room:
         return False  # zero acceleration at j keeps e now: no state needed (a cold review)
     return _passes(held.v_end, held.a_end, e, room, mid, a_max, j_max)
@@ -207,22 +216,23 @@ class Aims:
         where its state still keeps e."""
         st = self.st
         plan = None
-        tried = 0
+        first = True
         for j in range(i, min(k, i + AIMS)):
             # with drops between i and k: anchored at the first drop from which the brake to e
-            # passes the rest below their caps (`frees`), with the ones before it passed below
-            # theirs by the profile to it (`_state_plan`); at most AIMS drops looked at (each
-            # a bisection of the closed-form brake: over every drop up to k, a falling-feeds
-            # cycle took 3.6 ms where main's took 0.4, `bench_step.py`)
-            if not frees(ext, j, k, e, a_max, j_max):
+            # passes the rest below their caps (`free_brake`), with the ones before it passed
+            # below theirs by the profile to it (`_state_plan`); at most AIMS drops looked at
+            # (each a bisection of the closed-form brake: over every drop up to k, a
+            # falling-feeds cycle took 3.6 ms where main's took 0.4, `bench_step.py`)
+            a_j = free_brake(ext, j, k, e, a_max, j_max)
+            if a_j is None:
                 continue
-            plan = self._state_for(ext, j, k, e, v_p, ceiling, a_max, j_max, w, tried == 0)
+            plan = self._state_for(ext, j, k, e, a_j, v_p, ceiling, a_max, j_max, w, first)
             if plan is None and held is not None and _keeps(held, ext, j, k, e, a_max, j_max):
                 plan = held
                 plan.window = w
-            tried += 1
-            if plan is not None or tried >= AIMS:
+            if plan is not None:
                 break
+            first = False
         if plan is None:
             return False
         plan.soft_from = min(st.soft_from, ext[0][0])
@@ -231,24 +241,23 @@ class Aims:
         return True
 
     def _state_for(
-        self, ext: list[tuple[int, float, float, bool]], i: int, k: int, e: float, v_p: float,
-        ceiling: float, a_max: float, j_max: float, w: int, below: bool,
+        self, ext: list[tuple[int, float, float, bool]], i: int, k: int, e: float, a_i: float,
+        v_p: float, ceiling: float, a_max: float, j_max: float, w: int, below: bool,
     ) -> Plan | None:  # fmt: skip
-        """The brake state at drop i toward e at k (`_brake_state`), at i's cap or, where
-        `below` (the first anchor tried: 4 solves more), a little below it (`_below_cap`);
-        None where none. The drops between i and k are the brake's
-        (`frees`; the steps read them so, `Constraints.violated` with `Plan.aim`: read with
+        """The brake state at drop i toward e at k (`_brake_state`), at i's cap with a_i
+        (`free_brake`) or, where `below` (the first anchor tried: 4 solves more), a little
+        below it (`_below_cap`); None where none. The drops between i and k are the brake's
+        (`free_brake`; the steps read them so, `Constraints.violated` with `Plan.aim`: read with
         zero acceleration there, forced re-plans took turns with the shift, which passed a
         drop at 71.40 for 71.32 mm/s, feeds seed 394); with drops between, i's own target is
         lowered for them with zero acceleration at each, and the plan to i at its cap is kept
         also where it needs none at i (feeds seed 441: toward an F5182 drop one block before
         an F4295 drop and a rest chain, boundary 38 held at 89.4 for 97.7 mm/s)."""
-        _, s_i, c_i, _ = ext[i]
-        room = ext[k][1] - s_i - CHAIN_MARGIN
-        mid = [(c[1] - s_i, c[2]) for c in ext[i + 1 : k]]
+        c_i = ext[i][2]
+        room, mid = _after(ext, i, k)
         if not mid and brake_distance(c_i, 0.0, e, a_max, j_max) <= room:
             return None  # zero acceleration at i at its cap keeps e
-        plan = self._state_at(ext, i, c_i, e, room, mid, v_p, ceiling, a_max, j_max, w)
+        plan = self._state_at(ext, i, c_i, a_i, v_p, ceiling, a_max, j_max, w)
         if plan is None and below:
             plan = self._below_cap(ext, i, e, room, mid, v_p, ceiling, a_max, j_max, w)
         return plan
@@ -271,23 +280,22 @@ class Aims:
             v_i = c_i * (1.0 - f)
             if v_i <= floor:
                 return None
-            plan = self._state_at(ext, i, v_i, e, room, mid, v_p, ceiling, a_max, j_max, w)
+            a_i = least_brake(v_i, e, room, a_max, j_max)
+            if a_i is None or not _passes(v_i, a_i, e, room, mid, a_max, j_max):
+                continue
+            plan = self._state_at(ext, i, v_i, a_i, v_p, ceiling, a_max, j_max, w)
             if plan is not None:
                 return plan
         return None
 
     def _state_at(
-        self, ext: list[tuple[int, float, float, bool]], i: int, v_i: float, e: float,
-        room: float, mid: list[tuple[float, float]], v_p: float, ceiling: float, a_max: float,
-        j_max: float, w: int,
+        self, ext: list[tuple[int, float, float, bool]], i: int, v_i: float, a_i: float,
+        v_p: float, ceiling: float, a_max: float, j_max: float, w: int,
     ) -> Plan | None:  # fmt: skip
-        """The profile to candidate i at v_i (at most its cap) with the least deceleration from
-        which e stays reachable within `room` after it, where that brake passes the caps `mid`
-        below them (`frees`; `_state_plan`); None where none."""
+        """The profile to candidate i at v_i (at most its cap) with a_i there, the least
+        deceleration from which the later cap stays reachable and the caps between are
+        passed (`least_brake`, `_passes`; `_state_plan`); None where none."""
         st = self.st
-        a_i = least_brake(v_i, e, room, a_max, j_max)
-        if a_i is None or not _passes(v_i, a_i, e, room, mid, a_max, j_max):
-            return None
         v_max = max(ceiling, v_i, v_p) if st.v <= ceiling else max(ceiling, v_i, st.v, v_p)
         return self._state_plan(ext, i, a_i, v_max, min(st.v, v_i), a_max, j_max, w, v_i)
 

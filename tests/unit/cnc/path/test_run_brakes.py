@@ -181,7 +181,7 @@ def test_drops_between_a_brake_state_and_its_aim_are_passed_in_the_one_brake(
 ) -> None:  # fmt: skip
     """Feed drops on short blocks falling into a corner or the program end, under override
     steps: the brake state toward the later cap passes the drops between it and that cap
-    braking (`Aims._brake_state` anchored where `aims.frees`, the steps reading those drops
+    braking (`Aims._brake_state` anchored where `aims.free_brake`, the steps reading those drops
     as the brake's). On 85369f6 it was refused where a drop lay between, and the drop's own
     target, lowered for the ones after it with zero acceleration at each, held the path
     below the one brake (26 of 72 such programs with a slowdown, 2 now: FALL_B on 0.5 mm
@@ -199,7 +199,7 @@ def test_feeds_runs_with_drops_between_the_brake_state_and_its_aim(seed: int) ->
     end: boundary 38 at 89.4 for 97.7 mm/s: the brake state refused with a drop between),
     726 (boundary 30 at 80.0 for 91.2: anchored at the first drop, the brake state left the
     next one only to the brake at once, which ruckig does not reach at its cap, and the
-    shift's dip went down to 61.3 mm/s; anchored at the drop that binds, `aims.frees`). Seed
+    shift's dip went down to 61.3 mm/s; anchored at the drop that binds, `aims.free_brake`). Seed
     50 guards the state's re-plan as the window moves on: ruckig refused the state it had
     planned 3 ms before, and the fallback passed the drop at 152.9 for 152.0 mm/s (an
     overrun on this round's tree before `Aims._brake_state` kept the profile in hand).
