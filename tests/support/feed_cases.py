@@ -93,4 +93,36 @@ def feed_scenario(seed: int) -> Scenario:
     return Scenario(seed, ch, text, Schedule(overrides, holds))
 
 
-__all__ = ["feed_program", "feed_scenario"]
+# Programs of their own (tests/unit/cnc/path/test_run_brakes.py, test_motion_check.py): feeds
+# falling block by block into a corner, an M00 or the program end
+
+
+def falling_feeds(step_mm: float, feeds: tuple[int, ...], end: str) -> str:
+    """A 100-block-long line at the first feed, then one block of `step_mm` at each of the
+    others, then `end` (a corner block, or an M00 and a block after it)."""
+    x = 100 * step_mm
+    lines = ["G01 X0 Y0 F600", f"G01 X{x:.4f} F{feeds[0]}"]
+    for f in feeds[1:]:
+        x += step_mm
+        lines.append(f"G01 X{x:.4f} F{f}")
+    lines += [end, f"G01 X{x + 5.0:.4f} F6000"] if end == "M00" else [end]
+    return "\n".join([*lines, "M30"]) + "\n"
+
+
+def falling_to_the_end(feeds: tuple[int, ...], step_mm: float, corner: str) -> str:
+    """10 mm at the first feed, then one block of `step_mm` at each of the others, then
+    `corner` (a block, or nothing) and M30."""
+    lines = ["G01 X100 Y300 F3000", f"G01 X110 F{feeds[0]}"]
+    lines += [f"G01 X{110 + step_mm * i:.1f} F{f}" for i, f in enumerate(feeds[1:], 1)]
+    return "\n".join([*lines, *([corner] if corner else []), "M30"]) + "\n"
+
+
+FALL_A = (20000, 16000, 13000, 11000, 9000, 7500, 6000, 4800, 3800, 3000)
+FALL_B = (24000, 18000, 15000, 12000, 10000, 8000, 6500, 5000, 4000)
+FALL_C = (30000, 24000, 18000, 14000, 11000, 9000, 7000, 5200, 4300, 3800)
+
+
+__all__ = [
+    "FALL_A", "FALL_B", "FALL_C", "falling_feeds", "falling_to_the_end", "feed_program",
+    "feed_scenario",
+]  # fmt: skip

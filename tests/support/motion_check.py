@@ -40,7 +40,8 @@ the end of that ceiling's block still decelerating into a higher ceiling, and wh
 for the look-ahead window's end passes a boundary, at what the rules expect there, whose
 crossing moves the window on and releases it: the ramp-out after that boundary is the jerk
 limit's, not a dip (its deceleration there read as the lowest the jerk limit allows from the
-samples either side).
+samples either side; after a window's release, at most what the caps after the boundary need
+there under the window before, `PathRules.least_brake`).
 
 What the rules allow is tests/support/motion_rules.py, in the checker's own arithmetic (a
 jerk-limited velocity change with zero acceleration at both ends, inverted by bisection), not
@@ -415,38 +416,35 @@ def check_motion(
             # the acceleration where the path passed b (linear between the samples)
             frac = (s_b - last.s) / (smp.s - last.s) if smp.s > last.s else 1.0
             a_b = last.a + (smp.a - last.a) * frac
-            if (
-                a_b < 0.0
-                and smp.a < 0.0
-                and (
-                    (
-                        v_b > path.ceiling(b - 1, smp.override) * (1.0 + REL_TOL)
-                        and path.ceiling(b, smp.override) > path.ceiling(b - 1, smp.override)
-                    )
-                    or (
-                        # or a brake for the window's end that the window's move at b
-                        # releases (the path enters b's segment: the window ends a block
-                        # further on), passed above what zero acceleration there allows, so
-                        # braking as it must: its deceleration is ramped out after b as well
-                        # (feeds seed 46, look-ahead 3: 86.5 mm/s for 69.4 with zero
-                        # acceleration, −2.0 m/s² at an F3000 drop at 180 %, 81.5 at the ramp's
-                        # end, 86.0 at the next boundary). Not where zero acceleration at b
-                        # would do: a brake there for nothing, ramped out, is a dip (a cold
-                        # review's made-up path at −4 m/s² through a boundary of 43.6 mm/s)
-                        v_b > held_by * (1.0 + REL_TOL)
-                        and backward == held_by < forward
-                        and path.backward(b, smp, b + path.look_ahead) > backward * (1.0 + REL_TOL)
-                    )
-                )
-            ):
-                # the brake from above a lowered ceiling (after an input change: above it
-                # otherwise, motion_overrun fails the run) that ends where the ceiling rises
-                # again: its deceleration is ramped out at full jerk after b, as after an
-                # event (feeds seed 931: override 200 → 20 % at 102 mm/s, a 1 mm block of
-                # 10 mm/s, then 80; the ramp from 15.4 mm/s and −2.1 m/s² at its end went
-                # down to 10.09), and the forward pass and the interval go on from its end:
-                # the higher of the ramps from b and from the sample after it (a path that
-                # brakes on after b is not credited with it, a cold review found)
+            # the brake from above a lowered ceiling (after an input change: above it
+            # otherwise, motion_overrun fails the run) that ends where the ceiling rises again
+            above = v_b > path.ceiling(b - 1, smp.override) * (1.0 + REL_TOL) and path.ceiling(
+                b, smp.override
+            ) > path.ceiling(b - 1, smp.override)
+            # or a brake for the window's end that the window's move at b releases (the path
+            # enters b's segment: the window ends a block further on), passed above what zero
+            # acceleration there allows, so braking as it must: its deceleration is ramped out
+            # after b as well (feeds seed 46, look-ahead 3: 86.5 mm/s for 69.4 with zero
+            # acceleration, −2.0 m/s² at an F3000 drop at 180 %, 81.5 at the ramp's end, 86.0
+            # at the next boundary). Only the deceleration the caps after b need there under
+            # the window before is credited (`PathRules.least_brake`), not a harder one: a
+            # brake for nothing, ramped out, is a dip (seed 46 made up with its deceleration
+            # doubled at b and 12 % slower after it: the ramp from the doubled one ends at
+            # 66.5 mm/s and was taken for the jerk limit's). Not where zero acceleration at b
+            # would do either (a cold review's made-up path at −4 m/s² through a boundary of
+            # 43.6 mm/s)
+            released = (
+                v_b > held_by * (1.0 + REL_TOL)
+                and backward == held_by < forward
+                and path.backward(b, smp, b + path.look_ahead) > backward * (1.0 + REL_TOL)
+            )
+            if a_b < 0.0 and smp.a < 0.0 and (above or released):
+                # its deceleration is ramped out at full jerk after b, as after an event
+                # (feeds seed 931: override 200 → 20 % at 102 mm/s, a 1 mm block of 10 mm/s,
+                # then 80; the ramp from 15.4 mm/s and −2.1 m/s² at its end went down to
+                # 10.09), and the forward pass and the interval go on from its end: the higher
+                # of the ramps from b and from the sample after it (a path that brakes on
+                # after b is not credited with it, a cold review found)
                 _, j = path.limits(b, b + 1)
                 if j != INF:
                     t_r = -smp.a / j
@@ -459,7 +457,14 @@ def check_motion(
                     dt_s = smp.t - last.t
                     a_b = min(a_b, max(last.a - j * frac * dt_s, smp.a - j * (1.0 - frac) * dt_s))
                     ramp_v = max(smp.v + smp.a * t_r / 2.0, v_b - a_b * a_b / (2.0 * j), 0.0)
-                    ramp, ramp_ends = (smp.s, smp.v, smp.a, j), ramp_s
+                    ramp = (smp.s, smp.v, smp.a, j)
+                    need = a_b if above else path.least_brake(b, v_b, a_b, smp, window)
+                    if need > a_b:  # braking harder than the window's end needs: that much
+                        t_r = -need / j
+                        ramp_s = s_b + t_r * (v_b + t_r * (need / 2.0 + t_r * j / 6.0))
+                        ramp_v = max(v_b - need * need / (2.0 * j), 0.0)
+                        ramp = (s_b, v_b, need, j)
+                    ramp_ends = ramp_s
                     anchor_s, anchor_v, anchor_seg = ramp_s, ramp_v, b
                     entry_v, interval_min, fresh = min(v_b, ramp_v), INF, False
                     continue

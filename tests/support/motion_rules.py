@@ -15,6 +15,8 @@ from liftd.cnc.path.program import PathProgram
 from liftd.cnc.path.table import PathTable
 
 CHAIN_SLACK = 5e-6  # m of path given up per link of a chain (the tracker keeps µm margins)
+ABS_V = 1e-9  # m/s: a velocity this near a cap is at it
+OPEN_GRID = 24  # end velocities a brake toward the window's end is read at (`least_brake`)
 INF = math.inf
 
 
@@ -116,6 +118,9 @@ def _raise_distance(v: float, a: float, v1: float, a_max: float, j_max: float) -
     return d + u * t3 + peak * t3 * t3 / 2.0 - j_max * t3**3 / 6.0
 
 
+Phase = tuple[float, float]  # (duration, jerk) of a motion's piece of constant jerk
+
+
 def brake_distance(v: float, a: float, v1: float, a_max: float, j_max: float) -> float:
     """Least distance from (v, a) after which the path can be at v1 or below with zero
     acceleration, braking as hard as the limits allow (a positive acceleration ramped out
@@ -144,6 +149,62 @@ def brake_distance(v: float, a: float, v1: float, a_max: float, j_max: float) ->
     d += u * hold - peak * hold * hold / 2.0
     u -= peak * hold
     return d + u * t3 - peak * t3 * t3 / 2.0 + j_max * t3**3 / 6.0
+
+
+def brake_phases(v: float, a: float, v1: float, a_max: float, j_max: float) -> list[Phase]:
+    """The brake from (v, a) to v1 with zero acceleration there, as hard as the limits allow
+    (finite jerk): a positive acceleration ramped out first, the deceleration raised at full
+    jerk up to a_max, held, ramped out; where ramping the deceleration out alone ends at or
+    below v1, that ramp. The lowest velocity at every point on the way of any motion from
+    (v, a) that keeps at or above v1: it loses velocity as fast as the limits allow until it
+    must ramp the deceleration out."""
+    out: list[Phase] = []
+    if a > 0.0:  # ramp the acceleration out first
+        out.append((a / j_max, -j_max))
+        v, a = v + a * a / (2.0 * j_max), 0.0
+    dec = -a  # ≥ 0
+    drop = v - v1
+    if drop <= dec * dec / (2.0 * j_max):  # ramping out alone
+        return [*out, (dec / j_max, j_max)]
+    if dec > a_max:  # above a_max (a lower limit ahead): down to it at full jerk first
+        t0 = (dec - a_max) / j_max
+        out.append((t0, j_max))
+        v, dec = v - dec * t0 + j_max * t0 * t0 / 2.0, a_max
+        drop = v - v1
+    peak = math.sqrt(j_max * drop + dec * dec / 2.0)
+    hold = 0.0
+    if peak > a_max:
+        peak = a_max
+        hold = (drop - (2.0 * a_max * a_max - dec * dec) / (2.0 * j_max)) / a_max
+    return [*out, (max(peak - dec, 0.0) / j_max, -j_max), (hold, 0.0), (peak / j_max, j_max)]
+
+
+def travel(v: float, a: float, phases: list[Phase]) -> float:
+    """The distance the phases cover from (v, a)."""
+    d = 0.0
+    for t, jk in phases:
+        d += t * (v + t * (a / 2.0 + t * jk / 6.0))
+        v, a = v + t * (a + t * jk / 2.0), a + jk * t
+    return d
+
+
+def velocity_at(v: float, a: float, phases: list[Phase], d: float) -> float:
+    """The velocity `d` ahead of (v, a) along the phases (constant after the last one): the
+    phase that passes d, and the time in it by bisection."""
+    for t, jk in phases:
+        step = t * (v + t * (a / 2.0 + t * jk / 6.0))
+        if d <= step:
+            lo, hi = 0.0, t
+            for _ in range(40):
+                tau = 0.5 * (lo + hi)
+                if tau * (v + tau * (a / 2.0 + tau * jk / 6.0)) < d:
+                    lo = tau
+                else:
+                    hi = tau
+            return v + hi * (a + hi * jk / 2.0)
+        d -= step
+        v, a = v + t * (a + t * jk / 2.0), a + jk * t
+    return v
 
 
 def jerk_gap(
@@ -285,6 +346,68 @@ class PathRules:
                 return e
             end, inside = (start, min(e, nodes[i][1])), []
         return INF  # not reached: the loop returns at i = −1
+
+    def least_brake(
+        self, b: int, v: float, a_floor: float, sample: Sample, window_end: int
+    ) -> float:
+        """The least deceleration (a ≤ 0, not below `a_floor`) with which the path can pass
+        boundary b at v and still keep what lies after it up to `window_end`: each cap inside
+        b's run at most at its target, and the run's end (a run boundary, a stop, the window's
+        end) at its value with zero acceleration there (what the backward pass allows there;
+        rest at a stop or the window's end). Read off the lowest motion from (v, a) that keeps
+        at or above the lowest of those values (`brake_phases`, with the lowest limits up to
+        the run's end): it passes each cap at or below it and reaches that value, with zero
+        acceleration, before the run's end (where a cap inside the run is the lowest, that is
+        more than the run's end needs, erring toward a harder brake). `a_floor` where not even
+        it keeps them; else by bisection between the two. Where the run ends at the window's
+        end, whose rest becomes a cap as the window moves, the run's end is also kept at
+        every velocity below v (`OPEN_GRID` of them, as `reach_rising` does for the backward
+        pass)."""
+        ov = sample.override
+        w = min(window_end, self.n)
+        s_b = self.bounds[b].s
+        reach_d = 2.0 * change_distance(self.v_top, 0.0, self.a_low, self.j_low)
+        caps: list[tuple[float, float]] = []  # (distance, cap) below v inside the run
+        end = INF  # the distance to the run's end
+        is_open = False  # the run ends at the window's end: its rest may become any cap
+        last = b + 1
+        for k in range(b + 1, w + 1):
+            d = self.bounds[k].s - s_b
+            if d > reach_d:
+                break
+            last = k
+            if k == w or self.is_stop(k, sample) or self.gate[k]:
+                is_open = k == w and not self.is_stop(k, sample)
+                cap = 0.0 if k == w or self.is_stop(k, sample) else self.backward(k, sample, w)
+                caps.append((d, min(cap, self.target(k, ov))))
+                end = d - CHAIN_SLACK  # as the backward pass leaves it (erring harder)
+                break
+            cap = self.target(k, ov)
+            if cap < v and cap < self.ceiling(k - 1, ov):
+                caps.append((d, cap))
+        if not caps:
+            return 0.0
+        low = min(cap for _, cap in caps)
+        a_max, j_max = self.limits(b, last)
+        if j_max == INF:
+            return a_floor
+
+        def keeps(a: float) -> bool:
+            phases = brake_phases(v, a, low, a_max, j_max)
+            if end < INF and travel(v, a, phases) > end:
+                return False
+            if is_open and any(
+                travel(v, a, brake_phases(v, a, v * i / OPEN_GRID, a_max, j_max)) > end
+                for i in range(1, OPEN_GRID)
+            ):
+                return False  # the window's end may become a cap of any velocity
+            return all(velocity_at(v, a, phases, d) <= cap + ABS_V for d, cap in caps)
+
+        if keeps(0.0):
+            return 0.0
+        if a_floor >= 0.0 or not keeps(a_floor):
+            return a_floor
+        return _edge(keeps, a_floor, 0.0)
 
     def _run(
         self, start: int, inside: list[tuple[int, float]], end: tuple[int, float] | None,

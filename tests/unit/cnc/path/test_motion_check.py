@@ -22,7 +22,15 @@ from tests.support.cam_runs import check, time_limit
 from tests.support.channel import shipped
 from tests.support.feed_cases import feed_scenario
 from tests.support.motion_check import Expected, Recorder, check_motion
-from tests.support.motion_rules import PathRules, Sample, brake_distance, jerk_gap
+from tests.support.motion_rules import (
+    PathRules,
+    Sample,
+    brake_distance,
+    brake_phases,
+    jerk_gap,
+    travel,
+    velocity_at,
+)
 from tests.support.scenarios import Scenario
 
 MM = 1e-3
@@ -426,3 +434,52 @@ def test_a_brake_zero_acceleration_would_spare_is_no_window_release() -> None:
     samples = drive(task, 0.0437, ch.cycle_time, 400, accel)
     found = check_motion(task.interp.program, task.interp.table, 3, ch.cycle_time, samples)
     assert any(f.startswith(("dip", "boundary 31 ")) for f in found), found
+
+
+def test_a_window_release_is_credited_only_the_deceleration_its_caps_need() -> None:
+    """Feeds seed 46 (`test_a_brake_the_window_s_move_releases_ramps_out_after_the_boundary`,
+    clean as it ran) made up: its deceleration doubled in the two samples around boundary 16
+    (−3.9 m/s² there) and the path 12 % slower for 13 ms after it. Ramped out from −3.9 the
+    release ends at 67.2 mm/s, and the check took the dip down to 72.0 for the jerk limit's;
+    what lies after 16 under the window before (rest at its end, boundary 17) needs −2.56
+    there (`PathRules.least_brake`), whose ramp ends at 78.2: the dip is found."""
+    rec, samples = _recorded(feed_scenario(46))
+    ch = rec.task.ch
+    k = next(i for i, smp in enumerate(samples) if smp.s >= rec.table.s[16])
+    out = list(samples)
+    for i in (k - 1, k):
+        out[i] = dataclasses.replace(out[i], a=2.0 * out[i].a)
+    for i in range(k + 1, k + 14):
+        out[i] = dataclasses.replace(out[i], v=0.88 * out[i].v)
+    found = check_motion(rec.program, rec.table, ch.look_ahead_blocks, ch.cycle_time, out)
+    assert any(f.startswith("dip") and "boundary 17 " in f for f in found), found
+
+
+def test_the_brake_s_phases_are_the_brake_distance_s() -> None:
+    """`brake_phases` (the lowest motion `least_brake` reads the caps off) covers what
+    `brake_distance` says and ends at the velocity it brakes to, with zero acceleration, on
+    random states within the limits (whose ramp-out alone stays at or above rest); from a
+    deceleration above a_max (a lower limit ahead) it ends at v1 too, never harder than it
+    started; `velocity_at` follows it."""
+    rng = random.Random(5)
+    for _ in range(2000):
+        a_max, j_max = rng.uniform(1.0, 12.0), rng.choice((50.0, 400.0, 2000.0))
+        v, a, v1 = rng.uniform(0.0, 1.0), rng.uniform(-a_max, a_max), rng.uniform(0.0, 1.0)
+        above = rng.random() < 0.2  # a deceleration above a_max (a lower limit ahead)
+        if above:
+            a = -rng.uniform(a_max, 1.5 * a_max)
+        if v + a * abs(a) / (2.0 * j_max) < 0.0:
+            continue  # ramping the deceleration out alone ends below rest: a stop's brake
+        phases = brake_phases(v, a, v1, a_max, j_max)
+        d = travel(v, a, phases)
+        if not above:  # (brake_distance jumps to a_max there)
+            assert math.isclose(d, brake_distance(v, a, v1, a_max, j_max), rel_tol=1e-9,
+                                abs_tol=1e-15)  # fmt: skip
+        u, acc = v, a
+        for t, jk in phases:
+            assert t >= 0.0 and abs(acc) <= max(a_max, -a) * (1.0 + 1e-9) + 1e-12
+            u, acc = u + t * (acc + t * jk / 2.0), acc + jk * t
+            assert abs(acc) <= max(a_max, -a) * (1.0 + 1e-9) + 1e-12
+        assert abs(acc) < 1e-9
+        assert u <= v1 + 1e-9 or v1 >= v + a * abs(a) / (2.0 * j_max)  # at v1, or never above
+        assert math.isclose(velocity_at(v, a, phases, d), u, abs_tol=1e-9)
