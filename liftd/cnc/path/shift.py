@@ -67,6 +67,16 @@ class Replan:
         self.held = held
 
 
+def _brakes_for(plan: Plan | None, b: int) -> bool:
+    """`plan` is a brake at once (no goal boundary) that passes b as well as it can: an
+    earlier re-plan's for a cap out of reach (`Brakes.lost_cap`), which a re-plan as the
+    window moves on keeps taking while b's target with zero acceleration there is still in
+    the jerk gap near rest. The event's re-plan braked at once, the next one, the window
+    moved on and no event, took x1 (an F4800 drop after 0.5 mm blocks at F60000 and F24000,
+    override 100 → 80 % in the brake: 21.1 mm/s for 64, `test_run_brakes.py`)."""
+    return plan is not None and plan.goal < 0 and plan.serves >= b
+
+
 class Shift:
     """The re-plan toward a candidate, for the path state `st` under the constraints `con`,
     with the profiles of `tg` and the brakes of `br`; `Tracker` holds it."""
@@ -167,26 +177,35 @@ class Shift:
                 # override drop to 10 % at 117 mm/s 2 mm before it, the path went down to
                 # 1.06 mm/s (feeds seed 576); the brake at once passes it above, braking from
                 # the change on (deviation 10: a CNC brakes at once, it does not dip)
-                or (event and v_p > top_b and target < GAP_FLOOR * top_b)
+                or (
+                    (event or _brakes_for(held, b) or _brakes_for(passed, b))
+                    and v_p > top_b
+                    and target < GAP_FLOOR * top_b
+                )
             )
             and self.br.lost_cap(cands, best_i, below, event, a_max, j_max, w)
         ):
             return
         self.st.soft_from = soft_from
-        kept = passed
-        if (
-            kept is not None
-            and kept.goal == b
-            and kept.t0 <= self.st.t
-            and abs(kept.v_end - top_b) <= CAP_TOL * top_b
-            and abs(target - top_b) > CAP_TOL * top_b
-        ):
-            # the profile that brought the path to the boundary it just passed reaches b at
-            # its cap, and nothing from here does (a new one from its last µm before the brake
-            # can find the exact brake a few 10 nm too long): it keeps b
-            kept.window = w
-            self.st.plan = kept
-            return
+        for kept in (passed, None if event else held):
+            if (
+                kept is not None
+                and kept.goal == b
+                and kept.t0 <= self.st.t
+                and abs(kept.v_end - top_b) <= CAP_TOL * top_b
+                and abs(target - top_b) > CAP_TOL * top_b
+            ):
+                # the profile that brought the path to the boundary it just passed reaches b
+                # at its cap, and nothing from here does (a new one from its last µm before
+                # the brake can find the exact brake a few 10 nm too long): it keeps b. So
+                # does the profile in hand where only the window moved on (no input changed:
+                # it was planned under the same ceilings): a brake state at b's cap
+                # (`Plan.a_end`) whose later cap the move raised, from where zero
+                # acceleration at b at its cap is in the jerk gap (an F3000 drop after
+                # 0.5 mm blocks at F60000 and F24000, look-ahead 10: x1, 26.9 for 50 mm/s)
+                kept.window = w
+                self.st.plan = kept
+                return
         # above the ceiling (the override just dropped, or a hold): no acceleration, but the
         # brake toward the target may start from the current velocity
         # (a positive acceleration still lifts it to v_p while it is ramped down)

@@ -17,14 +17,14 @@ import pytest
 from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.path.tracker import Tracker
 from liftd.cnc.path.velocity import brake_distance
-from liftd.cnc.plc import SimPlc
+from liftd.cnc.plc import Schedule, SimPlc
 from liftd.sim.simulate import run_cycles
 from tests.support.cam_cases import cam_scenario
 from tests.support.cam_runs import check, time_limit
 from tests.support.channel import shipped
 from tests.support.feed_cases import feed_scenario
 from tests.support.motion_check import Expected, Recorder, check_motion
-from tests.support.scenarios import describe, wide_scenario
+from tests.support.scenarios import Scenario, describe, wide_scenario
 
 
 def test_an_override_drop_before_a_rounding_kink_slows_the_path_and_does_not_stop_it() -> None:
@@ -160,3 +160,28 @@ def test_a_deceleration_too_long_to_ramp_out_before_a_run_boundary_ends_at_x1() 
     assert at_b.v == pytest.approx(at_b.gap, rel=1e-3)
     low = min(smp.v for smp in rec.samples if smp.t >= 6.69 and smp.s <= rec.table.s[23])
     assert low >= 0.99 * at_b.gap
+
+
+RISING_AFTER_A_DROP = "\n".join([
+    "G01 X20 Y10 F6000", "G01 X21.5249 Y10.7366 F10347", "G01 X22.6823 Y11.2957 F11422",
+    "F12030", "G01 X23.4857 Y11.6838", "F13820", "G01 X24.8752 Y12.3550",
+    "G01 X26.3158 Y13.0509 F15098", "G01 X27.0163 Y13.3893 F16379",
+    "G01 X28.2988 Y14.0088 F2823", "F3065", "G01 X29.3251 Y14.5045", "F3399",
+    "G01 X30.3072 Y15.0411", "G01 X31.2140 Y15.5365 F3808", "G01 X32.7834 Y16.3938 F4219",
+    "G01 X34.4377 Y17.2975 F4441", "G01 X35.3427 Y17.7919 F4811", "M30",
+]) + "\n"  # fmt: skip
+
+
+def test_the_brake_from_an_override_drop_passes_a_run_boundary_above_its_lowered_cap() -> None:
+    """A review's program (its generator's gen4 seed 413, the first 18 lines): feeds rising
+    block by block over rounding kinks (run boundaries), override 100 → 15 % at 74 mm/s,
+    0.96 mm before the kink into the F4811 block, whose cap the drop lowered to 12.0 mm/s
+    (the ceiling behind the path 11.1). From there 12.0 with zero acceleration at the kink
+    is in the jerk gap: x1 2.2 mm/s, x2 above the cap, which `pick_target` allowed only up
+    to the kink's own feed cap, the same input's. The path passed the kink at 2.2 mm/s, a
+    near-stop; now at x2, braking from the drop on, as the CNC brakes at once (known
+    deviation 10), within the kink's transition cap and what lies after it."""
+    ch = dataclasses.replace(shipped(), look_ahead_blocks=20, cycle_time=2e-3)
+    sc = Scenario(413, ch, RISING_AFTER_A_DROP, Schedule(((0.4491, 0.15),), ()))
+    _, hard, slow, errors = check(sc)
+    assert (hard, slow, errors) == ([], [], 0)

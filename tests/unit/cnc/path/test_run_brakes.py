@@ -230,3 +230,39 @@ def test_a_feed_drop_whose_own_cap_is_in_the_jerk_gap_is_passed_at_it_braking() 
     mm/s there; it now passes the drop at 100 still braking (`Aims.gap_state`)."""
     _, hard, slow, errors = check(feed_scenario(249))
     assert (hard, slow, errors) == ([], [], 0)
+
+
+def fast_into_a_drop(drop: int) -> str:
+    """0.5 mm blocks: ten at F60000, three at F24000, two at `drop`, two at F7200, a corner."""
+    feeds = [60000] * 10 + [24000] * 3 + [drop] * 2 + [7200] * 2
+    lines = ["G01 X100 Y300 F3000"]
+    lines += [f"G01 X{100 + 0.5 * i:.1f} F{f}" for i, f in enumerate(feeds, 1)]
+    return "\n".join([*lines, f"G01 X{100 + 0.5 * len(feeds):.1f} Y301", "M30"]) + "\n"
+
+
+@pytest.mark.parametrize("look_ahead", [8, 10, 12])
+def test_a_brake_state_whose_later_cap_the_window_raised_is_kept(look_ahead: int) -> None:
+    """An F3000 drop (50 mm/s) after 0.5 mm blocks at F60000 and F24000: as the window's end
+    moves past the drop the path plans a brake state there (50 mm/s, −0.54 m/s², toward the
+    window's end one block on), and the next move raises that end's value, so zero
+    acceleration at the drop would keep it now, but from the path's state zero acceleration
+    there at 50 is in the jerk gap. The re-plan took x1: boundary 14 at 26.9 mm/s for 50 at
+    look-ahead 10 (24.2 for 43.6 at 8, 27.5 for 50 at 12), fails on 325bd6e. The profile in
+    hand reaches the drop at its cap and is kept (`Shift.toward`)."""
+    ch = dataclasses.replace(shipped(), look_ahead_blocks=look_ahead, cycle_time=1e-3)
+    _, hard, slow, errors = check(Scenario(0, ch, fast_into_a_drop(3000), Schedule()))
+    assert (hard, slow, errors) == ([], [], 0)
+
+
+@pytest.mark.parametrize("override", [0.8, 0.6])
+def test_the_brake_at_once_for_a_lost_cap_goes_on_as_the_window_moves(override: float) -> None:
+    """The same shape with an F4800 drop and override 100 % → 80 or 60 % 36 ms before it
+    (look-ahead 10): its cap out of reach with zero acceleration there (x1 21.1 mm/s for 64),
+    the path brakes at once (`Brakes.lost_cap`), but the re-plan as the window moved on, no
+    event any more, took x1: boundary 14 at 21.1 mm/s for 64 (48 at 60 %), boundary 13 at
+    62.3 for 69.5; fails on 325bd6e (so did the review corpus' gen3 seed 286: 25.4 for 64).
+    A re-plan inside that brake keeps braking at once (`shift._brakes_for`)."""
+    ch = dataclasses.replace(shipped(), look_ahead_blocks=10, cycle_time=1e-3)
+    sched = Schedule(((6.39, override),), ())
+    _, hard, slow, errors = check(Scenario(0, ch, fast_into_a_drop(4800), sched))
+    assert (hard, slow, errors) == ([], [], 0)
