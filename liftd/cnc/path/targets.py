@@ -214,6 +214,15 @@ class Targets:
         d = s_c - self.st.s
         over = self.gap_over(cands, i, min(cap, ceiling), w) if gate else 0.0
         hard_b = self.hard(b, w)
+        if gate and ceiling < cap and v > ceiling:
+            # above a ceiling an input lowered, its brake passes the run boundary above b's
+            # own cap too, which the same input lowered (the ceiling of the block after it),
+            # within b's axis and transition cap and, below, what lies after it: override
+            # 100 → 15 % at 74 mm/s 0.96 mm before a kink of rising feeds, b's cap 12.0
+            # mm/s, x2 above it and x1 2.2 mm/s, a near-stop (a review's program,
+            # `test_jerk_gap.py`). Where x2 would lose what lies after it, `pick_target`
+            # without `over` keeps the x2 within b's own cap, as before
+            over = max(over, hard_b)
         target = self.pick_target(v, a, v_p, d, cap, ceiling, a_max, j_max, hard_b, over)
         if (
             over > 0.0
@@ -239,8 +248,7 @@ class Targets:
         override drop (wide seed 641: 230 mm/s toward a cap of 100 at a 0.001° kink, x1 = 0.03
         mm/s, a near-stop), it takes x2, as slowly as it can above the cap, where x2 is within
         `over` and nearer the cap than x1 by ratio (x2 / cap < cap / x1). Above a lowered
-        ceiling that ends before b, `over` is at least b's hard cap: the brake from above a
-        ceiling an input lowered passes b's own cap, which the same input lowered."""
+        ceiling that ends before b, `over` is at least the cap itself."""
         if self.con.hold:
             return min(cap, lowest_reachable_from(v, a, d, a_max, j_max))
         top = min(cap, ceiling)  # the ceiling holds up to there
@@ -274,16 +282,12 @@ class Targets:
             below = nearest_reachable(v, a, d, top, a_max, j_max, False)
             if ceiling < cap and v > ceiling:
                 # above a lowered ceiling that ends before b: its brake, without a pause,
-                # may pass b above that ceiling (override 100 → 10 % at 38.9 mm/s, 0.4 mm
-                # before a run boundary of 29.3 mm/s, the ceiling of 10 mm/s ending 0.2 mm
-                # on: the path dipped to 0.75 mm/s and passed it at 4.18, feeds seed 942; now
-                # 21.0, its brake at once), and above b's own cap, which the same input
-                # lowered (the ceiling of the block after it), within b's axis and transition
-                # cap and what lies after it (`boundary_target`, `Constraints.hard_reach`):
-                # override 100 → 15 % at 74 mm/s 0.96 mm before a kink of rising feeds, b's
-                # cap 12.0 mm/s, x2 above it and x1 2.2 mm/s, a near-stop (a review's program,
-                # `test_jerk_gap.py`)
-                over = max(over, hard)
+                # may pass b above that ceiling, within b's own cap (override 100 → 10 % at
+                # 38.9 mm/s, 0.4 mm before a run boundary of 29.3 mm/s, the ceiling of
+                # 10 mm/s ending 0.2 mm on: the path dipped to 0.75 mm/s and passed it at
+                # 4.18, feeds seed 942; now 21.0, its brake at once); a run boundary's
+                # `boundary_target` passes more
+                over = max(over, cap)
             if over <= top:
                 return below
             up = nearest_reachable(v, a, fits, top, a_max, j_max, True)
