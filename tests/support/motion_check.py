@@ -64,7 +64,15 @@ from liftd.cnc.path.program import PathProgram
 from liftd.cnc.path.table import PathTable
 from liftd.cnc.snapshot import ChannelState, GeoSnapshot
 from tests.support.motion_overrun import overruns
-from tests.support.motion_rules import INF, PathRules, Sample, jerk_gap, reach, reach_from
+from tests.support.motion_rules import (
+    INF,
+    PathRules,
+    Sample,
+    jerk_gap,
+    reach,
+    reach_from,
+    velocity_at,
+)
 
 # Sample and reach_from are the tests' too (the samples' type; the check's arithmetic)
 __all__ = ["Expected", "Recorder", "Sample", "check_motion", "reach_from"]
@@ -160,17 +168,9 @@ class Expected(NamedTuple):
 
 def _ramp_at(ramp: tuple[float, float, float, float], s_b: float) -> float:
     """The velocity where an event's deceleration ramp (from s, v, a < 0, ramped out at the
-    jerk j) passes s_b, before its end: the time found by bisection."""
+    jerk j) passes s_b, before its end (`motion_rules.velocity_at` on its one phase)."""
     s0, v0, a0, j = ramp
-    lo, hi = 0.0, -a0 / j
-    for _ in range(50):
-        tau = 0.5 * (lo + hi)
-        if s0 + tau * (v0 + tau * (a0 / 2.0 + tau * j / 6.0)) < s_b:
-            lo = tau
-        else:
-            hi = tau
-    tau = 0.5 * (lo + hi)
-    return max(v0 + tau * (a0 + tau * j / 2.0), 0.0)
+    return max(velocity_at(v0, a0, [(-a0 / j, j)], s_b - s0), 0.0)
 
 
 def _gap(
