@@ -27,7 +27,7 @@ from liftd.cnc.path.constraints import (
 )
 from liftd.cnc.path.plan import PathState, Plan
 from liftd.cnc.path.targets import Targets
-from liftd.cnc.path.velocity import reach_velocity
+from liftd.cnc.path.velocity import brake_crossing, reach_velocity
 
 # after an input change, a feed cap whose nearest reachable velocity below it (the jerk gap's
 # lower end, `Targets.pick_target`) is less than this fraction of it is out of reach
@@ -180,7 +180,14 @@ class Shift:
                 or (
                     (event or _brakes_for(held, b) or _brakes_for(passed, b))
                     and v_p > top_b
-                    and target < GAP_FLOOR * top_b
+                    and (
+                        target < GAP_FLOOR * top_b
+                        or (
+                            target < top_b
+                            and brake_crossing(v, a, top_b, top_b * top_b / target, a_max, j_max)
+                            <= d + SLACK_TOL
+                        )
+                    )
                 )
             )
             and self.br.lost_cap(cands, best_i, below, event, a_max, j_max, w)
