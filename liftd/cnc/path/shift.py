@@ -166,6 +166,8 @@ class Shift:
             shifted = True
         below = ceiling * (1.0 + CAP_TOL) + V_ROUND >= v_p  # not after an override drop
         top_b = min(cap, ceiling)
+        # after an input change, or inside the brake at once it started for b
+        changed = event or _brakes_for(held, b) or _brakes_for(passed, b)
         if (
             not shifted
             and not gate
@@ -178,7 +180,7 @@ class Shift:
                 # 1.06 mm/s (feeds seed 576); the brake at once passes it above, braking from
                 # the change on (deviation 10: a CNC brakes at once, it does not dip)
                 or (
-                    (event or _brakes_for(held, b) or _brakes_for(passed, b))
+                    changed
                     and v_p > top_b
                     and (
                         target < GAP_FLOOR * top_b
@@ -190,7 +192,7 @@ class Shift:
                     )
                 )
             )
-            and self.br.lost_cap(cands, best_i, below, event, a_max, j_max, w)
+            and self.br.lost_cap(cands, best_i, below, changed, a_max, j_max, w)
         ):
             return
         self.st.soft_from = soft_from
@@ -280,6 +282,17 @@ class Shift:
             # there slowed falling feeds, feeds seed 394), but not where the goal is a run
             # boundary or a stop just after it: the dip follows (feeds seed 177, a corner of
             # 4.5 mm/s 1 mm after a drop to F6000, passed at 106.7 mm/s)
+            return
+        if (
+            changed
+            and not in_reach
+            and self.br.brake_lost(looked, looked.index(first), a_max, j_max, w)
+        ):
+            # out of reach after an input change: the brake at once passes it above, as
+            # where it is the candidate itself (`lost_cap`), not below it braking through
+            # (override 100 → 60 % 2.6 ms before a 0.5 mm brake toward an F6000 block,
+            # look-ahead 10, the window's end the shift's goal: 59.997 mm/s at −2.2 m/s² at
+            # its boundary, ramped out to 53.8, 56.2 for 60 at the next one)
             return
         if below and self.br.dip_through(looked, first, a_max, j_max, w):
             # below it braking through (it came into view too late, or the shift's goal is

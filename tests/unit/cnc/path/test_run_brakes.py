@@ -271,7 +271,7 @@ def test_the_brake_at_once_for_a_lost_cap_goes_on_as_the_window_moves(override: 
 @pytest.mark.parametrize(
     ("drop", "override", "look_ahead", "at", "before"),
     [(3000, 0.8, 10, 6.39, 26.85), (3000, 0.6, 8, 6.40, 24.24), (4800, 0.4, 30, 6.38, 23.09),
-     (4800, 0.4, 10, 6.39, 21.06)],
+     (4800, 0.4, 10, 6.39, 21.06), (6000, 0.6, 10, 6.39, 56.23), (6000, 0.4, 10, 6.385, 28.32)],
 )  # fmt: skip
 def test_a_feed_cap_an_override_drop_put_out_of_reach_is_passed_braking(
     drop: int, override: float, look_ahead: int, at: float, before: float
@@ -283,7 +283,11 @@ def test_a_feed_cap_an_override_drop_put_out_of_reach_is_passed_braking(
     slowdown). Where the brake at once passes the boundary nearer the cap by ratio than x1
     (`Shift.toward`: v_b / cap < cap / x1, as for a run boundary's x2), it is taken, as the
     CNC brakes after an override drop (known deviation 15), within the check's rule for a
-    cap out of reach after an input change."""
+    cap out of reach after an input change. So does a re-plan inside that brake as the
+    window moves on (F6000 at 60 %: the next re-plan passed the cap below it braking
+    through, `Brakes.dip_through`, at 59.997 mm/s and −2.2 m/s², ramped out to 53.8 and
+    passed the next boundary at 56.23 for 60), and so does the shift's profile past such a
+    cap at the event (F6000 at 40 % 5 ms earlier: a dip to 28.32 between 40 and 38.3)."""
     ch = dataclasses.replace(shipped(), look_ahead_blocks=look_ahead, cycle_time=1e-3)
     sched = Schedule(((at, override),), ())
     _, hard, slow, errors = check(Scenario(0, ch, fast_into_a_drop(drop), sched))
