@@ -140,6 +140,8 @@ class Brakes:
         seg = self.con.seg
         if self.con.hold or not cands or seg + 1 >= tb.n:
             return 0.0
+        if abs(ceiling - tb.ceiling(seg, self.con.ov)) > CAP_TOL * ceiling + V_ROUND:
+            return 0.0  # a cap ahead as the brake's end (`_brake_past`), not the block's ceiling
         s_end = tb.s[seg + 1]
         first = min(c[1] for c in cands)
         if s_end >= first - SLACK_TOL:

@@ -168,6 +168,16 @@ class Shift:
         top_b = min(cap, ceiling)
         # after an input change, or inside the brake at once it started for b
         changed = event or _brakes_for(held, b) or _brakes_for(passed, b)
+        if not event and not forced:
+            for kept in (passed, held):
+                if _brakes_for(kept, b) and kept is not None and self.st.t < kept.t0 + kept.dur:
+                    # inside that brake, no input changed: it goes on (re-planned in its last
+                    # phase, where v_p is b's cap, the target profile toward the cap itself
+                    # was refused, a tracker error and a dip to 3.56 mm/s, a cold review's
+                    # program; or it took x1 from there, 7.11 mm/s for 8)
+                    kept.window = w
+                    self.st.plan = kept
+                    return
         if (
             not shifted
             and not gate
@@ -285,6 +295,7 @@ class Shift:
             return
         if (
             changed
+            and below
             and not in_reach
             and self.br.brake_lost(looked, looked.index(first), a_max, j_max, w)
         ):

@@ -503,11 +503,12 @@ class Targets:
         on and comes back, and takes longer (override 100 → 10 % 1.9 mm before a 0.2 mm block
         of F3000, ramp-out at its end to 10.0 mm/s, toward 18.11 mm/s 0.2 mm on: a profile
         through 3.61 in 20.4 ms; with the target `REACH_ROUND` lower, 14.9 ms and no dip).
-        That one is taken where it does not dip; else the dip stays (one ruckig call)."""
-        dipping = self.st.plan
+        That one is taken where it does not dip; else the dip stays (one ruckig call). Tried
+        wherever such a speed-up dips below v_p, at the edge or not."""
+        dipping, error = self.st.plan, self.st.last_error
         lower = target * (1.0 - REACH_ROUND)
         if not self.try_target(s, v, a, s_c, lower, v_max, a_max, j_max, b, w) or self.dips(floor):
-            self.st.plan = dipping
+            self.st.plan, self.st.last_error = dipping, error
 
     def _exact_brake(
         self, s: float, v: float, a: float, s_c: float, target: float, a_max: float,

@@ -292,3 +292,44 @@ def test_a_feed_cap_an_override_drop_put_out_of_reach_is_passed_braking(
     sched = Schedule(((at, override),), ())
     _, hard, slow, errors = check(Scenario(0, ch, fast_into_a_drop(drop), sched))
     assert (hard, slow, errors) == ([], [], 0), f"was {before} mm/s"
+
+
+def _review_program(moves: list[tuple[float, float, int]]) -> str:
+    """A cold review's program: 20 mm at F3000, then the moves (x, y, F)."""
+    lines = ["G01 X0 Y0 F3000", "G01 X20 Y0"] + [f"G01 X{x} Y{y} F{f}" for x, y, f in moves]
+    return "\n".join([*lines, "M30"]) + "\n"
+
+
+REVIEW_932 = _review_program([
+    (20.05, 0, 24000), (20.1, 0, 1200), (20.15, 0, 2400), (20.65, 0, 2400), (20.85, 0, 4800),
+    (20.95, 0.00017, 2400), (21.14987, 0.0075, 4800), (21.19983, 0.00942, 9000),
+    (21.69946, 0.02862, 24000), (21.89931, 0.03629, 4800), (22.19909, 0.04781, 1200),
+    (22.24905, 0.04982, 6000), (22.54821, 0.07231, 60000), (22.59807, 0.07606, 2400),
+    (23.09666, 0.11355, 2400), (23.2961, 0.12854, 9000), (23.2961, 2.12854, 3000),
+])  # fmt: skip
+REVIEW_391 = _review_program([
+    (20.1, 0, 4800), (20.2, 0, 60000), (20.5, 0, 1200), (20.6, 0.00017, 24000),
+    (20.65, 0.00026, 4800), (20.95, 0.00079, 24000), (21.15, 0.00113, 6000),
+    (21.45, 0.00218, 60000), (21.94999, 0.00393, 2400), (22.14985, 0.0116, 24000),
+    (22.3497, 0.01928, 60000), (22.64948, 0.0308, 3000), (23.14911, 0.04999, 60000),
+    (23.44889, 0.06151, 60000), (23.74808, 0.08348, 2400), (23.74808, 2.08348, 3000),
+])  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("text", "look_ahead", "cycle", "at", "override"),
+    [(REVIEW_932, 30, 2e-3, 0.4083174872110241, 0.8),
+     (REVIEW_391, 8, 1e-3, 0.4138630528595175, 0.4)],
+)  # fmt: skip
+def test_the_brake_at_once_for_a_lost_cap_is_kept_to_its_end(
+    text: str, look_ahead: int, cycle: float, at: float, override: float
+) -> None:
+    """A cold review's programs for the rule above: the event's brake at once toward a lost
+    cap was re-planned in its last phase (crossing a boundary, or the window moving on),
+    where v_p is the cap, so no brake at once was asked for any more: toward the cap itself
+    ruckig refused (a tracker error, 11.78 mm/s for 16.0 and a dip to 3.56), or x1 from
+    there (7.11 for 8.0, below the event's own x1). Inside that brake, no input changed, it
+    goes on (`Shift.toward`)."""
+    ch = dataclasses.replace(shipped(), look_ahead_blocks=look_ahead, cycle_time=cycle)
+    _, hard, slow, errors = check(Scenario(0, ch, text, Schedule(((at, override),), ())))
+    assert (hard, slow, errors) == ([], [], 0)
