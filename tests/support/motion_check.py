@@ -467,12 +467,19 @@ def check_motion(
                     a_b = min(a_b, max(last.a - j * frac * dt_s, smp.a - j * (1.0 - frac) * dt_s))
                     ramp_v = max(smp.v + smp.a * t_r / 2.0, v_b - a_b * a_b / (2.0 * j), 0.0)
                     ramp = (smp.s, smp.v, smp.a, j)
+                    need = path.least_brake(b, v_b, a_b, smp, window)
                     if above:
-                        # no harder than a brake toward that ceiling has there: its
-                        # ramp-out ends at the ceiling, not below it
-                        need = -math.sqrt(2.0 * j * (v_b - ceiling_before))
-                    else:
-                        need = path.least_brake(b, v_b, a_b, smp, window)
+                        # or no harder than a brake toward that ceiling has there (its
+                        # ramp-out ends at the ceiling, not below it), where that is
+                        # harder; the whole deceleration where that brake's ramp-out would
+                        # pass a run boundary, which the path passes with zero acceleration
+                        # (0.05 mm after the ceiling's end, 13.29 mm/s at −2.57 m/s² over a
+                        # ceiling of 8: the ramp toward 8 ends 0.055 mm on, and the path
+                        # ramps out to x1 = 5.0 there; a cold review's program)
+                        toward = -math.sqrt(2.0 * j * (v_b - ceiling_before))
+                        t_t = -toward / j
+                        ramp_len = t_t * (v_b + t_t * (toward / 2.0 + t_t * j / 6.0))
+                        need = a_b if path.gate_within(b, ramp_len) else min(need, toward)
                     if need > a_b:  # braking harder than the window's end needs: that much
                         t_r = -need / j
                         ramp_s = s_b + t_r * (v_b + t_r * (need / 2.0 + t_r * j / 6.0))

@@ -15,7 +15,7 @@ import ruckig
 
 from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.params import ChannelParams
-from liftd.cnc.plc import SimPlc
+from liftd.cnc.plc import Schedule, SimPlc
 from liftd.sim.simulate import run_cycles
 from tests.support.cam_cases import cam_scenario
 from tests.support.cam_runs import check, time_limit
@@ -486,6 +486,25 @@ def test_a_brake_from_just_above_a_ceiling_ramps_out_where_the_ceiling_rises() -
     assert _short_drop_made_up(1.0, 1.0) == []
     found = _short_drop_made_up(3.0, 0.88)
     assert any(f.startswith(("dip", "boundary 28 ")) for f in found), found
+
+
+def test_a_run_boundary_inside_the_ramp_toward_the_ceiling_credits_the_whole_brake() -> None:
+    """A cold review's program: override 100 → 10 % at 47 mm/s, 0.16 mm before the end of
+    an F4800 block (8 mm/s now); the path passes that end (the ceiling rises to 100) at
+    13.29 mm/s and −2.57 m/s², and a run boundary 0.05 mm on, passed with zero acceleration,
+    at x1 = 5.0. The brake toward the ceiling would ramp out over 0.055 mm, past that
+    boundary: there the whole deceleration is the path's to ramp out (the bound expected
+    8.0 at the boundary, which nothing with zero acceleration there reaches)."""
+    moves = [(20.2, 0, 4800), (20.25, 0, 60000), (20.45, 0.00035, 24000),
+             (20.94966, 0.01867, 4800), (21.14952, 0.02635, 3000), (21.24944, 0.03019, 1200),
+             (22.99541, 2.14537, 3000)]  # fmt: skip
+    text = "G01 X0 Y0 F3000\nG01 X20 Y0\n" + "".join(
+        f"G01 X{x} Y{y} F{f}\n" for x, y, f in moves
+    )
+    ch = dataclasses.replace(shipped(), look_ahead_blocks=8, cycle_time=1e-3)
+    sched = Schedule(((0.4084522748996617, 0.1),), ())
+    rec, samples = _recorded(Scenario(0, ch, text + "M30\n", sched))
+    assert check_motion(rec.program, rec.table, 8, 1e-3, samples) == []
 
 
 def test_the_brake_s_phases_are_the_brake_distance_s() -> None:
