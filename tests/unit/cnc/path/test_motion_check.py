@@ -498,9 +498,7 @@ def test_a_run_boundary_inside_the_ramp_toward_the_ceiling_credits_the_whole_bra
     moves = [(20.2, 0, 4800), (20.25, 0, 60000), (20.45, 0.00035, 24000),
              (20.94966, 0.01867, 4800), (21.14952, 0.02635, 3000), (21.24944, 0.03019, 1200),
              (22.99541, 2.14537, 3000)]  # fmt: skip
-    text = "G01 X0 Y0 F3000\nG01 X20 Y0\n" + "".join(
-        f"G01 X{x} Y{y} F{f}\n" for x, y, f in moves
-    )
+    text = "G01 X0 Y0 F3000\nG01 X20 Y0\n" + "".join(f"G01 X{x} Y{y} F{f}\n" for x, y, f in moves)
     ch = dataclasses.replace(shipped(), look_ahead_blocks=8, cycle_time=1e-3)
     sched = Schedule(((0.4084522748996617, 0.1),), ())
     rec, samples = _recorded(Scenario(0, ch, text + "M30\n", sched))
