@@ -37,8 +37,9 @@ lower where a cap needs it); the forward pass starts again where the ramp ends (
 event's state), and the interval goes on from there: no dip below the lower of the ramp's end
 and the next boundary. The same where the brake from above a ceiling an input lowered passes
 the end of that ceiling's block still decelerating into a higher ceiling (however little above
-it, and credited no harder than a brake toward that ceiling is there: its ramp-out ends at the
-ceiling, not below), and where a brake
+it, and credited no harder than a brake toward that ceiling is there, whose ramp-out ends at
+the ceiling, or than the caps after it need, but wholly where that ramp-out would pass a run
+boundary), and where a brake
 for the look-ahead window's end passes a boundary, at what the rules expect there, whose
 crossing moves the window on and releases it: the ramp-out after that boundary is the jerk
 limit's, not a dip (its deceleration there read as the lowest the jerk limit allows from the
