@@ -11,8 +11,10 @@ otherwise (a boundary passed slower than the rules allow, a dip between two boun
 counted apart: docs/architecture.md lists them as known
 deviations. One JSON line per kind of run with the counts and the first findings.
 
-Run: .venv/bin/python bench/bench_cam_motion.py [RUNS [FIRST_SEED]] [--kind cam|wide|narrow|feeds]
-[--all] (feeds: tests/support/feed_cases.py, short blocks whose feed changes block by block)
+Run: .venv/bin/python bench/bench_cam_motion.py [RUNS [FIRST_SEED]]
+[--kind cam|wide|narrow|feeds|drops] [--all] (feeds: tests/support/feed_cases.py, short blocks
+whose feed changes block by block; drops: a cold review's random short blocks with an override
+drop as they come, `drop_scenario`)
 (--all: a line for each run with findings or problems, all of them, before the summary)
 """
 
@@ -28,10 +30,13 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from bench.cli import parser
 from tests.support.cam_cases import cam_scenario
 from tests.support.cam_runs import check
-from tests.support.feed_cases import feed_scenario
+from tests.support.feed_cases import drop_scenario, feed_scenario
 from tests.support.scenarios import scenario, wide_scenario
 
-KINDS = {"cam": cam_scenario, "wide": wide_scenario, "narrow": scenario, "feeds": feed_scenario}
+KINDS = {
+    "cam": cam_scenario, "wide": wide_scenario, "narrow": scenario, "feeds": feed_scenario,
+    "drops": drop_scenario,
+}  # fmt: skip
 
 
 def main() -> None:

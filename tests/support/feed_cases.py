@@ -17,7 +17,9 @@ import dataclasses
 import math
 import random
 
-from liftd.cnc.plc import Schedule, parse_override_spec
+from liftd.cnc.geo_task import GeoTask
+from liftd.cnc.plc import Schedule, SimPlc, parse_override_spec
+from liftd.sim.simulate import run_cycles
 from tests.support.channel import shipped
 from tests.support.scenarios import Scenario
 
@@ -117,12 +119,75 @@ def falling_to_the_end(feeds: tuple[int, ...], step_mm: float, corner: str) -> s
     return "\n".join([*lines, *([corner] if corner else []), "M30"]) + "\n"
 
 
+def short_drop(first: int, rising: int) -> tuple[str, int]:
+    """0.2 mm blocks over rounding kinks of 0.1° (every boundary a run boundary: known
+    deviation 0): 20 at F`first`, `rising` at F60000, one at F6000 collinear with the next,
+    three more at F60000, one at F6000 and ten at F60000; and the boundary where the first
+    F6000 block begins (the shape of feeds seed 942)."""
+    lines = [f"G01 X0 Y0 F{first}"]
+    x = y = heading = 0.0
+    seq = [first] * 20 + [60000] * rising + [6000, 60000, 60000, 60000, 6000] + [60000] * 10
+    short = 20 + rising
+    for i, f in enumerate(seq):
+        if i != short + 1:  # the short block and the one after it are collinear
+            heading += math.radians(0.1)
+        x += 0.2 * math.cos(heading)
+        y += 0.2 * math.sin(heading)
+        lines.append(f"G01 X{x:.4f} Y{y:.4f} F{f}")
+    return "\n".join([*lines, "M30"]) + "\n", short
+
+
+def short_drop_scenario(
+    first: int, rising: int, before_mm: float, low: float, look_ahead: int, cycle: float
+) -> Scenario:
+    """`short_drop` on the shipped machine, the override 100 % → `low` in the first cycle
+    in which the path, run without that drop, is within `before_mm` of the F6000 block."""
+    text, short = short_drop(first, rising)
+    ch = dataclasses.replace(shipped(), look_ahead_blocks=look_ahead, cycle_time=cycle)
+    task = GeoTask(ch, text)
+    s_drop = task.prog.table.s[short] - before_mm * 1e-3
+    t_drop = next(
+        snap.t
+        for snap in run_cycles(task, SimPlc(0.02), Schedule((), ()), cycle, 60.0)
+        if task.interp.s >= s_drop
+    )
+    return Scenario(short, ch, text, Schedule(((t_drop, low),), ()))
+
+
+def drop_scenario(seed: int) -> Scenario:
+    """A cold review's random programs (eighteenth round): 20 mm at F3000, then 8–16 blocks
+    of 0.05–0.5 mm at F1200–F60000, each bending by 0°, 0.1° or 2°, and a 2 mm corner
+    block; look-ahead 3–30, 1 or 2 ms; the override drops to 10–80 % between 0.40 and
+    0.55 s, as the short blocks come (in a fifth of the runs a second step, to 50–150 %,
+    5–50 ms later)."""
+    rng = random.Random(seed)
+    lines = ["G01 X0 Y0 F3000", "G01 X20 Y0"]
+    x, y, heading = 20.0, 0.0, 0.0
+    for _ in range(rng.randint(8, 16)):
+        length = rng.choice((0.05, 0.1, 0.2, 0.3, 0.5))
+        feed = rng.choice((1200, 2400, 3000, 4800, 6000, 9000, 24000, 60000))
+        heading += math.radians(rng.choice((0.0, 0.0, 0.0, 0.1, 2.0)))
+        x += length * math.cos(heading)
+        y += length * math.sin(heading)
+        lines.append(f"G01 X{x:.5f} Y{y:.5f} F{feed}")
+    lines.append(f"G01 X{x:.5f} Y{y + 2:.5f} F3000")
+    look_ahead = rng.choice((3, 8, 10, 30))
+    cycle = rng.choice((1e-3, 2e-3))
+    low = rng.choice((0.1, 0.2, 0.3, 0.4, 0.6, 0.8))
+    t = 0.40 + rng.random() * 0.15
+    steps: tuple[tuple[float, float], ...] = ((t, low),)
+    if rng.random() < 0.2:
+        steps = ((t, low), (t + rng.uniform(0.005, 0.05), rng.choice((0.5, 1.0, 1.5))))
+    ch = dataclasses.replace(shipped(), look_ahead_blocks=look_ahead, cycle_time=cycle)
+    return Scenario(seed, ch, "\n".join([*lines, "M30"]) + "\n", Schedule(steps, ()))
+
+
 FALL_A = (20000, 16000, 13000, 11000, 9000, 7500, 6000, 4800, 3800, 3000)
 FALL_B = (24000, 18000, 15000, 12000, 10000, 8000, 6500, 5000, 4000)
 FALL_C = (30000, 24000, 18000, 14000, 11000, 9000, 7000, 5200, 4300, 3800)
 
 
 __all__ = [
-    "FALL_A", "FALL_B", "FALL_C", "falling_feeds", "falling_to_the_end", "feed_program",
-    "feed_scenario",
+    "FALL_A", "FALL_B", "FALL_C", "drop_scenario", "falling_feeds", "falling_to_the_end",
+    "feed_program", "feed_scenario", "short_drop", "short_drop_scenario",
 ]  # fmt: skip

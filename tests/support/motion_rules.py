@@ -291,6 +291,17 @@ class PathRules:
             return 0.0
         return min(self.ceiling(b - 1, ov), self.ceiling(b, ov), self.bounds[b].v_cap)
 
+    def gate_within(self, b: int, length: float) -> bool:
+        """A run boundary (zero acceleration there) or the program's end lies after boundary
+        b within `length` of path."""
+        s_b = self.bounds[b].s
+        k = b + 1
+        while k <= self.n and self.bounds[k].s - s_b < length:
+            if k >= self.n or self.gate[k]:
+                return True
+            k += 1
+        return False
+
     def is_stop(self, b: int, sample: Sample) -> bool:
         if b <= 0 or b >= self.n or self.bounds[b].stop or b in sample.lift_stops:
             return True

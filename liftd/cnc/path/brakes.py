@@ -80,25 +80,33 @@ class Brakes:
         re-planned as the window moves on, and crawled to the program's end, a review found),
         never below the lowest cap ahead (with a jerk limit a brake to a lower velocity can be
         the shorter: CAM seed 956, on the exact brake to 2.68 mm/s at the drop, a brake to
-        2.45 fitted and dipped). False where none keeps them (a feed cap it can no longer get
-        below, a run boundary inside the brake: `brake_into`)."""
+        2.45 fitted and dipped). Where the ceiling's block ends before the candidates and a
+        run boundary lies inside the brake to the ceiling, first the brake at once toward the
+        ceiling ramped out at the block's end (`_ceiling_end`), a plan of its own (`SETTLE`).
+        False where none keeps them (a feed cap it can no longer get below, a run boundary
+        inside the brake: `brake_into`)."""
         e, goal = ceiling, CRUISE
         below: list[int] = []  # the feed caps its own velocity keeps (`_first_keeps`)
         if not self._first_keeps(cands, e, a_max, j_max, below=below):
-            good = min((c[2] for c in cands if not self._moves_on(c)), default=0.0)
-            if good >= ceiling or not self._first_keeps(cands, good, a_max, j_max, below=[]):
-                # nothing between (path-based Lifting, wide seed 879: a run boundary 1 µm
-                # ahead above the ceiling, a brake of no length planned again and again)
-                return False
-            good = highest(
-                good, ceiling, BISECT_STEPS,
-                lambda e: self._first_keeps(cands, e, a_max, j_max, below=[]),
-            )  # fmt: skip
-            if good <= 0.0:
-                return False  # never a brake to rest where no stop is
-            e, goal = good, SETTLE
             below = []
-            self._first_keeps(cands, e, a_max, j_max, below=below)
+            end = self._ceiling_end(cands, ceiling, a_max, j_max, w)
+            if end > ceiling and self._first_keeps(cands, end, a_max, j_max, below=below):
+                e, goal = end, SETTLE
+            else:
+                good = min((c[2] for c in cands if not self._moves_on(c)), default=0.0)
+                if good >= ceiling or not self._first_keeps(cands, good, a_max, j_max, below=[]):
+                    # nothing between (path-based Lifting, wide seed 879: a run boundary 1 µm
+                    # ahead above the ceiling, a brake of no length planned again and again)
+                    return False
+                good = highest(
+                    good, ceiling, BISECT_STEPS,
+                    lambda e: self._first_keeps(cands, e, a_max, j_max, below=[]),
+                )  # fmt: skip
+                if good <= 0.0:
+                    return False  # never a brake to rest where no stop is
+                e, goal = good, SETTLE
+                below = []
+                self._first_keeps(cands, e, a_max, j_max, below=below)
         plan = self.tg.velocity_plan(e, goal, w, a_max, j_max)
         if plan is None or (goal == SETTLE and plan.dur <= 0.0):
             return False  # refused, or a brake of no length, re-planned at its end without end
@@ -110,6 +118,48 @@ class Brakes:
             self.st.soft_from = plan.soft_from
         self.st.plan = plan
         return True
+
+    def _ceiling_end(
+        self, cands: list[tuple[int, float, float, bool]], ceiling: float, a_max: float,
+        j_max: float, w: int,
+    ) -> float:  # fmt: skip
+        """Where the lowered ceiling ends before every candidate ahead and the blocks from its
+        end up to the first candidate are higher: the velocity the brake at once toward the
+        ceiling (ruckig's velocity interface, as `brake_first`'s) has where the ceiling's block
+        ends, its deceleration there ramped out at full jerk (v + a·|a|/2J); 0 where none.
+        A CNC brakes toward the ceiling while it holds and speeds up again once it rises;
+        this brake, ruckig's time-optimal one to that velocity, is the same motion up to the
+        block's end and a cruise after it, re-planned where it ends and at the block's end
+        (override 100 → 10 % at 38.9 mm/s, 0.2 mm before the end of an F6000 block and
+        0.4 mm before a rounding kink capped at 29.3 mm/s by a second F6000 block: the brake
+        to the ceiling of 10 mm/s does not end before the kink, whose target was taken against
+        that ceiling, x2 of the jerk gap above it, the slowest brake that fills the 0.4 mm:
+        21.0 mm/s at the kink, 27.2 now; feeds seed 942, `test_jerk_gap.py`). One ruckig
+        call; the blocks read are those before the first candidate, in the window."""
+        tb = self.con.tb
+        seg = self.con.seg
+        if self.con.hold or not cands or seg + 1 >= tb.n:
+            return 0.0
+        if abs(ceiling - tb.ceiling(seg, self.con.ov)) > CAP_TOL * ceiling + V_ROUND:
+            return 0.0  # a cap ahead as the brake's end (`_brake_past`), not the block's ceiling
+        s_end = tb.s[seg + 1]
+        first = min(c[1] for c in cands)
+        if s_end >= first - SLACK_TOL:
+            return 0.0
+        plan = self.tg.velocity_plan(ceiling, CRUISE, w, a_max, j_max)
+        if plan is None:
+            return 0.0
+        t_end = plan.time_at(s_end, INF)
+        if t_end == INF:
+            return 0.0
+        _, v_e, a_e = plan.at(t_end)
+        e = projected_velocity(v_e, a_e, j_max)
+        k = seg + 1
+        while k < min(tb.n, w) and tb.s[k] < first - SLACK_TOL:
+            if tb.ceiling(k, self.con.ov) < e:
+                return 0.0
+            k += 1
+        return e
 
     def brake_into(
         self, cands: list[tuple[int, float, float, bool]], v_p: float, s_c: float,

@@ -27,7 +27,7 @@ from liftd.cnc.path.constraints import (
 )
 from liftd.cnc.path.plan import PathState, Plan
 from liftd.cnc.path.targets import Targets
-from liftd.cnc.path.velocity import reach_velocity
+from liftd.cnc.path.velocity import brake_crossing, reach_velocity
 
 # after an input change, a feed cap whose nearest reachable velocity below it (the jerk gap's
 # lower end, `Targets.pick_target`) is less than this fraction of it is out of reach
@@ -166,6 +166,18 @@ class Shift:
             shifted = True
         below = ceiling * (1.0 + CAP_TOL) + V_ROUND >= v_p  # not after an override drop
         top_b = min(cap, ceiling)
+        # after an input change, or inside the brake at once it started for b
+        changed = event or _brakes_for(held, b) or _brakes_for(passed, b)
+        if not event and not forced:
+            for kept in (passed, held):
+                if _brakes_for(kept, b) and kept is not None and self.st.t < kept.t0 + kept.dur:
+                    # inside that brake, no input changed: it goes on (re-planned in its last
+                    # phase, where v_p is b's cap, the target profile toward the cap itself
+                    # was refused, a tracker error and a dip to 3.56 mm/s, a cold review's
+                    # program; or it took x1 from there, 7.11 mm/s for 8)
+                    kept.window = w
+                    self.st.plan = kept
+                    return
         if (
             not shifted
             and not gate
@@ -178,12 +190,19 @@ class Shift:
                 # 1.06 mm/s (feeds seed 576); the brake at once passes it above, braking from
                 # the change on (deviation 10: a CNC brakes at once, it does not dip)
                 or (
-                    (event or _brakes_for(held, b) or _brakes_for(passed, b))
+                    changed
                     and v_p > top_b
-                    and target < GAP_FLOOR * top_b
+                    and (
+                        target < GAP_FLOOR * top_b
+                        or (
+                            target < top_b
+                            and brake_crossing(v, a, top_b, top_b * top_b / target, a_max, j_max)
+                            <= d + SLACK_TOL
+                        )
+                    )
                 )
             )
-            and self.br.lost_cap(cands, best_i, below, event, a_max, j_max, w)
+            and self.br.lost_cap(cands, best_i, below, changed, a_max, j_max, w)
         ):
             return
         self.st.soft_from = soft_from
@@ -273,6 +292,18 @@ class Shift:
             # there slowed falling feeds, feeds seed 394), but not where the goal is a run
             # boundary or a stop just after it: the dip follows (feeds seed 177, a corner of
             # 4.5 mm/s 1 mm after a drop to F6000, passed at 106.7 mm/s)
+            return
+        if (
+            changed
+            and below
+            and not in_reach
+            and self.br.brake_lost(looked, looked.index(first), a_max, j_max, w)
+        ):
+            # out of reach after an input change: the brake at once passes it above, as
+            # where it is the candidate itself (`lost_cap`), not below it braking through
+            # (override 100 → 60 % 2.6 ms before a 0.5 mm brake toward an F6000 block,
+            # look-ahead 10, the window's end the shift's goal: 59.997 mm/s at −2.2 m/s² at
+            # its boundary, ramped out to 53.8, 56.2 for 60 at the next one)
             return
         if below and self.br.dip_through(looked, first, a_max, j_max, w):
             # below it braking through (it came into view too late, or the shift's goal is

@@ -46,6 +46,7 @@ from liftd.cnc.ruckig1 import (
 )
 
 DIP_TOL = 1e-4  # relative: a profile this much below the lower of its ends' velocities dips
+REACH_ROUND = 1e-9  # relative: a target this much below the highest reachable one (`_unreach`)
 HOLD_TOP_GAIN = 1e-6  # s: `Targets._hold_top` takes the other profile where it is this shorter
 
 
@@ -317,21 +318,7 @@ class Targets:
         if self.try_target(s, v, a, s_c, target, v_max, a_max, j_max, b, w):
             if a > 0.0 and abs(v_p - v_max) <= V_ROUND and v_max <= ceiling + V_ROUND:
                 self._hold_top(s, v, a, s_c, target, v_max, a_max, j_max, b, w)
-            floor = min(v, v_p, target)
-            if (
-                target < 0.5 * max(v, v_p)
-                and self.dips(floor)
-                and not self._undip(target, b, w, (passed, held))
-            ):
-                if event:  # a lift planned with the times before it (wide seed 767)
-                    self._exact_brake(s, v, a, s_c, target, a_max, j_max, b, w)
-                else:
-                    self._unpin(s, v, a, s_c, target, v_max, a_max, j_max, b, w, floor)
-                    if self.dips(floor):
-                        # the exact brake where it reaches b: from a cruise at 73.0 mm/s to
-                        # x1 = 2.19 1 mm on (override 10 %), ruckig's profile went down to
-                        # 1.40 (feeds seed 381; `_unpin` found none)
-                        self._exact_brake(s, v, a, s_c, target, a_max, j_max, b, w)
+            self._mend(s, v, a, v_p, s_c, target, v_max, a_max, j_max, b, w, passed, held, event)
             return
         if v_p <= max(hard, target) and self.try_target(
             s, v, a, s_c, v_p, max(v_max, v_p), a_max, j_max, b, w
@@ -451,6 +438,34 @@ class Targets:
 
         accepted(highest(good, bad, 14, accepted))
 
+    def _mend(
+        self, s: float, v: float, a: float, v_p: float, s_c: float, target: float, v_max: float,
+        a_max: float, j_max: float, b: int, w: int, passed: Plan | None, held: Plan | None,
+        event: bool,
+    ) -> None:  # fmt: skip
+        """The target profile just chosen (`settle`), where it dips below its ends: a low
+        target's (below half the path's velocity) replaced by the profile in hand
+        (`_undip`), the same with v_max a rounding higher (`_unpin`) or the exact brake
+        (`_exact_brake`); a speed-up after a brake's ramp-out by the target a rounding lower
+        (`_unreach`)."""
+        floor = min(v, v_p, target)
+        if (
+            target < 0.5 * max(v, v_p)
+            and self.dips(floor)
+            and not self._undip(target, b, w, (passed, held))
+        ):
+            if event:  # a lift planned with the times before it (wide seed 767)
+                self._exact_brake(s, v, a, s_c, target, a_max, j_max, b, w)
+            else:
+                self._unpin(s, v, a, s_c, target, v_max, a_max, j_max, b, w, floor)
+                if self.dips(floor):
+                    # the exact brake where it reaches b: from a cruise at 73.0 mm/s to
+                    # x1 = 2.19 1 mm on (override 10 %), ruckig's profile went down to
+                    # 1.40 (feeds seed 381; `_unpin` found none)
+                    self._exact_brake(s, v, a, s_c, target, a_max, j_max, b, w)
+        elif a < 0.0 and v_p < target and self.dips(v_p):
+            self._unreach(s, v, a, s_c, target, v_max, a_max, j_max, b, w, v_p)
+
     def dips(self, floor: float) -> bool:
         """The profile just chosen goes below `floor` (the lower of the velocity it starts
         from and its target) on the way. Its pieces are read for it, and kept for its cycles."""
@@ -476,6 +491,24 @@ class Targets:
         top = v_max + V_ROUND
         if not self.try_target(s, v, a, s_c, target, top, a_max, j_max, b, w) or self.dips(floor):
             self.st.plan = dipping
+
+    def _unreach(
+        self, s: float, v: float, a: float, s_c: float, target: float, v_max: float,
+        a_max: float, j_max: float, b: int, w: int, floor: float,
+    ) -> None:  # fmt: skip
+        """The profile just chosen, from inside a brake toward a target above v_p (the ramp-out
+        of the deceleration, then a speed-up), goes below v_p: ruckig at the edge of the
+        reachable (`reach_from`: the target is the highest velocity the path can have at b)
+        misses the profile that ramps out and speeds up at once and returns one that brakes
+        on and comes back, and takes longer (override 100 → 10 % 1.9 mm before a 0.2 mm block
+        of F3000, ramp-out at its end to 10.0 mm/s, toward 18.11 mm/s 0.2 mm on: a profile
+        through 3.61 in 20.4 ms; with the target `REACH_ROUND` lower, 14.9 ms and no dip).
+        That one is taken where it does not dip; else the dip stays (one ruckig call). Tried
+        wherever such a speed-up dips below v_p, at the edge or not."""
+        dipping, error = self.st.plan, self.st.last_error
+        lower = target * (1.0 - REACH_ROUND)
+        if not self.try_target(s, v, a, s_c, lower, v_max, a_max, j_max, b, w) or self.dips(floor):
+            self.st.plan, self.st.last_error = dipping, error
 
     def _exact_brake(
         self, s: float, v: float, a: float, s_c: float, target: float, a_max: float,

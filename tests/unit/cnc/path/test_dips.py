@@ -7,12 +7,13 @@ from __future__ import annotations
 import pytest
 
 from liftd.cnc.geo_task import GeoTask
-from liftd.cnc.path.targets import lowest_velocity
+from liftd.cnc.path.targets import REACH_ROUND, lowest_velocity
 from liftd.cnc.path.tracker import Tracker
-from liftd.cnc.path.velocity import projected_velocity
+from liftd.cnc.path.velocity import projected_velocity, reach_from
 from liftd.cnc.ruckig1 import Phases, Ruckig1
 from tests.support.cam_cases import cam_scenario
 from tests.support.cam_runs import check
+from tests.support.feed_cases import short_drop_scenario
 from tests.support.scenarios import describe, scenario, wide_scenario
 
 A_MAX, J_MAX = 8.333333333333172, 416.6666666666586  # wide seed 57's run limits
@@ -182,3 +183,33 @@ def test_the_lowest_velocity_of_a_profile_that_brakes_into_its_limits_first() ->
     sampled = min(float(traj.at_time(traj.duration * k / 2000)[1][0]) for k in range(2001))
     assert lowest_velocity(ph) == pytest.approx(sampled, rel=1e-6)
     assert lowest_velocity(ph) >= 0.01 * (1.0 - 1e-9)
+
+
+# ruckig at the edge of the reachable: from inside a brake (a short_drop run, F3000, override
+# 100 → 10 % 1.7 mm before the F6000 block, look-ahead 30, 2 ms) at that block's end, toward
+# the highest velocity the path can have at the run boundary 0.2 mm on (`reach_from`)
+EDGE = (0.005400010186751738, 0.017083394243701498, -2.381802542654486, 0.0056000311856493545,
+        0.018109574882210364, 0.1, 8.00884880470934, 400.44244023546696)  # fmt: skip
+
+
+def test_ruckig_at_the_edge_of_the_reachable_returns_a_profile_that_dips() -> None:
+    """The state and target the tracker re-planned with: ruckig's profile to exactly the
+    highest reachable velocity brakes on to 3.61 mm/s and comes back (20.4 ms); a target
+    `REACH_ROUND` lower gives the profile that ramps the deceleration out to 10.0 and speeds
+    up at once (14.9 ms). Why `Targets._unreach` tries it."""
+    s, v, a, s_c, target, v_max, a_max, j_max = EDGE
+    v_p = projected_velocity(v, a, j_max)
+    assert target == pytest.approx(reach_from(v, a, s_c - s, a_max, j_max), rel=1e-12)
+    r = Ruckig1()
+    edge = r.position(s, v, a, s_c, target, v_max, a_max, j_max)
+    below = r.position(s, v, a, s_c, target * (1.0 - REACH_ROUND), v_max, a_max, j_max)
+    assert lowest_velocity(Phases(edge)) < 0.5 * v_p
+    assert lowest_velocity(Phases(below)) >= v_p * (1.0 - 1e-9)
+    assert below.duration < 0.8 * edge.duration
+
+
+def test_a_speed_up_after_a_brake_s_ramp_out_does_not_dip() -> None:
+    """That run: the path passed the boundary 0.2 mm on at 18.1 mm/s after a dip to 4.2
+    (found by the motion check), where it ramps out to 10.0 mm/s and speeds up at once now."""
+    _, hard, slow, errors = check(short_drop_scenario(3000, 6, 1.7, 0.1, 30, 2e-3))
+    assert (hard, slow, errors) == ([], [], 0)

@@ -15,12 +15,12 @@ import ruckig
 
 from liftd.cnc.geo_task import GeoTask
 from liftd.cnc.params import ChannelParams
-from liftd.cnc.plc import SimPlc
+from liftd.cnc.plc import Schedule, SimPlc
 from liftd.sim.simulate import run_cycles
 from tests.support.cam_cases import cam_scenario
 from tests.support.cam_runs import check, time_limit
 from tests.support.channel import shipped
-from tests.support.feed_cases import feed_scenario
+from tests.support.feed_cases import feed_scenario, short_drop_scenario
 from tests.support.motion_check import Expected, Recorder, check_motion
 from tests.support.motion_rules import (
     PathRules,
@@ -453,6 +453,56 @@ def test_a_window_release_is_credited_only_the_deceleration_its_caps_need() -> N
         out[i] = dataclasses.replace(out[i], v=0.88 * out[i].v)
     found = check_motion(rec.program, rec.table, ch.look_ahead_blocks, ch.cycle_time, out)
     assert any(f.startswith("dip") and "boundary 17 " in f for f in found), found
+
+
+def _short_drop_made_up(decel: float, slower: float) -> list[str]:
+    """`short_drop_scenario` (F3000, six blocks at F60000, override 100 → 25 % 1.55 mm
+    before the F6000 block, look-ahead 30, 1 ms) as the core ran it, checked with the
+    deceleration read in the two samples around the F6000 block's end (boundary 27, where
+    the ceiling rises from 25 to 250 mm/s) times `decel` and the velocity in the 6 ms after it
+    times `slower`."""
+    sc = short_drop_scenario(3000, 6, 1.55, 0.25, 30, 1e-3)
+    rec, samples = _recorded(sc)
+    b = sc.seed + 1
+    k = next(i for i, smp in enumerate(samples) if smp.s >= rec.table.s[b])
+    out = list(samples)
+    for i in (k - 1, k):
+        out[i] = dataclasses.replace(out[i], a=decel * out[i].a)
+    for i in range(k + 1, k + 7):
+        out[i] = dataclasses.replace(out[i], v=slower * out[i].v)
+    ch = rec.task.ch
+    return check_motion(rec.program, rec.table, ch.look_ahead_blocks, ch.cycle_time, out)
+
+
+def test_a_brake_from_just_above_a_ceiling_ramps_out_where_the_ceiling_rises() -> None:
+    """The path brakes at once from 32.2 mm/s toward the F6000 block's lowered ceiling of
+    25 mm/s and passes its end at 25.55 mm/s and −0.66 m/s², 2 % above the ceiling: its
+    ramp-out ends at 25.0, and from there 28.6 mm/s is what it reaches at the next run
+    boundary. The check credited the ramp-out only 5 % (REL_TOL) above the ceiling and
+    expected 30.6 there as from zero acceleration. Now from any velocity above it, but
+    never below the ceiling: the same path with three times the deceleration read at the
+    boundary and 12 % slower after it is found (ramped out from −2.0 m/s² it would end at
+    20.6 mm/s)."""
+    assert _short_drop_made_up(1.0, 1.0) == []
+    found = _short_drop_made_up(3.0, 0.88)
+    assert any(f.startswith(("dip", "boundary 28 ")) for f in found), found
+
+
+def test_a_run_boundary_inside_the_ramp_toward_the_ceiling_credits_the_whole_brake() -> None:
+    """A cold review's program: override 100 → 10 % at 47 mm/s, 0.16 mm before the end of
+    an F4800 block (8 mm/s now); the path passes that end (the ceiling rises to 100) at
+    13.29 mm/s and −2.57 m/s², and a run boundary 0.05 mm on, passed with zero acceleration,
+    at x1 = 5.0. The brake toward the ceiling would ramp out over 0.055 mm, past that
+    boundary: there the whole deceleration is the path's to ramp out (the bound expected
+    8.0 at the boundary, which nothing with zero acceleration there reaches)."""
+    moves = [(20.2, 0, 4800), (20.25, 0, 60000), (20.45, 0.00035, 24000),
+             (20.94966, 0.01867, 4800), (21.14952, 0.02635, 3000), (21.24944, 0.03019, 1200),
+             (22.99541, 2.14537, 3000)]  # fmt: skip
+    text = "G01 X0 Y0 F3000\nG01 X20 Y0\n" + "".join(f"G01 X{x} Y{y} F{f}\n" for x, y, f in moves)
+    ch = dataclasses.replace(shipped(), look_ahead_blocks=8, cycle_time=1e-3)
+    sched = Schedule(((0.4084522748996617, 0.1),), ())
+    rec, samples = _recorded(Scenario(0, ch, text + "M30\n", sched))
+    assert check_motion(rec.program, rec.table, 8, 1e-3, samples) == []
 
 
 def test_the_brake_s_phases_are_the_brake_distance_s() -> None:
