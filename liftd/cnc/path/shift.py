@@ -170,7 +170,7 @@ class Shift:
         changed = event or _brakes_for(held, b) or _brakes_for(passed, b)
         if not event and not forced:
             for kept in (passed, held):
-                if _brakes_for(kept, b) and kept is not None and self.st.t < kept.t0 + kept.dur:
+                if kept is not None and _brakes_for(kept, b) and self.st.t < kept.t0 + kept.dur:
                     # inside that brake, no input changed: it goes on (re-planned in its last
                     # phase, where v_p is b's cap, the target profile toward the cap itself
                     # was refused, a tracker error and a dip to 3.56 mm/s, a cold review's

@@ -500,9 +500,10 @@ class Targets:
         of the deceleration, then a speed-up), goes below v_p: ruckig at the edge of the
         reachable (`reach_from`: the target is the highest velocity the path can have at b)
         misses the profile that ramps out and speeds up at once and returns one that brakes
-        on and comes back, and takes longer (override 100 → 10 % 1.9 mm before a 0.2 mm block
-        of F3000, ramp-out at its end to 10.0 mm/s, toward 18.11 mm/s 0.2 mm on: a profile
-        through 3.61 in 20.4 ms; with the target `REACH_ROUND` lower, 14.9 ms and no dip).
+        on and comes back, and takes longer (`short_drop` from F3000, override 100 → 10 %
+        1.7 mm before its 0.2 mm F6000 block, ramped out at that block's end to 10.0 mm/s,
+        toward 18.11 mm/s 0.2 mm on: a profile through 3.61 in 20.4 ms; with the target
+        `REACH_ROUND` lower, 14.9 ms and no dip).
         That one is taken where it does not dip; else the dip stays (one ruckig call). Tried
         wherever such a speed-up dips below v_p, at the edge or not."""
         dipping, error = self.st.plan, self.st.last_error
