@@ -42,6 +42,7 @@ COMPILED: tuple[str, ...] = (
     "liftd.cnc.path.program",
     "liftd.cnc.path.shift",
     "liftd.cnc.path.table",
+    "liftd.cnc.path.profiles",
     "liftd.cnc.path.targets",
     "liftd.cnc.path.tracker",
     "liftd.cnc.path.velocity",

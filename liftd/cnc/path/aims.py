@@ -23,7 +23,8 @@ from liftd.cnc.path.constraints import (
     Constraints,
 )
 from liftd.cnc.path.plan import PathState, Plan
-from liftd.cnc.path.targets import DIP_TOL, Targets, highest, lowest_velocity
+from liftd.cnc.path.profiles import DIP_TOL, lowest_velocity
+from liftd.cnc.path.targets import Targets, highest
 from liftd.cnc.path.velocity import brake_crossing, brake_distance
 from liftd.cnc.ruckig1 import ProfileError
 
@@ -178,7 +179,7 @@ class Aims:
             plan = st.plan
             if plan is None or plan.goal != b or st.errors != errors:
                 break
-            fast = self.tg.passed_above(plan, ext[i:k], k - i)
+            fast = self.tg.pf.passed_above(plan, ext[i:k], k - i)
             if fast == 0 and self._brake_state(ext, i, k, e, v_p, ceiling, a_max, j_max, w, held):
                 return True
             if fast < 0:
@@ -365,7 +366,7 @@ class Aims:
         b_i, s_i, c_i, _ = cands[i]
         c_i = min(c_i, v_i)
         try:
-            traj = self.tg.calc.position(st.s, st.v, st.a, s_i, c_i, v_max, a_max, j_max, a1=x)
+            traj = self.tg.pf.calc.position(st.s, st.v, st.a, s_i, c_i, v_max, a_max, j_max, a1=x)
         except ProfileError:
             return None
         plan = Plan(traj, st.t, b_i, w, s_i, c_i)
@@ -388,6 +389,6 @@ class Aims:
         in its block, feeds seed 86)."""
         return all(
             plan.at(plan.time_at(c[1], INF))[1] <= c[2] * (1.0 + CAP_TOL) + V_ROUND
-            and not self.tg.rises_above(plan, c)
+            and not self.tg.pf.rises_above(plan, c)
             for c in cands
         )

@@ -21,7 +21,8 @@ from liftd.cnc.path.constraints import (
     Constraints,
 )
 from liftd.cnc.path.plan import CRUISE, SETTLE, PathState, Plan
-from liftd.cnc.path.targets import Targets, highest, lowest_rise, only_brakes
+from liftd.cnc.path.profiles import lowest_rise, only_brakes
+from liftd.cnc.path.targets import Targets, highest
 from liftd.cnc.path.velocity import (
     brake_crossing,
     brake_distance,
@@ -107,7 +108,7 @@ class Brakes:
                 e, goal = good, SETTLE
                 below = []
                 self._first_keeps(cands, e, a_max, j_max, below=below)
-        plan = self.tg.velocity_plan(e, goal, w, a_max, j_max)
+        plan = self.tg.pf.velocity_plan(e, goal, w, a_max, j_max)
         if plan is None or (goal == SETTLE and plan.dur <= 0.0):
             return False  # refused, or a brake of no length, re-planned at its end without end
         if below:
@@ -146,7 +147,7 @@ class Brakes:
         first = min(c[1] for c in cands)
         if s_end >= first - SLACK_TOL:
             return 0.0
-        plan = self.tg.velocity_plan(ceiling, CRUISE, w, a_max, j_max)
+        plan = self.tg.pf.velocity_plan(ceiling, CRUISE, w, a_max, j_max)
         if plan is None:
             return 0.0
         t_end = plan.time_at(s_end, INF)
@@ -181,9 +182,9 @@ class Brakes:
             if s_j < s_c and cap < top and brake_distance(v, a, cap, a_max, j_max) <= s_j - s:
                 top = cap
         top = max(top, target)
-        if top >= v_max or not self.tg.try_target(s, v, a, s_c, target, top, a_max, j_max, b, w):
+        if top >= v_max or not self.tg.pf.try_target(s, v, a, s_c, target, top, a_max, j_max, b, w):
             return False
-        if self.tg.dips(min(v, v_p, target)):
+        if self.tg.pf.dips(min(v, v_p, target)):
             return False
         # from above its v_max the profile only brakes: ruckig's brake into its limits is not
         # a brake to v_max with zero acceleration, and the profile after it can brake to rest
@@ -233,14 +234,14 @@ class Brakes:
             return False
         shift = self.st.plan
         kept.sort(key=lambda c: c[1])
-        if self.tg.try_target(s, v, a, s_c, target, top, a_max, j_max, b, w):
+        if self.tg.pf.try_target(s, v, a, s_c, target, top, a_max, j_max, b, w):
             plan = self.st.plan
             assert plan is not None
-            if not self.tg.dips(min(v, v_p, target)):
+            if not self.tg.pf.dips(min(v, v_p, target)):
                 assert plan.ev.phases is not None
                 if (
                     lowest_rise(plan.ev.phases) >= UNDER_RISE * top
-                    and self.tg.passed_above(plan, kept, len(kept)) < 0
+                    and self.tg.pf.passed_above(plan, kept, len(kept)) < 0
                 ):
                     return True
         self.st.plan = shift
@@ -271,14 +272,14 @@ class Brakes:
         if self.con.hold or not v_p <= ceiling * (1.0 + CAP_TOL) + V_ROUND < v:
             return False
         if not forced and self._first_keeps(cands, v_p, a_max, j_max):
-            plan = self.tg.velocity_plan(v_p, SETTLE, w, a_max, j_max)
+            plan = self.tg.pf.velocity_plan(v_p, SETTLE, w, a_max, j_max)
             if plan is not None and plan.dur > 0.0:
                 self.st.plan = plan
                 return True
         top = max(min(v_max, ceiling), target, 1e-12)
-        if not self.tg.try_target(s, v, a, s_c, target, top, a_max, j_max, b, w):
+        if not self.tg.pf.try_target(s, v, a, s_c, target, top, a_max, j_max, b, w):
             return False
-        return not self.tg.dips(min(v, v_p, target))
+        return not self.tg.pf.dips(min(v, v_p, target))
 
     def _brake_past(
         self, cands: list[tuple[int, float, float, bool]], lost: list[int], e: float,
@@ -402,7 +403,7 @@ class Brakes:
                 if brake is not None:
                     if (
                         brake_distance(v, a, cap, a_max, j_max) > room - margin
-                        and self.tg.passed_above(brake, [(b, s_b, cap, gate)], 1) >= 0
+                        and self.tg.pf.passed_above(brake, [(b, s_b, cap, gate)], 1) >= 0
                     ):
                         return False
                 elif cap * (1.0 + CAP_TOL) + V_ROUND < e:
@@ -449,12 +450,12 @@ class Brakes:
         b, s_k = cands[k][0], cands[k][1]
         if e <= 0.0 or self.con.is_stop(b) or b == w:
             return False
-        plan = self.tg.velocity_plan(e, CRUISE, w, a_max, j_max)
+        plan = self.tg.pf.velocity_plan(e, CRUISE, w, a_max, j_max)
         if (
             plan is None
             or plan.p_end > s_k
             or s_k - plan.p_end > BRAKE_CRUISE * (s_k - self.st.s)
-            or self.tg.passed_above(plan, cands, k) >= 0
+            or self.tg.pf.passed_above(plan, cands, k) >= 0
         ):
             return False
         plan.serves, plan.soft_from = cands[k][0], cands[0][0]
@@ -486,8 +487,8 @@ class Brakes:
         found: list[Plan] = []  # the plan of the last velocity that passes below
 
         def passes_below(e: float) -> bool:
-            plan = self.tg.velocity_plan(e, SETTLE, w, a_max, j_max)
-            if plan is None or plan.dur <= 0.0 or self.tg.passed_above(plan, [first], 1) >= 0:
+            plan = self.tg.pf.velocity_plan(e, SETTLE, w, a_max, j_max)
+            if plan is None or plan.dur <= 0.0 or self.tg.pf.passed_above(plan, [first], 1) >= 0:
                 return False
             if not self._first_keeps(others, e, a_max, j_max, 2.0 * SLACK_MARGIN, plan):
                 return False
@@ -540,7 +541,7 @@ class Brakes:
             or passed.goal != b
             or passed.t0 > self.st.t
             or (target < INF and abs(passed.v_end - target) > CAP_TOL * target + V_ROUND)
-            or self.tg.passed_above(passed, [first], 1) >= 0
+            or self.tg.pf.passed_above(passed, [first], 1) >= 0
         ):
             return False
         passed.window = w

@@ -268,8 +268,8 @@ class Shift:
              and self.con.need(v, a, c[2], False, a_max, j_max) <= c[1] - s + SLACK_TOL),
             key=lambda c: c[1],
         )  # fmt: skip
-        j = self.tg.passed_above(plan, [first, *between], 1 + len(between))
-        if j < 0 and self.tg.rises_above(plan, first):
+        j = self.tg.pf.passed_above(plan, [first, *between], 1 + len(between))
+        if j < 0 and self.tg.pf.rises_above(plan, first):
             j = 0
         if j > 0:
             first = between[j - 1]

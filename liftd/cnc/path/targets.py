@@ -21,13 +21,13 @@ from collections.abc import Callable
 from liftd.cnc.path.constraints import (
     CAP_TOL,
     CHAIN_MARGIN,
-    GATE_TOL,
     INF,
     SLACK_TOL,
     V_ROUND,
     Constraints,
 )
-from liftd.cnc.path.plan import BRAKE, CRUISE, EPS_S, SETTLE, PathState, Plan
+from liftd.cnc.path.plan import CRUISE, SETTLE, PathState, Plan
+from liftd.cnc.path.profiles import Profiles
 from liftd.cnc.path.velocity import (
     brake_distance,
     lowest_reachable_from,
@@ -37,49 +37,10 @@ from liftd.cnc.path.velocity import (
     reach_velocity,
 )
 from liftd.cnc.ruckig1 import (
-    Evaluator,
-    Phases,
     ProfileError,
-    Ruckig1,
-    brake_pieces,
-    highest_between,
 )
 
-DIP_TOL = 1e-4  # relative: a profile this much below the lower of its ends' velocities dips
-REACH_ROUND = 1e-9  # relative: a target this much below the highest reachable one (`_unreach`)
 HOLD_TOP_GAIN = 1e-6  # s: `Targets._hold_top` takes the other profile where it is this shorter
-
-
-def lowest_velocity(ph: Phases) -> float:
-    """The lowest velocity of a ruckig profile: at a phase's ends, or inside a phase where its
-    acceleration crosses zero under a positive jerk (v − a²/2j there)."""
-    low = ph.v[7]
-    start = 0.0
-    for i in range(7):
-        low = min(low, ph.v[i])
-        a, j = ph.a[i], ph.j[i]
-        end = ph.t_sum[i]
-        if a < 0.0 < j and -a / j < end - start:
-            low = min(low, ph.v[i] - a * a / (2.0 * j))
-        start = end
-    for _, dur, v, a, j in brake_pieces(ph):
-        low = min(low, v)
-        if a < 0.0 < j and -a / j < dur:
-            low = min(low, v - a * a / (2.0 * j))
-    return low
-
-
-def lowest_rise(ph: Phases) -> float:
-    """The lowest velocity from which the profile (after ruckig's brake into its limits)
-    speeds up again: where its acceleration turns positive (under a positive jerk, v − a²/2j
-    there, or a phase's start); INF where it never does."""
-    low = INF
-    for i in range(7):
-        a, j = ph.a[i], ph.j[i]
-        if ph.a[i + 1] <= GATE_TOL:
-            continue  # not speeding up at the phase's end
-        low = min(low, ph.v[i] if a > 0.0 or j <= 0.0 else ph.v[i] - a * a / (2.0 * j))
-    return low
 
 
 def highest(good: float, bad: float, steps: int, fits: Callable[[float], bool]) -> float:
@@ -95,11 +56,6 @@ def highest(good: float, bad: float, steps: int, fits: Callable[[float], bool]) 
     return good
 
 
-def only_brakes(ph: Phases) -> bool:
-    """The profile's acceleration is nowhere positive (it is linear in each piece: its ends)."""
-    return max(ph.a) <= GATE_TOL and all(p[3] <= GATE_TOL for p in brake_pieces(ph))
-
-
 class Targets:
     """The target choice and the profiles toward it, for the path state `st` under the
     constraints `con`; `Tracker` holds it and moves the path along them."""
@@ -107,7 +63,7 @@ class Targets:
     def __init__(self, con: Constraints, st: PathState) -> None:
         self.con = con
         self.st = st
-        self.calc = Ruckig1()
+        self.pf = Profiles(con, st)  # the profiles, and their repairs where they dip
 
     def gap_over(
         self, cands: list[tuple[int, float, float, bool]], i: int, top: float, w: int
@@ -152,7 +108,7 @@ class Targets:
         if self._keeps_at(rest, m, s_w, e):
             return
         last = self.st.last_error
-        if not self.try_target(
+        if not self.pf.try_target(
             self.st.s, self.st.v, self.st.a, s_w, e, max(v_max, e), a_max, j_max, w, w
         ) or not self._keeps_at(self.st.plan, m, s_w, 0.0):
             self.st.plan, self.st.last_error = rest, last  # (a refusal here is no error)
@@ -173,10 +129,10 @@ class Targets:
         """Ruckig's velocity interface from the path's state to `ceiling` (`CRUISE`); where it
         is refused, the last resort's brake (counted)."""
         try:
-            traj = self.calc.velocity(self.st.s, self.st.v, self.st.a, ceiling, a_max, j_max)
+            traj = self.pf.calc.velocity(self.st.s, self.st.v, self.st.a, ceiling, a_max, j_max)
         except ProfileError as exc:
             self.count(f"cruise profile refused: {exc}")
-            self.brake(a_max, j_max, w)
+            self.pf.brake(a_max, j_max, w)
             return
         self.st.plan = Plan(traj, self.st.t, CRUISE, w, None, ceiling)
 
@@ -189,19 +145,6 @@ class Targets:
     def count(self, what: str) -> None:
         self.st.errors += 1
         self.st.last_error = what
-
-    def try_target(
-        self, s: float, v: float, a: float, s_c: float, tgt: float, v_max: float,
-        a_max: float, j_max: float, b: int, w: int,
-    ) -> bool:  # fmt: skip
-        try:
-            traj = self.calc.position(s, v, a, s_c, tgt, max(v_max, tgt), a_max, j_max)
-        except ProfileError as exc:
-            self.st.last_error = str(exc)
-            return False
-        plan = self.st.plan = Plan(traj, self.st.t, b, w, s_c, tgt)
-        plan.soft_from = min(self.st.soft_from, b)
-        return True
 
     def boundary_target(
         self, cands: list[tuple[int, float, float, bool]], i: int, cap: float, v: float, a: float,
@@ -315,25 +258,25 @@ class Targets:
         to the boundary it just passed; a brake (an error). A profile that dips below its ends
         is replaced where `_undip` or `_unpin` (at an event `_exact_brake`) finds one that does
         not."""
-        if self.try_target(s, v, a, s_c, target, v_max, a_max, j_max, b, w):
+        if self.pf.try_target(s, v, a, s_c, target, v_max, a_max, j_max, b, w):
             if a > 0.0 and abs(v_p - v_max) <= V_ROUND and v_max <= ceiling + V_ROUND:
                 self._hold_top(s, v, a, s_c, target, v_max, a_max, j_max, b, w)
-            self._mend(s, v, a, v_p, s_c, target, v_max, a_max, j_max, b, w, passed, held, event)
+            self.pf.mend(s, v, a, v_p, s_c, target, v_max, a_max, j_max, b, w, passed, held, event)
             return
-        if v_p <= max(hard, target) and self.try_target(
+        if v_p <= max(hard, target) and self.pf.try_target(
             s, v, a, s_c, v_p, max(v_max, v_p), a_max, j_max, b, w
         ):
             # from v_p toward the target while ruckig still accepts it
             self._bisect(v_p, target, s, v, a, s_c, v_max, a_max, j_max, b, w)
             return
-        if target > 0.0 and self.try_target(s, v, a, s_c, 0.0, v_max, a_max, j_max, b, w):
+        if target > 0.0 and self.pf.try_target(s, v, a, s_c, 0.0, v_max, a_max, j_max, b, w):
             # rest is accepted: the highest velocity below the target that is too (an exact
             # brake with no room left, refused at the edge: CAM seed 482, an override drop to
             # 18 % as the path began its brake to a 12.2 mm/s corner, passed it at rest)
             self._highest_below(s, v, a, s_c, target, v_max, a_max, j_max, b, w)
             return
         for tgt in (cap, hard):
-            if self.try_target(s, v, a, s_c, tgt, max(v_max, tgt), a_max, j_max, b, w):
+            if self.pf.try_target(s, v, a, s_c, tgt, max(v_max, tgt), a_max, j_max, b, w):
                 return
         kept = passed
         if kept is not None and kept.goal == b and kept.t0 <= self.st.t:
@@ -350,7 +293,7 @@ class Targets:
                 and kept.keeps > b
                 and kept.t0 <= self.st.t
                 and not self.con.tb.gate[b]
-                and self.passed_above(kept, [(b, s_c, cap, False)], 1) < 0
+                and self.pf.passed_above(kept, [(b, s_c, cap, False)], 1) < 0
             ):
                 # the profile in hand, toward a goal beyond b, passes b below its cap, braking
                 # (a re-plan from inside a brake at once, `brake_into`, 0.5 mm before a feed
@@ -366,7 +309,7 @@ class Targets:
             and passed.goal == SETTLE
             and passed.t0 <= self.st.t < passed.t0 + passed.dur
             and not self.con.tb.gate[b]
-            and self.passed_above(passed, [(b, s_c, cap, False)], 1) < 0
+            and self.pf.passed_above(passed, [(b, s_c, cap, False)], 1) < 0
         ):
             # the brake at once that brought the path to the boundary it just passed
             # (`Brakes.brake_first`, checked against the candidates ahead) goes on to its
@@ -383,7 +326,7 @@ class Targets:
             # 0.18 mm before a boundary whose lowest reachable velocity ruckig refused at the
             # edge, a review's program); what it passes is checked on arrival (`_arrive`)
             self.count(f"target profile refused at boundary {b}")
-        self.brake(a_max, j_max, w)
+        self.pf.brake(a_max, j_max, w)
 
     def _hold_top(
         self, s: float, v: float, a: float, s_c: float, target: float, v_max: float,
@@ -407,7 +350,7 @@ class Targets:
         last = self.st.last_error
         top = v_max + 0.5 * V_ROUND
         if (
-            not self.try_target(s, v, a, s_c, target, top, a_max, j_max, b, w)
+            not self.pf.try_target(s, v, a, s_c, target, top, a_max, j_max, b, w)
             or self.st.plan is None
             or self.st.plan.dur >= first.dur - HOLD_TOP_GAIN
         ):
@@ -423,7 +366,7 @@ class Targets:
         the target has no room left it refuses it and accepts one 1e-8 below (seed 482:
         12.2034 mm/s refused, 12.2034 · (1 − 1e-8) accepted, no dip)."""
         near = target * (1.0 - 1e-6)
-        if not self.try_target(s, v, a, s_c, near, max(v_max, near), a_max, j_max, b, w):
+        if not self.pf.try_target(s, v, a, s_c, near, max(v_max, near), a_max, j_max, b, w):
             self._bisect(0.0, near, s, v, a, s_c, v_max, a_max, j_max, b, w)
 
     def _bisect(
@@ -434,178 +377,6 @@ class Targets:
         steps; the last one accepted is planned."""
 
         def accepted(e: float) -> bool:
-            return self.try_target(s, v, a, s_c, e, max(v_max, e), a_max, j_max, b, w)
+            return self.pf.try_target(s, v, a, s_c, e, max(v_max, e), a_max, j_max, b, w)
 
         accepted(highest(good, bad, 14, accepted))
-
-    def _mend(
-        self, s: float, v: float, a: float, v_p: float, s_c: float, target: float, v_max: float,
-        a_max: float, j_max: float, b: int, w: int, passed: Plan | None, held: Plan | None,
-        event: bool,
-    ) -> None:  # fmt: skip
-        """The target profile just chosen (`settle`), where it dips below its ends: a low
-        target's (below half the path's velocity) replaced by the profile in hand
-        (`_undip`), the same with v_max a rounding higher (`_unpin`) or the exact brake
-        (`_exact_brake`); a speed-up after a brake's ramp-out by the target a rounding lower
-        (`_unreach`)."""
-        floor = min(v, v_p, target)
-        if (
-            target < 0.5 * max(v, v_p)
-            and self.dips(floor)
-            and not self._undip(target, b, w, (passed, held))
-        ):
-            if event:  # a lift planned with the times before it (wide seed 767)
-                self._exact_brake(s, v, a, s_c, target, a_max, j_max, b, w)
-            else:
-                self._unpin(s, v, a, s_c, target, v_max, a_max, j_max, b, w, floor)
-                if self.dips(floor):
-                    # the exact brake where it reaches b: from a cruise at 73.0 mm/s to
-                    # x1 = 2.19 1 mm on (override 10 %), ruckig's profile went down to
-                    # 1.40 (feeds seed 381; `_unpin` found none)
-                    self._exact_brake(s, v, a, s_c, target, a_max, j_max, b, w)
-        elif a < 0.0 and v_p < target and self.dips(v_p):
-            self._unreach(s, v, a, s_c, target, v_max, a_max, j_max, b, w, v_p)
-
-    def dips(self, floor: float) -> bool:
-        """The profile just chosen goes below `floor` (the lower of the velocity it starts
-        from and its target) on the way. Its pieces are read for it, and kept for its cycles."""
-        plan = self.st.plan
-        assert plan is not None
-        ph = Phases(plan.traj)
-        plan.ev = Evaluator(plan.traj, ph)
-        return lowest_velocity(ph) < floor * (1.0 - DIP_TOL) - V_ROUND
-
-    def _unpin(
-        self, s: float, v: float, a: float, s_c: float, target: float, v_max: float,
-        a_max: float, j_max: float, b: int, w: int, floor: float,
-    ) -> None:  # fmt: skip
-        """The profile just chosen dips and none is kept (`_undip`): where the path's velocity,
-        its acceleration ramped out, is v_max itself (a cruise at the ceiling that the step
-        ended with a last bit of acceleration), ruckig misses the profile that holds v_max and
-        brakes late, and returns one that brakes below the target and comes back, and takes
-        longer (wide seed 54: from 75 mm/s, v_p = v_max, toward 9.485 mm/s 1.012 mm on, a
-        profile through 8.236 in 26.86 ms; with v_max 1e-15 m/s higher, 23.72 ms and no dip).
-        The same target with v_max a rounding higher (`V_ROUND`, a velocity that close above a
-        cap is at it) is taken where it does not dip; else the dip stays (one ruckig call)."""
-        dipping = self.st.plan
-        top = v_max + V_ROUND
-        if not self.try_target(s, v, a, s_c, target, top, a_max, j_max, b, w) or self.dips(floor):
-            self.st.plan = dipping
-
-    def _unreach(
-        self, s: float, v: float, a: float, s_c: float, target: float, v_max: float,
-        a_max: float, j_max: float, b: int, w: int, floor: float,
-    ) -> None:  # fmt: skip
-        """The profile just chosen, from inside a brake toward a target above v_p (the ramp-out
-        of the deceleration, then a speed-up), goes below v_p: ruckig at the edge of the
-        reachable (`reach_from`: the target is the highest velocity the path can have at b)
-        misses the profile that ramps out and speeds up at once and returns one that brakes
-        on and comes back, and takes longer (`short_drop` from F3000, override 100 → 10 %
-        1.7 mm before its 0.2 mm F6000 block, ramped out at that block's end to 10.0 mm/s,
-        toward 18.11 mm/s 0.2 mm on: a profile through 3.61 in 20.4 ms; with the target
-        `REACH_ROUND` lower, 14.9 ms and no dip).
-        That one is taken where it does not dip; else the dip stays (one ruckig call). Tried
-        wherever such a speed-up dips below v_p, at the edge or not."""
-        dipping, error = self.st.plan, self.st.last_error
-        lower = target * (1.0 - REACH_ROUND)
-        if not self.try_target(s, v, a, s_c, lower, v_max, a_max, j_max, b, w) or self.dips(floor):
-            self.st.plan, self.st.last_error = dipping, error
-
-    def _exact_brake(
-        self, s: float, v: float, a: float, s_c: float, target: float, a_max: float,
-        j_max: float, b: int, w: int,
-    ) -> None:  # fmt: skip
-        """An event's re-plan (`Tracker.set_state`) chose a profile that dips and no profile
-        is in hand (the producer's is the queue tail's, not the path's), or (elsewhere) one
-        that `_unpin` could not replace. Where the path is
-        on the exact brake to the target, the brake reaching b within EPS_S, that brake is
-        planned: ruckig's velocity interface, time-optimal from (v, a) to the target, with b
-        as its goal. It is the profile the path followed before the event (from a state
-        inside it, the hardest brake that fits is the only one), so every arrival stays as a
-        lift planned it; ruckig's position interface finds that brake a rounding too long
-        and returns one that dips and arrives later (issue 36, narrow seed 635: override
-        100 → 77 % while braking from 196 mm/s to 4.82 mm/s 3.663 mm on, the brake
-        3e-17 m longer than the distance, a profile through 3.09 mm/s, 44.27 ms, where the
-        brake takes 39.90; CAM seed 956: 46.3 → 2.68 mm/s, 1.15 mm/s and 21.65 against 17.61
-        ms). Only the exact brake: a profile that leaves it (a lower target, tried) may reach
-        a lift's boundary sooner than planned (wide seed 767, Z 0.2 ms late)."""
-        if abs(s + brake_distance(v, a, target, a_max, j_max) - s_c) > EPS_S:
-            return
-        try:
-            traj = self.calc.velocity(s, v, a, target, a_max, j_max)
-        except ProfileError as exc:
-            self.st.last_error = str(exc)
-            return
-        if abs(float(traj.at_time(traj.duration)[0][0]) - s_c) > EPS_S:
-            return  # ruckig's brake is not the closed form's (never seen)
-        plan = Plan(traj, self.st.t, b, w, s_c, target)
-        plan.soft_from = min(self.st.soft_from, b)
-        self.st.plan = plan
-
-    def _undip(self, target: float, b: int, w: int, kept: tuple[Plan | None, Plan | None]) -> bool:
-        """Ruckig's time-optimal profile to a low target brakes below it and comes back where
-        the exact brake fits only just (from inside a brake that has no slack left, a re-plan
-        for a window that moved on finds it a few 10 nm too long: issue 36, wide seed 35,
-        33 → 1.94 mm/s went down to 0.90; known deviation 2). The CNC does not dip: the
-        profile in hand, or the one that brought the path to the boundary it just passed, is
-        kept if it ends at b with the same velocity (it is the exact brake, planned with
-        slack). Else the dip stays (after an event no such profile is at hand). A lower target
-        where the brake fits with room was tried: after an override drop it reached LIFT_END
-        1.2 ms sooner than the dip, and Z, descending, landed 0.2 ms late (wide seed 767)."""
-        for plan in kept:
-            if (
-                plan is not None
-                and plan.goal == b
-                and plan.t0 <= self.st.t
-                and abs(plan.v_end - target) <= CAP_TOL * target + V_ROUND
-            ):
-                plan.window = w
-                self.st.plan = plan
-                return True
-        return False
-
-    def brake(self, a_max: float, j_max: float, w: int) -> None:
-        """Last resort: brake to rest from the path's state (never expected; counted)."""
-        traj = self.calc.velocity(self.st.s, self.st.v, self.st.a, 0.0, a_max, j_max)
-        self.st.plan = Plan(traj, self.st.t, BRAKE, w, None, 0.0)
-
-    def velocity_plan(self, e: float, goal: int, w: int, a_max: float, j_max: float) -> Plan | None:
-        """Ruckig's velocity interface from the path's state to e (time-optimal, zero
-        acceleration there) as a plan toward `goal` (CRUISE or SETTLE); None where refused."""
-        try:
-            traj = self.calc.velocity(self.st.s, self.st.v, self.st.a, e, a_max, j_max)
-        except ProfileError:
-            return None
-        return Plan(traj, self.st.t, goal, w, None, e)
-
-    @staticmethod
-    def passed_above(plan: Plan, cands: list[tuple[int, float, float, bool]], k: int) -> int:
-        """The first of candidates 0 … k − 1 that `plan` passes above its cap (or, the first,
-        not braking: it could speed up after it), -1 where none."""
-        for j in range(k):
-            _, vj, aj = plan.at(plan.time_at(cands[j][1], INF))
-            if cands[j][3] or vj > cands[j][2] * (1.0 + CAP_TOL) + V_ROUND:
-                return j
-            if j == 0 and aj > GATE_TOL:
-                return j
-        return -1
-
-    def rises_above(self, plan: Plan, cand: tuple[int, float, float, bool]) -> bool:
-        """`plan` speeds up again after `cand`'s boundary above the ceiling of its block
-        before the block ends (`passed_above` reads the boundary alone): a profile toward a
-        goal beyond it, with v_max at the velocity it had before it (`Shift.toward`'s
-        shift), passed an F5548 boundary at its cap still braking and came back to 2.5 µm/s
-        above it in the block (feeds seed 940)."""
-        tb = self.con.tb
-        b, s_b = cand[0], cand[1]
-        if b >= tb.n:
-            return False
-        t_b = plan.time_at(s_b, INF)
-        if t_b == INF:
-            return False
-        plan.ev.prepare()
-        ph = plan.ev.phases
-        assert ph is not None
-        t_e = plan.time_at(tb.s[b + 1], plan.t0 + ph.dur)  # its end, or the profile's
-        top = highest_between(ph, t_b - plan.t0, t_e - plan.t0)
-        return top > tb.ceiling(b, self.con.ov) * (1.0 + CAP_TOL) + V_ROUND

@@ -87,7 +87,7 @@ class Tracker:
         self.stopped_at: int | None = 0  # resting at this boundary until `resume`
         self.parked = False  # at rest under a hold, not at a stop
         self._passed: Plan | None = None  # the target plan of the boundary just passed
-        self._event = True  # the next re-plan is an event's (`set_state`): `Targets._unpin`
+        self._event = True  # the next re-plan is an event's (`set_state`): `Profiles._unpin`
 
     # -- the state its users read -------------------------------------------------------------
     @property
@@ -132,7 +132,7 @@ class Tracker:
 
     @property
     def calc(self) -> Ruckig1:
-        return self.tg.calc  # its solves are counted (`Ruckig1.calls`)
+        return self.tg.pf.calc  # its solves are counted (`Ruckig1.calls`)
 
     @property
     def tb(self) -> PathTable:
@@ -216,7 +216,7 @@ class Tracker:
         event, self._event = self._event, False
         forced = force is not None  # a step would lose `force` (`advance`)
         passed, self._passed = self._passed, None
-        # the profile in hand, where only the window moved on (`Targets._undip`)
+        # the profile in hand, where only the window moved on (`Profiles._undip`)
         held = self.st.plan if force is None else None
         tb = self.con.tb
         s, v, a, seg = self.st.s, self.st.v, self.st.a, self.con.seg

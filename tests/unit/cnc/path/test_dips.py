@@ -7,7 +7,7 @@ from __future__ import annotations
 import pytest
 
 from liftd.cnc.geo_task import GeoTask
-from liftd.cnc.path.targets import REACH_ROUND, lowest_velocity
+from liftd.cnc.path.profiles import REACH_ROUND, lowest_velocity
 from liftd.cnc.path.tracker import Tracker
 from liftd.cnc.path.velocity import projected_velocity, reach_from
 from liftd.cnc.ruckig1 import Phases, Ruckig1
@@ -151,7 +151,7 @@ def test_an_event_inside_the_exact_brake_plans_that_brake(case: str) -> None:
     tracker.st.t = t
     v_p = projected_velocity(v, a, j_max)
     # ruckig's own profile to the target: the dip (no brake in hand)
-    assert tracker.tg.try_target(s, v, a, s_c, target, v_max, a_max, j_max, b, w)
+    assert tracker.tg.pf.try_target(s, v, a, s_c, target, v_max, a_max, j_max, b, w)
     plan = tracker.plan
     assert plan is not None and plan.dur * 1e3 == pytest.approx(dip, abs=1e-3)
     assert lowest_velocity(Phases(plan.traj)) < 0.7 * target
@@ -196,7 +196,7 @@ def test_ruckig_at_the_edge_of_the_reachable_returns_a_profile_that_dips() -> No
     """The state and target the tracker re-planned with: ruckig's profile to exactly the
     highest reachable velocity brakes on to 3.61 mm/s and comes back (20.4 ms); a target
     `REACH_ROUND` lower gives the profile that ramps the deceleration out to 10.0 and speeds
-    up at once (14.9 ms). Why `Targets._unreach` tries it."""
+    up at once (14.9 ms). Why `Profiles._unreach` tries it."""
     s, v, a, s_c, target, v_max, a_max, j_max = EDGE
     v_p = projected_velocity(v, a, j_max)
     assert target == pytest.approx(reach_from(v, a, s_c - s, a_max, j_max), rel=1e-12)
