@@ -35,6 +35,7 @@ from liftd.cnc.path.constraints import (
     CAP_TOL,
     GATE_TOL,
     INF,
+    SLACK_MARGIN,
     V_ROUND,
     Constraints,
 )
@@ -44,6 +45,8 @@ from liftd.cnc.path.table import PathTable
 from liftd.cnc.path.targets import Targets
 from liftd.cnc.path.velocity import (
     projected_velocity,
+    ramp_crossing,
+    ramp_distance,
 )
 from liftd.cnc.ruckig1 import Ruckig1
 
@@ -254,6 +257,20 @@ class Tracker:
                 continue
             if not gate and v_p <= cap + V_ROUND and v <= cap + V_ROUND:
                 continue  # cannot bind from here
+            if (
+                not gate
+                and v_p <= cap + V_ROUND
+                and ramp_distance(v, a, j_max) > s_c - s
+                and ramp_crossing(v, a, cap, j_max) <= s_c - s - SLACK_MARGIN
+            ):
+                # nor can one the path passes below its cap braking, still ramping its
+                # deceleration out there (the ramp-out, the highest velocity any profile has,
+                # crosses the cap before b): no profile gets above the cap before b, and zero
+                # acceleration at b, its target, is out of reach (a feed cap 0.2 mm ahead at
+                # 41.4 mm/s and −2.6 m/s², ramped out at 32.8 after 0.24 mm: every target was
+                # refused and the brake to rest at the window's end that moved on was kept,
+                # the path stopped at the next boundary, drops seed 27)
+                continue
             slack = s_c - s - self.con.need(v, a, cap, gate, a_max, j_max)
             if slack < best_slack:
                 best, best_slack, best_i = c, slack, i
