@@ -148,15 +148,16 @@ class Targets:
 
     def boundary_target(
         self, cands: list[tuple[int, float, float, bool]], i: int, cap: float, v: float, a: float,
-        v_p: float, ceiling: float, a_max: float, j_max: float, w: int,
+        v_p: float, ceiling: float, a_max: float, j_max: float, w: int, gap: bool = True,
     ) -> float:  # fmt: skip
         """The target at candidate i (cap: its chain's, `Constraints.target_cap`) from the
         path's state (v, a; v_p after ramping a out): `pick_target`, a run boundary with the
-        jerk gap's bound (`gap_over`), and x1 where the gap's x2 above the cap would lose a
-        stop or a hard cap after it (`Constraints.hard_reach`; a cold review)."""
+        jerk gap's bound (`gap_over`) where `gap` (an input changed: `Tracker._gap_rule`),
+        and x1 where the gap's x2 above the cap would lose a stop or a hard cap after it
+        (`Constraints.hard_reach`; a cold review)."""
         b, s_c, _, gate = cands[i]
         d = s_c - self.st.s
-        over = self.gap_over(cands, i, min(cap, ceiling), w) if gate else 0.0
+        over = self.gap_over(cands, i, min(cap, ceiling), w) if gate and gap else 0.0
         hard_b = self.hard(b, w)
         if gate and ceiling < cap and v > ceiling:
             # above a ceiling an input lowered, its brake passes the run boundary above b's

@@ -677,3 +677,16 @@ PASSED_BRAKING_SEEDS = [27, 1426, 2128, 3031]
 def test_a_cap_passed_below_while_braking_does_not_stop_the_path(seed: int) -> None:
     _, hard, slow, errors = check(drop_scenario(seed))
     assert (hard, slow, errors) == ([], [], 0), describe(drop_scenario(seed))
+
+
+# `drop_scenario` runs that passed a run boundary above its feed cap on main 03c3724 with no
+# input change near (look-ahead 3): the window moved on and raised the boundary's cap from
+# 9.2 to 16 mm/s, now in the jerk gap, and the path took x2 above it (seed 993: 17.23 mm/s in
+# an F1200 block at 80 %), the jerk gap's rule for the brake after an input change
+WINDOW_GAP_SEEDS = [993, 3510]
+
+
+@pytest.mark.parametrize("seed", WINDOW_GAP_SEEDS)
+def test_a_cap_the_window_raised_into_the_jerk_gap_is_passed_below(seed: int) -> None:
+    _, hard, slow, errors = check(drop_scenario(seed))
+    assert (hard, slow, errors) == ([], [], 0), describe(drop_scenario(seed))
