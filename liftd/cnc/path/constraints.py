@@ -158,10 +158,18 @@ class Constraints:
                 nxt = tb.next_constraint[k + 1]
 
     def _cap(self, b: int, w: int) -> tuple[float, bool, bool]:
-        """(cap, zero acceleration required, stop) of constraint boundary b."""
+        """(cap, zero acceleration required, stop) of constraint boundary b: its entry cap,
+        and where the block before it lies ahead of the path's, that block's ceiling. The feed
+        drop where that block begins keeps it, unless the path passes that one above it after
+        an override drop (a block of 16 mm/s entered at 37 mm/s: the run boundary at its end,
+        read by its entry cap of 100 and the chain after it, 37.9, was passed at 22.9 mm/s, an
+        overrun; a cold review's program, `drop_scenario(1735)`)."""
         if b == w or self.is_stop(b):
             return 0.0, True, True
-        return self.tb.entry_cap(b, self.ov), self.tb.gate[b], False
+        cap = self.tb.entry_cap(b, self.ov)
+        if b - 1 > self.seg:
+            cap = min(cap, self.tb.ceiling(b - 1, self.ov))
+        return cap, self.tb.gate[b], False
 
     def collect(
         self, s: float, seg: int, reach: float, soft: tuple[int, int] = (0, 0), keep: int = -1,

@@ -86,6 +86,31 @@ class Targets:
             over = min(over, later)
         return over
 
+    def gap_rule(
+        self, b: int, cap: float, event: bool, passed: Plan | None, held: Plan | None, w: int
+    ) -> bool:
+        """The jerk gap's rule (`Targets.gap_over`: a run boundary's feed cap in the jerk gap
+        passed at x2 above it) is the rule of the brake after an input change. Not where no
+        input changed and the window's move raised b's cap (`cap`, its own) into the gap: the
+        profile in hand, or the one that brought the path here, passes b below its cap, and
+        under its window, whose end was near b, the cap was lower. The window's end 0.05 mm
+        after b (look-ahead 3) made its cap 9.2 mm/s, the move raised it to 16 (an F1200 block
+        at 80 %), and x2, 17.23, passed that feed ceiling above it where the path could still
+        pass it below (drops seed 993). Read by `Tracker._replan` and the shift (`Shift.toward`)."""
+        if event or self.con.hold:
+            return True
+        tb = self.con.tb
+        a_max, j_max = self.con.limits(b)  # the brake from b to that end
+        low = cap * (1.0 - CAP_TOL)
+        return not any(
+            p is not None
+            and p.goal == b
+            and p.v_end < low
+            and b < p.window < min(w, tb.n)
+            and reach_velocity(0.0, tb.s[p.window] - tb.s[b], a_max, j_max) < low
+            for p in (passed, held)
+        )
+
     def keep_floor(
         self, floor: tuple[int, float, float, bool], v_max: float, a_max: float, j_max: float,
         w: int,

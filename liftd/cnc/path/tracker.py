@@ -47,7 +47,6 @@ from liftd.cnc.path.velocity import (
     projected_velocity,
     ramp_crossing,
     ramp_distance,
-    reach_velocity,
 )
 from liftd.cnc.ruckig1 import Ruckig1
 
@@ -318,7 +317,7 @@ class Tracker:
             return  # one brake through a feed drop a later cap lowers (known deviation 8)
         target = self.tg.boundary_target(
             cands, best_i, cap, v, a, v_p, ceiling, a_max, j_max, w,
-            self._gap_rule(b, cands[best_i][2], event, passed, held, w),
+            self.tg.gap_rule(b, cands[best_i][2], event, passed, held, w),
         )  # fmt: skip
         if (
             not gate
@@ -332,31 +331,6 @@ class Tracker:
             Replan(s, v, a, seg, v_p, a_max, j_max, ceiling, w, dt, forced, event, passed, held),
             cands, best_i, cap, target, skip, top,
         )  # fmt: skip
-
-    def _gap_rule(
-        self, b: int, cap: float, event: bool, passed: Plan | None, held: Plan | None, w: int
-    ) -> bool:
-        """The jerk gap's rule (`Targets.gap_over`: a run boundary's feed cap in the jerk gap
-        passed at x2 above it) is the rule of the brake after an input change. Not where no
-        input changed and the window's move raised b's cap (`cap`, its own) into the gap: the
-        profile in hand, or the one that brought the path here, passes b below its cap, and
-        under its window, whose end was near b, the cap was lower. The window's end 0.05 mm
-        after b (look-ahead 3) made its cap 9.2 mm/s, the move raised it to 16 (an F1200 block
-        at 80 %), and x2, 17.23, passed that feed ceiling above it where the path could still
-        pass it below (drops seed 993)."""
-        if event or self.con.hold:
-            return True
-        tb = self.con.tb
-        a_max, j_max = self.con.limits(b)  # the brake from b to that end
-        low = cap * (1.0 - CAP_TOL)
-        return not any(
-            p is not None
-            and p.goal == b
-            and p.v_end < low
-            and b < p.window < min(w, tb.n)
-            and reach_velocity(0.0, tb.s[p.window] - tb.s[b], a_max, j_max) < low
-            for p in (passed, held)
-        )
 
     # -- motion ---------------------------------------------------------------------------------
     def advance(self, t_new: float, dt: float) -> list[Crossing]:

@@ -690,3 +690,18 @@ WINDOW_GAP_SEEDS = [993, 3510]
 def test_a_cap_the_window_raised_into_the_jerk_gap_is_passed_below(seed: int) -> None:
     _, hard, slow, errors = check(drop_scenario(seed))
     assert (hard, slow, errors) == ([], [], 0), describe(drop_scenario(seed))
+
+
+# `drop_scenario` runs that passed a run boundary above the ceiling of the block before it on
+# main 03c3724: the feed drop where that short block begins was lost to the override drop
+# (passed above, braking at once), and the run boundary at its end was read by its entry cap
+# and the chain after it (seed 1735: a 0.3 mm block of 16 mm/s entered at 37 mm/s, its end
+# passed at 22.9). Seed 2672: that block's ceiling, now a cap of the run boundary, in the jerk
+# gap of the shift past the lost drop, x1 = 9.59 mm/s for 16 where x2 is nearer
+LOST_DROP_SEEDS = [143, 1735, 2672]
+
+
+@pytest.mark.parametrize("seed", LOST_DROP_SEEDS)
+def test_a_short_block_after_a_lost_feed_drop_keeps_its_ceiling_to_its_end(seed: int) -> None:
+    _, hard, slow, errors = check(drop_scenario(seed))
+    assert (hard, slow, errors) == ([], [], 0), describe(drop_scenario(seed))
