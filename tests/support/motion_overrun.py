@@ -118,7 +118,12 @@ def _boundaries(
                 f"mm/s above its cap {cap * 1e3:.4f} (t={smp.t:.4f} s)"
             )
         if brake is not None and path.gate[b]:
-            brake = replace(smp, s=path.bounds[b].s, v=v_b, a=0.0, seg=b)
+            # from there, at the highest velocity the path can have had (v_b + moved): what
+            # it could no longer get down to is read in its favour. From v_b itself, v + a·Δt
+            # 0.79 ms before a run boundary at −0.32 m/s², 40.606 mm/s where the jerk that
+            # ramps that deceleration out at b gives 40.731, a feed cap of 40 mm/s 0.1 mm on
+            # read as reachable, and x2 above it, 40.12, as an overrun (drops seed 277)
+            brake = replace(smp, s=path.bounds[b].s, v=v_b + moved, a=0.0, seg=b)
     return out, brake
 
 

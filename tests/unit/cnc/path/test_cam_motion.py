@@ -705,3 +705,14 @@ LOST_DROP_SEEDS = [143, 1735, 2672]
 def test_a_short_block_after_a_lost_feed_drop_keeps_its_ceiling_to_its_end(seed: int) -> None:
     _, hard, slow, errors = check(drop_scenario(seed))
     assert (hard, slow, errors) == ([], [], 0), describe(drop_scenario(seed))
+
+
+def test_a_cap_out_of_reach_from_a_run_boundary_in_the_brake_is_passed_above() -> None:
+    """Override 100 → 80 % 0.03 mm before a run boundary at 40.86 mm/s and −0.32 m/s²: the
+    path ramps that out to 40.73 there (zero acceleration), and from there a feed cap of 40
+    mm/s at the next run boundary, 0.1 mm on, is in the jerk gap; x2 passes it at 40.12. The
+    check read the path's velocity at the first boundary from the sample before it (v + a·Δt,
+    40.606 mm/s, from where 40 is within reach) and called that an overrun (drops seed 277);
+    it now reads it in the path's favour, within what the jerk can have moved it."""
+    _, hard, slow, errors = check(drop_scenario(277))
+    assert (hard, slow, errors) == ([], [], 0), describe(drop_scenario(277))
