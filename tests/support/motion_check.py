@@ -320,6 +320,15 @@ def check_motion(
             entry_v, interval_min, fresh = min(smp.v, anchor_v), INF, False
             entered.clear()
             changed, gap_low = last, min(last.v, smp.v)
+            for b in range(last.seg + 1, min(smp.seg, path.n - 1) + 1):
+                if path.gate[b]:
+                    # a run boundary the path passed in the event's cycle: zero acceleration
+                    # there, and what lies after it is reachable from that state (3.5 µm
+                    # after the state at an override drop to 20 % at 32.79 mm/s and −0.04
+                    # m/s², the next run boundary's cap of 4 mm/s 0.3 mm on: x1 2.59 from
+                    # the event's state, 0.83 from the boundary's, drops seed 827)
+                    s_b = path.bounds[b].s
+                    changed = dataclasses.replace(smp, s=s_b, v=_at(last, smp, s_b), a=0.0, seg=b)
             last = smp
             continue
         held = smp.hold or smp.override <= 0.0 or smp.parked or last.parked

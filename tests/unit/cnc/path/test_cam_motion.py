@@ -716,3 +716,13 @@ def test_a_cap_out_of_reach_from_a_run_boundary_in_the_brake_is_passed_above() -
     it now reads it in the path's favour, within what the jerk can have moved it."""
     _, hard, slow, errors = check(drop_scenario(277))
     assert (hard, slow, errors) == ([], [], 0), describe(drop_scenario(277))
+
+
+def test_a_run_boundary_passed_in_the_event_s_cycle_has_zero_acceleration() -> None:
+    """Override 100 → 20 % 3.5 µm before a run boundary at 32.79 mm/s and −0.04 m/s²; the next
+    run boundary's cap, 4 mm/s 0.3 mm on, lies in the jerk gap. From the state at the drop the
+    check read x1 = 2.59 mm/s there; the path passes the first boundary with zero acceleration,
+    from where x1 is 0.83, and it passes the second at 0.83 (drops seed 827). The check now
+    reads the gap from a run boundary passed in the event's own cycle."""
+    _, hard, slow, errors = check(drop_scenario(827))
+    assert (hard, slow, errors) == ([], [], 0), describe(drop_scenario(827))
