@@ -124,7 +124,12 @@ class Targets:
         jerk gap: look-ahead 3, 0.5 mm blocks, F12000 at 15 %, the profile to rest went to
         58 mm/s, and the run boundary at w, its cap 30 mm/s, was passed at 36.9 once the
         window moved on (a review's program; the forced re-plans chose rest, the lower slack,
-        four times a step)."""
+        four times a step). Where the floor lies in that profile's jerk gap, x1 below it
+        (nearest_reachable); above the ceiling (an override drop) with the ceiling as v_max,
+        from which ruckig brakes at once: an override drop to 30 % 0.5 mm before the window's
+        end (look-ahead 3, a run boundary 0.15 mm after the window moves on), the event's plan
+        rested there and, the window moved on, only rest was reachable at its cap, 0.028 mm/s
+        for 24.8 (`drop_scenario(723)`)."""
         rest = self.st.plan
         m = w - self.con.look_ahead + 1  # the window moves on where the path reaches m
         if rest is None or rest.goal != w or m <= self.con.seg or m >= w:
@@ -133,10 +138,16 @@ class Targets:
         if self._keeps_at(rest, m, s_w, e):
             return
         last = self.st.last_error
-        if not self.pf.try_target(
-            self.st.s, self.st.v, self.st.a, s_w, e, max(v_max, e), a_max, j_max, w, w
-        ) or not self._keeps_at(self.st.plan, m, s_w, 0.0):
-            self.st.plan, self.st.last_error = rest, last  # (a refusal here is no error)
+        s, v, a = self.st.s, self.st.v, self.st.a
+        for tgt in (e, nearest_reachable(v, a, s_w - s, e, a_max, j_max, False)):
+            # the floor, or where it lies in the jerk gap, x1 below it
+            if (
+                tgt > 0.0
+                and self.pf.try_target(s, v, a, s_w, tgt, max(v_max, tgt), a_max, j_max, w, w)
+                and self._keeps_at(self.st.plan, m, s_w, 0.0)
+            ):
+                return
+        self.st.plan, self.st.last_error = rest, last  # (a refusal here is no error)
 
     def _keeps_at(self, plan: Plan | None, m: int, s_w: float, e: float) -> bool:
         """`plan` reaches boundary m with room left to get down to e at s_w with zero

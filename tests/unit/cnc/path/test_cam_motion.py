@@ -726,3 +726,17 @@ def test_a_run_boundary_passed_in_the_event_s_cycle_has_zero_acceleration() -> N
     reads the gap from a run boundary passed in the event's own cycle."""
     _, hard, slow, errors = check(drop_scenario(827))
     assert (hard, slow, errors) == ([], [], 0), describe(drop_scenario(827))
+
+
+# `drop_scenario` runs (look-ahead 3) that came to a near-stop on main 03c3724: an override
+# drop while the window's end was a run boundary 0.15 mm after the next boundary; the event's
+# plan rested there (the window's end) and, the window moved on, only rest was reachable at its
+# cap (seed 723: 0.028 mm/s for 24.8). `Targets.keep_floor` now takes the profile to the floor
+# also above the ceiling (braking at once to it) and, in the jerk gap, to x1 below the floor
+FLOOR_SEEDS = [723, 1666, 2459, 2898]
+
+
+@pytest.mark.parametrize("seed", FLOOR_SEEDS)
+def test_an_override_drop_before_the_window_s_end_keeps_its_floor(seed: int) -> None:
+    _, hard, slow, errors = check(drop_scenario(seed))
+    assert (hard, slow, errors) == ([], [], 0), describe(drop_scenario(seed))
