@@ -740,3 +740,12 @@ FLOOR_SEEDS = [723, 1666, 2459, 2898]
 def test_an_override_drop_before_the_window_s_end_keeps_its_floor(seed: int) -> None:
     _, hard, slow, errors = check(drop_scenario(seed))
     assert (hard, slow, errors) == ([], [], 0), describe(drop_scenario(seed))
+
+
+def test_a_lowered_ceiling_does_not_hold_a_target_beyond_its_block() -> None:
+    """Override 100 → 10 % at 31.1 mm/s 0.09 mm before the end of an F2400 block (4 mm/s now),
+    a run boundary of 8.87 mm/s 0.2 mm after it (F6000 blocks, 10 mm/s): the forced re-plan
+    held that boundary's target to the ceiling of the block the path was in, and the path
+    passed it at 4.0 where 8.87 was reachable (drops seed 3507)."""
+    _, hard, slow, errors = check(drop_scenario(3507))
+    assert (hard, slow, errors) == ([], [], 0), describe(drop_scenario(3507))
