@@ -749,3 +749,14 @@ def test_a_lowered_ceiling_does_not_hold_a_target_beyond_its_block() -> None:
     passed it at 4.0 where 8.87 was reachable (drops seed 3507)."""
     _, hard, slow, errors = check(drop_scenario(3507))
     assert (hard, slow, errors) == ([], [], 0), describe(drop_scenario(3507))
+
+
+def test_a_ceiling_s_end_inside_an_event_s_ramp_is_ramped_out_after_it() -> None:
+    """Override 100 → 30 % at 49.9 mm/s; the path brakes at once through two lost feed caps and
+    passes the end of a 0.05 mm block of 12 mm/s at 21.5 mm/s and −2.7 m/s², inside the
+    event's ramp. Its deceleration is ramped out after that boundary, to 12.6: the check read
+    the forward pass from 21.5 with zero acceleration and expected 23.5 at the next
+    boundary, 0.1 mm on (drops seed 740). It now credits that ramp-out as outside the
+    event's ramp."""
+    _, hard, slow, errors = check(drop_scenario(740))
+    assert (hard, slow, errors) == ([], [], 0), describe(drop_scenario(740))
