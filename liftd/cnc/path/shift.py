@@ -166,7 +166,7 @@ class Shift:
             # block's ceiling caps, passed at x1 = 9.59 mm/s for 16 where x2 is nearer
             target = self.tg.boundary_target(
                 tail, 0, cap, v, a, v_p, ceiling, a_max, j_max, w,
-                self.tg.gap_rule(b, tail[0][2], event, passed, held, w),
+                self.tg.gap_rule(b, tail[0][2]),
             )  # fmt: skip
             shifted = True
         below = ceiling * (1.0 + CAP_TOL) + V_ROUND >= v_p  # not after an override drop
@@ -258,11 +258,10 @@ class Shift:
         if not braked:
             self.tg.settle(s, v, a, v_p, s_c, target, cap, v_max, a_max, j_max, b, w,
                            self.tg.hard(b, w), passed, held, event, ceiling)  # fmt: skip
-            if b == w and target <= 0.0 and best_i + 1 < len(cands):
-                # (not after a brake; above the ceiling with the ceiling as v_max: v_max there
-                # is v, and the profile to the floor could hold it, a cold review found; the
-                # ceiling makes ruckig brake at once)
-                self.tg.keep_floor(cands[best_i + 1], min(v_max, ceiling), a_max, j_max, w)
+            if b == w and target <= 0.0 and best_i + 1 < len(cands) and v <= ceiling:
+                # (not after a brake, nor above the ceiling: its v_max there is v, and the
+                # profile to the floor could hold it, a cold review found)
+                self.tg.keep_floor(cands[best_i + 1], v_max, a_max, j_max, w)
         plan = self.st.plan
         if plan is None or not shifted or plan.goal != b:
             return

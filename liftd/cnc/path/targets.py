@@ -86,30 +86,27 @@ class Targets:
             over = min(over, later)
         return over
 
-    def gap_rule(
-        self, b: int, cap: float, event: bool, passed: Plan | None, held: Plan | None, w: int
-    ) -> bool:
+    def gap_rule(self, b: int, cap: float) -> bool:
         """The jerk gap's rule (`Targets.gap_over`: a run boundary's feed cap in the jerk gap
-        passed at x2 above it) is the rule of the brake after an input change. Not where no
-        input changed and the window's move raised b's cap (`cap`, its own) into the gap: the
-        profile in hand, or the one that brought the path here, passes b below its cap, and
-        under its window, whose end was near b, the cap was lower. The window's end 0.05 mm
-        after b (look-ahead 3) made its cap 9.2 mm/s, the move raised it to 16 (an F1200 block
-        at 80 %), and x2, 17.23, passed that feed ceiling above it where the path could still
-        pass it below (drops seed 993). Read by `Tracker._replan` and the shift (`Shift.toward`)."""
-        if event or self.con.hold:
+        passed at x2 above it) is the rule of the brake after an input change, for a cap the
+        path could no longer get down to from its state at the change or at the last run
+        boundary it passed since (`PathState.changed`, set by `Tracker._replan` and
+        `_arrive`; tests/support/motion_overrun.py); `cap` is b's own. Not
+        before any input changed, nor for a cap within reach from that state: the window's
+        move raised a run boundary's cap from 9.2 mm/s (its end 0.05 mm after it, look-ahead
+        3) to 16, 50 ms after an override drop, and x2, 17.23, passed that F1200 block above
+        its ceiling (drops seed 993); an override drop 0.55 mm before a cap of 8 mm/s, within
+        reach, the forced re-plans aimed at rest at the window's end, and once the window
+        moved on the shift took x2 at 32.2 (a cold review's `drop_scenario(411)` with its drop
+        20 ms earlier). Under a hold: the hold's brake (`pick_target`)."""
+        if self.con.hold:
             return True
-        tb = self.con.tb
-        a_max, j_max = self.con.limits(b)  # the brake from b to that end
-        low = cap * (1.0 - CAP_TOL)
-        return not any(
-            p is not None
-            and p.goal == b
-            and p.v_end < low
-            and b < p.window < min(w, tb.n)
-            and reach_velocity(0.0, tb.s[p.window] - tb.s[b], a_max, j_max) < low
-            for p in (passed, held)
-        )
+        changed = self.st.changed
+        if changed is None:
+            return False
+        s_e, v_e, a_e = changed
+        a_max, j_max = self.con.limits(b - 1)
+        return brake_distance(v_e, a_e, cap, a_max, j_max) > self.con.tb.s[b] - s_e + SLACK_TOL
 
     def keep_floor(
         self, floor: tuple[int, float, float, bool], v_max: float, a_max: float, j_max: float,
@@ -124,12 +121,11 @@ class Targets:
         jerk gap: look-ahead 3, 0.5 mm blocks, F12000 at 15 %, the profile to rest went to
         58 mm/s, and the run boundary at w, its cap 30 mm/s, was passed at 36.9 once the
         window moved on (a review's program; the forced re-plans chose rest, the lower slack,
-        four times a step). Where the floor lies in that profile's jerk gap, x1 below it
-        (nearest_reachable); above the ceiling (an override drop) with the ceiling as v_max,
-        from which ruckig brakes at once: an override drop to 30 % 0.5 mm before the window's
-        end (look-ahead 3, a run boundary 0.15 mm after the window moves on), the event's plan
-        rested there and, the window moved on, only rest was reachable at its cap, 0.028 mm/s
-        for 24.8 (`drop_scenario(723)`)."""
+        four times a step). Where the floor lies in the jerk gap from the path's state, x1
+        below it (`nearest_reachable`): look-ahead 3 at 50 mm/s, the window's end a run
+        boundary 0.15 mm after the boundary where the window moves on, its floor in the gap;
+        the plan to rest was kept and, the window moved on, only rest was reachable at its
+        cap: 0.028 mm/s for 24.8 (`drop_scenario(723)`, before its override drop)."""
         rest = self.st.plan
         m = w - self.con.look_ahead + 1  # the window moves on where the path reaches m
         if rest is None or rest.goal != w or m <= self.con.seg or m >= w:
@@ -139,8 +135,9 @@ class Targets:
             return
         last = self.st.last_error
         s, v, a = self.st.s, self.st.v, self.st.a
-        for tgt in (e, nearest_reachable(v, a, s_w - s, e, a_max, j_max, False)):
+        for x1 in (False, True):
             # the floor, or where it lies in the jerk gap, x1 below it
+            tgt = nearest_reachable(v, a, s_w - s, e, a_max, j_max, False) if x1 else e
             if (
                 tgt > 0.0
                 and self.pf.try_target(s, v, a, s_w, tgt, max(v_max, tgt), a_max, j_max, w, w)
@@ -188,7 +185,7 @@ class Targets:
     ) -> float:  # fmt: skip
         """The target at candidate i (cap: its chain's, `Constraints.target_cap`) from the
         path's state (v, a; v_p after ramping a out): `pick_target`, a run boundary with the
-        jerk gap's bound (`gap_over`) where `gap` (an input changed: `Tracker._gap_rule`),
+        jerk gap's bound (`gap_over`) where `gap` (`Targets.gap_rule`),
         and x1 where the gap's x2 above the cap would lose a stop or a hard cap after it
         (`Constraints.hard_reach`; a cold review)."""
         b, s_c, _, gate = cands[i]

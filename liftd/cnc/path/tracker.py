@@ -217,6 +217,8 @@ class Tracker:
     def _replan(self, dt: float, force: int | None = None) -> None:
         self.con.recheck()
         event, self._event = self._event, False
+        if event:  # the state an input changed at (`Targets.gap_rule`)
+            self.st.changed = (self.st.s, self.st.v, self.st.a)
         forced = force is not None  # a step would lose `force` (`advance`)
         passed, self._passed = self._passed, None
         # the profile in hand, where only the window moved on (`Profiles._undip`)
@@ -317,7 +319,7 @@ class Tracker:
             return  # one brake through a feed drop a later cap lowers (known deviation 8)
         target = self.tg.boundary_target(
             cands, best_i, cap, v, a, v_p, ceiling, a_max, j_max, w,
-            self.tg.gap_rule(b, cands[best_i][2], event, passed, held, w),
+            self.tg.gap_rule(b, cands[best_i][2]),
         )  # fmt: skip
         if (
             not gate
@@ -495,6 +497,10 @@ class Tracker:
             self.tg.count(f"run boundary {b} reached with acceleration {a:.3g} m/s²")
         elif tb.gate[b]:
             self.st.a = a = 0.0
+        if tb.gate[b] and self.st.changed is not None:
+            # after an input change, what lies beyond a run boundary is judged from there
+            # (zero acceleration: `Targets.gap_rule`)
+            self.st.changed = (self.st.s, v, 0.0)
         self.con.seg = b if b < tb.n else tb.n
         if tb.needs_time[b]:
             out.append(Crossing(b, t, False, v, a))

@@ -728,16 +728,16 @@ def test_a_run_boundary_passed_in_the_event_s_cycle_has_zero_acceleration() -> N
     assert (hard, slow, errors) == ([], [], 0), describe(drop_scenario(827))
 
 
-# `drop_scenario` runs (look-ahead 3) that came to a near-stop on main 03c3724: an override
-# drop while the window's end was a run boundary 0.15 mm after the next boundary; the event's
-# plan rested there (the window's end) and, the window moved on, only rest was reachable at its
-# cap (seed 723: 0.028 mm/s for 24.8). `Targets.keep_floor` now takes the profile to the floor
-# also above the ceiling (braking at once to it) and, in the jerk gap, to x1 below the floor
+# `drop_scenario` runs (look-ahead 3) that came to a near-stop on main 03c3724 before their
+# override drop: the window's end a run boundary 0.15 mm after the boundary where the window
+# moves on, its floor in the jerk gap from the path's state; the plan to rest there was kept
+# and, the window moved on, only rest was reachable at its cap (seed 723: 0.028 mm/s for
+# 24.8). `Targets.keep_floor` now takes x1 below the floor where that keeps rest reachable
 FLOOR_SEEDS = [723, 1666, 2459, 2898]
 
 
 @pytest.mark.parametrize("seed", FLOOR_SEEDS)
-def test_an_override_drop_before_the_window_s_end_keeps_its_floor(seed: int) -> None:
+def test_the_window_s_floor_in_the_jerk_gap_is_kept_below_it(seed: int) -> None:
     _, hard, slow, errors = check(drop_scenario(seed))
     assert (hard, slow, errors) == ([], [], 0), describe(drop_scenario(seed))
 
@@ -760,3 +760,18 @@ def test_a_ceiling_s_end_inside_an_event_s_ramp_is_ramped_out_after_it() -> None
     event's ramp."""
     _, hard, slow, errors = check(drop_scenario(740))
     assert (hard, slow, errors) == ([], [], 0), describe(drop_scenario(740))
+
+
+def test_x2_above_a_feed_cap_only_for_one_out_of_reach_since_the_change() -> None:
+    """A cold review's program: `drop_scenario(411)` with its override drop 20 ms earlier, to
+    20 % at 51.9 mm/s 0.55 mm before a run boundary whose cap, 8 mm/s, is within reach from
+    there (0.545 mm). The forced re-plans aimed at rest at the window's end; once the window
+    moved on, the shift took x2 of the jerk gap above that cap: 32.2 mm/s, an overrun. x2
+    above a feed cap only where the cap was out of reach from the state at the change or at
+    the last run boundary since (`Targets.gap_rule`)."""
+    sc = drop_scenario(411)
+    sc = dataclasses.replace(
+        sc, schedule=Schedule(tuple((t - 0.02, o) for t, o in sc.schedule.override), ())
+    )
+    _, hard, slow, errors = check(sc)
+    assert (hard, errors) == ([], 0), describe(sc)
