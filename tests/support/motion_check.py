@@ -72,6 +72,7 @@ from tests.support.motion_rules import (
     INF,
     PathRules,
     Sample,
+    crossing_velocity,
     jerk_gap,
     reach,
     reach_from,
@@ -126,35 +127,6 @@ def _slack(path: PathRules, b: int, dt: float) -> float:
     """What the velocity may differ from its value at boundary b a cycle away: J·dt²."""
     _, j = path.limits(max(b - 1, 0), min(b + 1, path.n))
     return ABS_TOL + (j * dt * dt if j != INF else 0.0)
-
-
-def _at(last: Sample, smp: Sample, s_b: float) -> float:
-    """The velocity where the path passed s_b between two samples: the quintic through both
-    samples' position, velocity and acceleration (the time found by bisection). Constant jerk
-    from the first sample, which leaves the second's position and velocity out, read 25.047
-    mm/s for 24.781 at a run boundary between two samples at −0.071 m/s² whose velocities
-    differ by 0.40 mm/s (a brake between them: drops seed 1444), and the jerk gap after it
-    from there (x2 the nearer side where from 24.781 x1 is)."""
-    dt = smp.t - last.t
-    if dt <= 0.0 or smp.s <= last.s:
-        return smp.v
-    d_s = smp.s - last.s - dt * (last.v + dt * last.a / 2.0)
-    d_v = (smp.v - last.v - dt * last.a) * dt
-    d_a = (smp.a - last.a) * dt * dt
-    c3 = (20.0 * d_s - 8.0 * d_v + d_a) / (2.0 * dt**3)
-    c4 = (-30.0 * d_s + 14.0 * d_v - 2.0 * d_a) / (2.0 * dt**4)
-    c5 = (12.0 * d_s - 6.0 * d_v + d_a) / (2.0 * dt**5)
-    lo, hi = 0.0, dt
-    for _ in range(50):
-        tau = 0.5 * (lo + hi)
-        s = last.s + tau * (last.v + tau * (last.a / 2.0 + tau * (c3 + tau * (c4 + tau * c5))))
-        if s < s_b:
-            lo = tau
-        else:
-            hi = tau
-    tau = 0.5 * (lo + hi)
-    v = last.v + tau * (last.a + tau * (3.0 * c3 + tau * (4.0 * c4 + tau * 5.0 * c5)))
-    return max(v, 0.0)
 
 
 def _before_stop(path: PathRules, smp: Sample) -> bool:
@@ -421,7 +393,9 @@ def check_motion(
                     # m/s², the next run boundary's cap of 4 mm/s 0.3 mm on: x1 2.59 from
                     # the event's state, 0.83 from the boundary's, drops seed 827)
                     s_b = path.bounds[b].s
-                    changed = dataclasses.replace(smp, s=s_b, v=_at(last, smp, s_b), a=0.0, seg=b)
+                    changed = dataclasses.replace(
+                        smp, s=s_b, v=crossing_velocity(last, smp, s_b), a=0.0, seg=b
+                    )
             last = smp
             continue
         held = smp.hold or smp.override <= 0.0 or smp.parked or last.parked
@@ -445,7 +419,7 @@ def check_motion(
                 anchor_s, anchor_v, anchor_seg = s_b, 0.0, b
                 interval_min, fresh, gap_low = INF, True, INF
                 continue
-            v_b = _at(last, smp, s_b)
+            v_b = crossing_velocity(last, smp, s_b)
             low, gap_low = gap_low, v_b  # since the event or the boundary before
             tol = _slack(path, b, dt)
             # the look-ahead window as it was when the path began braking toward b: its end was a
