@@ -775,3 +775,17 @@ def test_x2_above_a_feed_cap_only_for_one_out_of_reach_since_the_change() -> Non
     )
     _, hard, slow, errors = check(sc)
     assert (hard, errors) == ([], 0), describe(sc)
+
+
+def test_a_target_beyond_a_lowered_ceiling_keeps_the_ceilings_between() -> None:
+    """`drop_scenario(981)` with its drop 20 ms earlier: override 100 → 20 % at 50 mm/s, the
+    next block at the same feed (10 mm/s now), a run boundary of 45.7 mm/s after it. The
+    target beyond the lowered ceiling's block, held to b's own cap only, left the next
+    block's ceiling out (the list leaves out a cap at the ceiling itself): the path held
+    50 mm/s above a ceiling of 10, an overrun."""
+    sc = drop_scenario(981)
+    sc = dataclasses.replace(
+        sc, schedule=Schedule(tuple((t - 0.02, o) for t, o in sc.schedule.override), ())
+    )
+    _, hard, slow, errors = check(sc)
+    assert (hard, slow, errors) == ([], [], 0), describe(sc)
