@@ -72,6 +72,7 @@ from tests.support.motion_rules import (
     INF,
     PathRules,
     Sample,
+    crossing_velocity,
     jerk_gap,
     reach,
     reach_from,
@@ -126,25 +127,6 @@ def _slack(path: PathRules, b: int, dt: float) -> float:
     """What the velocity may differ from its value at boundary b a cycle away: J·dt²."""
     _, j = path.limits(max(b - 1, 0), min(b + 1, path.n))
     return ABS_TOL + (j * dt * dt if j != INF else 0.0)
-
-
-def _at(last: Sample, smp: Sample, s_b: float) -> float:
-    """The velocity where the path passed s_b between two samples: constant jerk between them
-    (the cycle's profile up to its phase changes), the time found by bisection."""
-    dt = smp.t - last.t
-    if dt <= 0.0 or smp.s <= last.s:
-        return smp.v
-    j = (smp.a - last.a) / dt
-    lo, hi = 0.0, dt
-    for _ in range(50):
-        tau = 0.5 * (lo + hi)
-        s = last.s + tau * (last.v + tau * (last.a / 2.0 + tau * j / 6.0))
-        if s < s_b:
-            lo = tau
-        else:
-            hi = tau
-    tau = 0.5 * (lo + hi)
-    return max(last.v + tau * (last.a + tau * j / 2.0), 0.0)
 
 
 def _before_stop(path: PathRules, smp: Sample) -> bool:
@@ -241,6 +223,89 @@ def _gap_dip(path: PathRules, b: int, x1: float, low: float, tol: float, smp: Sa
     ]
 
 
+def _brake_on(
+    path: PathRules, b: int, last: Sample, smp: Sample, v_b: float, held_by: float,
+    backward: float, forward: float, window: int, release: bool,
+) -> tuple[float, float, tuple[float, float, float, float]] | None:  # fmt: skip
+    """Where the path passes boundary b (at v_b, between `last` and `smp`) braking, and its
+    deceleration is ramped out after b (the brake from above a lowered ceiling that ends at b;
+    with `release`, a brake for the window's end that its move at b releases): that ramp's
+    end (position, velocity) and the ramp (its start s, v, a and the jerk). None elsewhere."""
+    s_b = path.bounds[b].s
+    # the acceleration where the path passed b (linear between the samples)
+    frac = (s_b - last.s) / (smp.s - last.s) if smp.s > last.s else 1.0
+    a_b = last.a + (smp.a - last.a) * frac
+    # the brake from above a lowered ceiling (after an input change: above it
+    # otherwise, motion_overrun fails the run) that ends where the ceiling rises again;
+    # however little above it (a brake at once from 32.2 mm/s toward 25 passed the
+    # block's end at 25.55 and −0.66 m/s², ramped out to 25.0 and reached 28.6 mm/s
+    # at the next run boundary, where REL_TOL above it was asked and 30.6 expected as
+    # from zero acceleration: a `short_drop` program, test_motion_check.py)
+    ceiling_before = path.ceiling(b - 1, smp.override)
+    above = (
+        v_b > ceiling_before * (1.0 + OVER_REL) + OVER_ABS
+        and path.ceiling(b, smp.override) > ceiling_before
+    )
+    # or a brake for the window's end that the window's move at b releases (the path
+    # enters b's segment: the window ends a block further on), passed above what zero
+    # acceleration there allows, so braking as it must: its deceleration is ramped out
+    # after b as well (feeds seed 46, look-ahead 3: 86.5 mm/s for 69.4 with zero
+    # acceleration, −2.0 m/s² at an F3000 drop at 180 %, 81.5 at the ramp's end, 86.0
+    # at the next boundary). Only the deceleration the caps after b need there under
+    # the window before is credited (`PathRules.least_brake`), not a harder one: a
+    # brake for nothing, ramped out, is a dip (seed 46 made up with its deceleration
+    # doubled at b and 12 % slower after it: the ramp from the doubled one ends at
+    # 66.5 mm/s and was taken for the jerk limit's). Not where zero acceleration at b
+    # would do either (a cold review's made-up path at −4 m/s² through a boundary of
+    # 43.6 mm/s)
+    released = (
+        release
+        and v_b > held_by * (1.0 + REL_TOL)
+        and backward == held_by < forward
+        and path.backward(b, smp, b + path.look_ahead) > backward * (1.0 + REL_TOL)
+    )
+    if a_b < 0.0 and smp.a < 0.0 and (above or released):
+        # its deceleration is ramped out at full jerk after b, as after an event
+        # (feeds seed 931: override 200 → 20 % at 102 mm/s, a 1 mm block of 10 mm/s,
+        # then 80; the ramp from 15.4 mm/s and −2.1 m/s² at its end went down to
+        # 10.09), and the forward pass and the interval go on from its end: the higher
+        # of the ramps from b and from the sample after it (a path that brakes on
+        # after b is not credited with it, a cold review found)
+        _, j = path.limits(b, b + 1)
+        if j != INF:
+            t_r = -smp.a / j
+            ramp_s = smp.s + t_r * (smp.v + t_r * (smp.a / 2.0 + t_r * j / 6.0))
+            # the deceleration at b: a linear reading between the samples misses a
+            # peak between them; the jerk limit bounds it from either sample (feeds
+            # seed 247: −2.33 and −2.45 m/s² a cycle apart, the peak −2.55 at b,
+            # ramped out from there to 9.92 mm/s where the linear reading expected
+            # 11.0)
+            dt_s = smp.t - last.t
+            a_b = min(a_b, max(last.a - j * frac * dt_s, smp.a - j * (1.0 - frac) * dt_s))
+            ramp_v = max(smp.v + smp.a * t_r / 2.0, v_b - a_b * a_b / (2.0 * j), 0.0)
+            ramp = (smp.s, smp.v, smp.a, j)
+            need = path.least_brake(b, v_b, a_b, smp, window)
+            if above:
+                # or no harder than a brake toward that ceiling has there (its
+                # ramp-out ends at the ceiling, not below it), where that is
+                # harder; the whole deceleration where that brake's ramp-out would
+                # pass a run boundary, which the path passes with zero acceleration
+                # (0.05 mm after the ceiling's end, 13.29 mm/s at −2.57 m/s² over a
+                # ceiling of 8: the ramp toward 8 ends 0.055 mm on, and the path
+                # ramps out to x1 = 5.0 there; a cold review's program)
+                toward = -math.sqrt(2.0 * j * (v_b - ceiling_before))
+                t_t = -toward / j
+                ramp_len = t_t * (v_b + t_t * (toward / 2.0 + t_t * j / 6.0))
+                need = a_b if path.gate_within(b, ramp_len) else min(need, toward)
+            if need > a_b:  # braking harder than the window's end needs: that much
+                t_r = -need / j
+                ramp_s = s_b + t_r * (v_b + t_r * (need / 2.0 + t_r * j / 6.0))
+                ramp_v = max(v_b - need * need / (2.0 * j), 0.0)
+                ramp = (s_b, v_b, need, j)
+            return ramp_s, ramp_v, ramp
+    return None
+
+
 def check_motion(
     prog: PathProgram, table: PathTable, look_ahead: int, dt: float, samples: list[Sample],
     trace: list[Expected] | None = None,
@@ -320,6 +385,17 @@ def check_motion(
             entry_v, interval_min, fresh = min(smp.v, anchor_v), INF, False
             entered.clear()
             changed, gap_low = last, min(last.v, smp.v)
+            for b in range(last.seg + 1, min(smp.seg, path.n - 1) + 1):
+                if path.gate[b]:
+                    # a run boundary the path passed in the event's cycle: zero acceleration
+                    # there, and what lies after it is reachable from that state (3.5 µm
+                    # after the state at an override drop to 20 % at 32.79 mm/s and −0.04
+                    # m/s², the next run boundary's cap of 4 mm/s 0.3 mm on: x1 2.59 from
+                    # the event's state, 0.83 from the boundary's, drops seed 827)
+                    s_b = path.bounds[b].s
+                    changed = dataclasses.replace(
+                        smp, s=s_b, v=crossing_velocity(last, smp, s_b), a=0.0, seg=b
+                    )
             last = smp
             continue
         held = smp.hold or smp.override <= 0.0 or smp.parked or last.parked
@@ -343,7 +419,7 @@ def check_motion(
                 anchor_s, anchor_v, anchor_seg = s_b, 0.0, b
                 interval_min, fresh, gap_low = INF, True, INF
                 continue
-            v_b = _at(last, smp, s_b)
+            v_b = crossing_velocity(last, smp, s_b)
             low, gap_low = gap_low, v_b  # since the event or the boundary before
             tol = _slack(path, b, dt)
             # the look-ahead window as it was when the path began braking toward b: its end was a
@@ -389,6 +465,15 @@ def check_motion(
                     )
                 if v_b < anchor_v:
                     anchor_s, anchor_v, anchor_seg = s_b, v_b, b
+                brake_on = _brake_on(path, b, last, smp, v_b, held_by, backward, INF, window, False)
+                if brake_on is not None and brake_on[1] < anchor_v:
+                    # the brake toward a lowered ceiling whose block ends inside the event's
+                    # ramp: its own ramp-out after b, as outside it (override 100 → 30 % at
+                    # 49.9 mm/s, a 0.05 mm block of 12 mm/s 0.4 mm on passed at 21.5 and
+                    # −2.7 m/s², ramped out to 12.6; the forward pass from 21.5 expected 23.5
+                    # at the next boundary 0.1 mm on: drops seed 740)
+                    anchor_s, anchor_v, ramp = brake_on
+                    anchor_seg, ramp_ends = b, anchor_s
                 entry_v, interval_min = anchor_v, INF  # the ramp's end, or lower for a cap
                 continue
             a, j = path.limits(anchor_seg, b)
@@ -417,79 +502,13 @@ def check_motion(
                     f"{path.bounds[b].line}) between {entry_v * 1e3:.4f} and {v_b * 1e3:.4f} "
                     f"(t={smp.t:.4f} s)"
                 )
-            # the acceleration where the path passed b (linear between the samples)
-            frac = (s_b - last.s) / (smp.s - last.s) if smp.s > last.s else 1.0
-            a_b = last.a + (smp.a - last.a) * frac
-            # the brake from above a lowered ceiling (after an input change: above it
-            # otherwise, motion_overrun fails the run) that ends where the ceiling rises again;
-            # however little above it (a brake at once from 32.2 mm/s toward 25 passed the
-            # block's end at 25.55 and −0.66 m/s², ramped out to 25.0 and reached 28.6 mm/s
-            # at the next run boundary, where REL_TOL above it was asked and 30.6 expected as
-            # from zero acceleration: a `short_drop` program, test_motion_check.py)
-            ceiling_before = path.ceiling(b - 1, smp.override)
-            above = (
-                v_b > ceiling_before * (1.0 + OVER_REL) + OVER_ABS
-                and path.ceiling(b, smp.override) > ceiling_before
-            )
-            # or a brake for the window's end that the window's move at b releases (the path
-            # enters b's segment: the window ends a block further on), passed above what zero
-            # acceleration there allows, so braking as it must: its deceleration is ramped out
-            # after b as well (feeds seed 46, look-ahead 3: 86.5 mm/s for 69.4 with zero
-            # acceleration, −2.0 m/s² at an F3000 drop at 180 %, 81.5 at the ramp's end, 86.0
-            # at the next boundary). Only the deceleration the caps after b need there under
-            # the window before is credited (`PathRules.least_brake`), not a harder one: a
-            # brake for nothing, ramped out, is a dip (seed 46 made up with its deceleration
-            # doubled at b and 12 % slower after it: the ramp from the doubled one ends at
-            # 66.5 mm/s and was taken for the jerk limit's). Not where zero acceleration at b
-            # would do either (a cold review's made-up path at −4 m/s² through a boundary of
-            # 43.6 mm/s)
-            released = (
-                v_b > held_by * (1.0 + REL_TOL)
-                and backward == held_by < forward
-                and path.backward(b, smp, b + path.look_ahead) > backward * (1.0 + REL_TOL)
-            )
-            if a_b < 0.0 and smp.a < 0.0 and (above or released):
-                # its deceleration is ramped out at full jerk after b, as after an event
-                # (feeds seed 931: override 200 → 20 % at 102 mm/s, a 1 mm block of 10 mm/s,
-                # then 80; the ramp from 15.4 mm/s and −2.1 m/s² at its end went down to
-                # 10.09), and the forward pass and the interval go on from its end: the higher
-                # of the ramps from b and from the sample after it (a path that brakes on
-                # after b is not credited with it, a cold review found)
-                _, j = path.limits(b, b + 1)
-                if j != INF:
-                    t_r = -smp.a / j
-                    ramp_s = smp.s + t_r * (smp.v + t_r * (smp.a / 2.0 + t_r * j / 6.0))
-                    # the deceleration at b: a linear reading between the samples misses a
-                    # peak between them; the jerk limit bounds it from either sample (feeds
-                    # seed 247: −2.33 and −2.45 m/s² a cycle apart, the peak −2.55 at b,
-                    # ramped out from there to 9.92 mm/s where the linear reading expected
-                    # 11.0)
-                    dt_s = smp.t - last.t
-                    a_b = min(a_b, max(last.a - j * frac * dt_s, smp.a - j * (1.0 - frac) * dt_s))
-                    ramp_v = max(smp.v + smp.a * t_r / 2.0, v_b - a_b * a_b / (2.0 * j), 0.0)
-                    ramp = (smp.s, smp.v, smp.a, j)
-                    need = path.least_brake(b, v_b, a_b, smp, window)
-                    if above:
-                        # or no harder than a brake toward that ceiling has there (its
-                        # ramp-out ends at the ceiling, not below it), where that is
-                        # harder; the whole deceleration where that brake's ramp-out would
-                        # pass a run boundary, which the path passes with zero acceleration
-                        # (0.05 mm after the ceiling's end, 13.29 mm/s at −2.57 m/s² over a
-                        # ceiling of 8: the ramp toward 8 ends 0.055 mm on, and the path
-                        # ramps out to x1 = 5.0 there; a cold review's program)
-                        toward = -math.sqrt(2.0 * j * (v_b - ceiling_before))
-                        t_t = -toward / j
-                        ramp_len = t_t * (v_b + t_t * (toward / 2.0 + t_t * j / 6.0))
-                        need = a_b if path.gate_within(b, ramp_len) else min(need, toward)
-                    if need > a_b:  # braking harder than the window's end needs: that much
-                        t_r = -need / j
-                        ramp_s = s_b + t_r * (v_b + t_r * (need / 2.0 + t_r * j / 6.0))
-                        ramp_v = max(v_b - need * need / (2.0 * j), 0.0)
-                        ramp = (s_b, v_b, need, j)
-                    ramp_ends = ramp_s
-                    anchor_s, anchor_v, anchor_seg = ramp_s, ramp_v, b
-                    entry_v, interval_min, fresh = min(v_b, ramp_v), INF, False
-                    continue
+            brake_on = _brake_on(path, b, last, smp, v_b, held_by, backward, forward, window, True)
+            if brake_on is not None:
+                ramp_s, ramp_v, ramp = brake_on
+                ramp_ends = ramp_s
+                anchor_s, anchor_v, anchor_seg = ramp_s, ramp_v, b
+                entry_v, interval_min, fresh = min(v_b, ramp_v), INF, False
+                continue
             # the forward pass starts again where the acceleration is zero (a run boundary),
             # where a cap held the path below it, and where the path was slower than the rules
             # allow (found above). Not where it is only a little below it, within REL_TOL:

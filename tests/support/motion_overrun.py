@@ -20,7 +20,8 @@ The rules:
   ceiling. Within that brake it may pass a block boundary above the feed caps
   (F × override) that it could no longer get down to with zero acceleration there from its
   state at the change, or at the last run boundary it passed in the brake (zero acceleration
-  there) (the tracker's `Plan.soft_from`, and `Targets.gap_over`, the jerk gap:
+  there; its velocity there read from the samples either side, `crossing_velocity`) (the
+  tracker's `Plan.soft_from`, and `Targets.gap_over`, the jerk gap:
   docs/geo-core.md deviation 6), but never above a hard cap: the transition cap and the axes' and the
   lift's caps, which no override scales. The brake ends where the acceleration stops
   falling at or below the ceiling.
@@ -39,7 +40,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import replace
 
-from tests.support.motion_rules import INF, PathRules, Sample, brake_distance
+from tests.support.motion_rules import INF, PathRules, Sample, brake_distance, crossing_velocity
 
 OVER_REL = 1e-6
 OVER_ABS = 1e-9  # m/s
@@ -118,7 +119,14 @@ def _boundaries(
                 f"mm/s above its cap {cap * 1e3:.4f} (t={smp.t:.4f} s)"
             )
         if brake is not None and path.gate[b]:
-            brake = replace(smp, s=path.bounds[b].s, v=v_b, a=0.0, seg=b)
+            # from there, its velocity read from the quintic through the samples either side
+            # (`crossing_velocity`, as motion_check reads it): from v_b, v + a·Δt 0.79 ms
+            # after a sample at −0.32 m/s², 40.606 mm/s where the jerk that ramps that
+            # deceleration out at b gives 40.731, a feed cap of 40 mm/s 0.1 mm on read as
+            # reachable, and x2 above it, 40.12, as an overrun (drops seed 277); v_b + moved,
+            # an upper bound, is up to J·Δt² too high, and near rest far more
+            v_g = crossing_velocity(last, smp, path.bounds[b].s)
+            brake = replace(smp, s=path.bounds[b].s, v=v_g, a=0.0, seg=b)
     return out, brake
 
 

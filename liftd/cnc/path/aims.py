@@ -153,7 +153,7 @@ class Aims:
             return False  # (what lies beyond the extended list may lower it still)
         if (
             ext[k][3]
-            and e < self.con.tb.entry_cap(ext[k][0], self.con.ov) * (1.0 - CAP_TOL)
+            and e < self.con.own_cap(ext[k][0]) * (1.0 - CAP_TOL)
             and self.con.chain_open(ext)
         ):
             # a run's end lowered for the window's end (rest, or the floor its chain leaves):

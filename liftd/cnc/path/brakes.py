@@ -395,7 +395,7 @@ class Brakes:
                 # steps and the dip took turns: 157 ruckig calls in a cycle, a review found)
                 if self.con.tb.gate[b]:
                     continue
-                cap, gate = self.con.tb.entry_cap(b, self.con.ov), False
+                cap, gate = self.con.own_cap(b), False
             room = s_b - s
             if room - d_e < margin:
                 if gate:

@@ -63,7 +63,8 @@ class Constraints:
         self._beyond_key: tuple[int, int, float, float] | None = None
         self._beyond_val = INF
         self._beyond_open = False  # the last `_beyond` chain ended at the window's end or a cut
-        self._floor_key = (-1, -1.0)  # (window end, override) of `window_floor`'s last value
+        # (window end, override, its block before ahead) of `window_floor`'s last value
+        self._floor_key = (-1, -1.0, False)
         self._floor_val = 0.0
         self._low = INF  # the lowest cap `collect` kept so far (`_ahead` leaps below it)
 
@@ -157,11 +158,23 @@ class Constraints:
             else:
                 nxt = tb.next_constraint[k + 1]
 
+    def own_cap(self, b: int) -> float:
+        """Boundary b's own cap: its entry cap, and where the block before it lies ahead of
+        the path's, that block's ceiling. The feed drop where that block begins keeps it,
+        unless the path passes that one above it after an override drop (a block of 16 mm/s
+        entered at 37 mm/s: the run boundary at its end, read by its entry cap of 100 and the
+        chain after it, 37.9, was passed at 22.9 mm/s, an overrun; a cold review's program,
+        `drop_scenario(1735)`)."""
+        cap = self.tb.entry_cap(b, self.ov)
+        if b - 1 > self.seg:
+            cap = min(cap, self.tb.ceiling(b - 1, self.ov))
+        return cap
+
     def _cap(self, b: int, w: int) -> tuple[float, bool, bool]:
-        """(cap, zero acceleration required, stop) of constraint boundary b."""
+        """(cap, zero acceleration required, stop) of constraint boundary b (`own_cap`)."""
         if b == w or self.is_stop(b):
             return 0.0, True, True
-        return self.tb.entry_cap(b, self.ov), self.tb.gate[b], False
+        return self.own_cap(b), self.tb.gate[b], False
 
     def collect(
         self, s: float, seg: int, reach: float, soft: tuple[int, int] = (0, 0), keep: int = -1,
@@ -242,14 +255,15 @@ class Constraints:
         tb = self.tb
         if self.look_ahead < 2 or w >= tb.n:
             return 0.0
-        if self._floor_key == (w, self.ov):  # asked every step while the profile aims at w
+        key = (w, self.ov, w - 1 > self.seg)
+        if self._floor_key == key:  # asked every step while the profile aims at w
             return self._floor_val
         a_max, j_max = self.limits(w)
         after = reach_velocity_any_above(
             0.0, max(tb.s[w + 1] - tb.s[w] - CHAIN_MARGIN, 0.0), a_max, j_max
         )
-        self._floor_key = (w, self.ov)
-        self._floor_val = min(tb.entry_cap(w, self.ov), after)
+        self._floor_key = key
+        self._floor_val = min(self.own_cap(w), after)
         return self._floor_val
 
     def hard_reach(self, b: int, w: int) -> float:
@@ -306,10 +320,10 @@ class Constraints:
         if cands[-1][3] and not self.is_stop(last):
             if cands[-1][2] <= 0.0:
                 return True  # rest behind no stop (a cap of 0): a later list may raise it
-            # cached: `collect` just asked for it with g's entry cap (the result depends on
+            # cached: `collect` just asked for it with g's own cap (the result depends on
             # the cap: a review found a chain for cap 0, cached under g, read back for its
             # entry cap, which left out every feed drop behind g: 19 mm/s in a 1 mm/s block)
-            self._beyond(last, self.tb.entry_cap(last, self.ov), w)
+            self._beyond(last, self.own_cap(last), w)
             return self._beyond_open
         return False
 

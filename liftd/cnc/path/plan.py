@@ -113,7 +113,7 @@ class PathState:
     (`Targets`, `Brakes`, `Tracker`): each reads it, `Tracker` moves it along the plan. A
     plain class, as `Crossing`."""
 
-    __slots__ = ("a", "errors", "last_error", "plan", "s", "soft_from", "t", "v")
+    __slots__ = ("a", "changed", "errors", "last_error", "plan", "s", "soft_from", "t", "v")
 
     def __init__(self, s: float) -> None:
         self.t = 0.0
@@ -124,6 +124,8 @@ class PathState:
         self.soft_from = -1  # the target's Plan.soft_from (`Tracker._replan`)
         self.errors = 0  # profiles ruckig refused, answered with a brake (never expected)
         self.last_error = ""
+        # (s, v, a) where an input last changed (`Targets.gap_rule`), None before any
+        self.changed: tuple[float, float, float] | None = None
 
 
 class Primed:

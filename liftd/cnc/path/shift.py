@@ -161,8 +161,13 @@ class Shift:
             looked += tail
             b, s_c, gate, cap = nb, ns, ngate, ncap
             d = s_c - s
-            target = self.tg.pick_target(v, a, v_p, d, cap, ceiling, a_max, j_max,
-                                       self.tg.hard(b, w))  # fmt: skip
+            # a run boundary with the jerk gap's bound (`Targets.boundary_target`): a feed
+            # drop lost after an override drop, the run boundary after its block, which that
+            # block's ceiling caps, passed at x1 = 9.59 mm/s for 16 where x2 is nearer
+            target = self.tg.boundary_target(
+                tail, 0, cap, v, a, v_p, ceiling, a_max, j_max, w,
+                self.tg.gap_rule(b, tail[0][2]),
+            )  # fmt: skip
             shifted = True
         below = ceiling * (1.0 + CAP_TOL) + V_ROUND >= v_p  # not after an override drop
         top_b = min(cap, ceiling)

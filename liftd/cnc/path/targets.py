@@ -86,6 +86,28 @@ class Targets:
             over = min(over, later)
         return over
 
+    def gap_rule(self, b: int, cap: float) -> bool:
+        """The jerk gap's rule (`Targets.gap_over`: a run boundary's feed cap in the jerk gap
+        passed at x2 above it) is the rule of the brake after an input change, for a cap the
+        path could no longer get down to from its state at the change or at the last run
+        boundary it passed since (`PathState.changed`, set by `Tracker._replan` and
+        `_arrive`; tests/support/motion_overrun.py); `cap` is b's own. Not
+        before any input changed, nor for a cap within reach from that state: the window's
+        move raised a run boundary's cap from 9.2 mm/s (its end 0.05 mm after it, look-ahead
+        3) to 16, 50 ms after an override drop, and x2, 17.23, passed that F1200 block above
+        its ceiling (drops seed 993); an override drop 0.55 mm before a cap of 8 mm/s, within
+        reach, the forced re-plans aimed at rest at the window's end, and once the window
+        moved on the shift took x2 at 32.2 (a cold review's `drop_scenario(411)` with its drop
+        20 ms earlier). Under a hold: the hold's brake (`pick_target`)."""
+        if self.con.hold:
+            return True
+        changed = self.st.changed
+        if changed is None:
+            return False
+        s_e, v_e, a_e = changed
+        a_max, j_max = self.con.limits(b - 1)
+        return brake_distance(v_e, a_e, cap, a_max, j_max) > self.con.tb.s[b] - s_e + SLACK_TOL
+
     def keep_floor(
         self, floor: tuple[int, float, float, bool], v_max: float, a_max: float, j_max: float,
         w: int,
@@ -99,7 +121,11 @@ class Targets:
         jerk gap: look-ahead 3, 0.5 mm blocks, F12000 at 15 %, the profile to rest went to
         58 mm/s, and the run boundary at w, its cap 30 mm/s, was passed at 36.9 once the
         window moved on (a review's program; the forced re-plans chose rest, the lower slack,
-        four times a step)."""
+        four times a step). Where the floor lies in the jerk gap from the path's state, x1
+        below it (`nearest_reachable`): look-ahead 3 at 50 mm/s, the window's end a run
+        boundary 0.15 mm after the boundary where the window moves on, its floor in the gap;
+        the plan to rest was kept and, the window moved on, only rest was reachable at its
+        cap: 0.028 mm/s for 24.8 (`drop_scenario(723)`, before its override drop)."""
         rest = self.st.plan
         m = w - self.con.look_ahead + 1  # the window moves on where the path reaches m
         if rest is None or rest.goal != w or m <= self.con.seg or m >= w:
@@ -108,10 +134,17 @@ class Targets:
         if self._keeps_at(rest, m, s_w, e):
             return
         last = self.st.last_error
-        if not self.pf.try_target(
-            self.st.s, self.st.v, self.st.a, s_w, e, max(v_max, e), a_max, j_max, w, w
-        ) or not self._keeps_at(self.st.plan, m, s_w, 0.0):
-            self.st.plan, self.st.last_error = rest, last  # (a refusal here is no error)
+        s, v, a = self.st.s, self.st.v, self.st.a
+        for x1 in (False, True):
+            # the floor, or where it lies in the jerk gap, x1 below it
+            tgt = nearest_reachable(v, a, s_w - s, e, a_max, j_max, False) if x1 else e
+            if (
+                tgt > 0.0
+                and self.pf.try_target(s, v, a, s_w, tgt, max(v_max, tgt), a_max, j_max, w, w)
+                and self._keeps_at(self.st.plan, m, s_w, 0.0)
+            ):
+                return
+        self.st.plan, self.st.last_error = rest, last  # (a refusal here is no error)
 
     def _keeps_at(self, plan: Plan | None, m: int, s_w: float, e: float) -> bool:
         """`plan` reaches boundary m with room left to get down to e at s_w with zero
@@ -148,15 +181,16 @@ class Targets:
 
     def boundary_target(
         self, cands: list[tuple[int, float, float, bool]], i: int, cap: float, v: float, a: float,
-        v_p: float, ceiling: float, a_max: float, j_max: float, w: int,
+        v_p: float, ceiling: float, a_max: float, j_max: float, w: int, gap: bool = True,
     ) -> float:  # fmt: skip
         """The target at candidate i (cap: its chain's, `Constraints.target_cap`) from the
         path's state (v, a; v_p after ramping a out): `pick_target`, a run boundary with the
-        jerk gap's bound (`gap_over`), and x1 where the gap's x2 above the cap would lose a
-        stop or a hard cap after it (`Constraints.hard_reach`; a cold review)."""
+        jerk gap's bound (`gap_over`) where `gap` (`Targets.gap_rule`),
+        and x1 where the gap's x2 above the cap would lose a stop or a hard cap after it
+        (`Constraints.hard_reach`; a cold review)."""
         b, s_c, _, gate = cands[i]
         d = s_c - self.st.s
-        over = self.gap_over(cands, i, min(cap, ceiling), w) if gate else 0.0
+        over = self.gap_over(cands, i, min(cap, ceiling), w) if gate and gap else 0.0
         hard_b = self.hard(b, w)
         if gate and ceiling < cap and v > ceiling:
             # above a ceiling an input lowered, its brake passes the run boundary above b's
@@ -167,6 +201,17 @@ class Targets:
             # `test_jerk_gap.py`). Where x2 would lose what lies after it, `pick_target`
             # without `over` keeps the x2 within b's own cap, as before
             over = max(over, hard_b)
+        if v > ceiling and b > self.con.seg + 1:
+            # above a lowered ceiling whose block ends before b: b's target is held to the
+            # lowest ceiling of the blocks from the next one to b, not to that one (an
+            # override drop to 10 % at 31.1 mm/s 0.09 mm before the end of a block of 4 mm/s,
+            # a run boundary of 8.87 0.2 mm after it: passed at 4.0, drops seed 3507); the
+            # blocks between are read here, not only as caps of the list, which leaves out
+            # one at the ceiling itself (the next block at the same feed: a target of 45.7
+            # mm/s beyond it held 50 above a ceiling of 10, `drop_scenario(981)` 20 ms early)
+            tb = self.con.tb
+            between = min(tb.ceiling(k, self.con.ov) for k in range(self.con.seg + 1, b))
+            ceiling = max(ceiling, min(cap, between))
         target = self.pick_target(v, a, v_p, d, cap, ceiling, a_max, j_max, hard_b, over)
         if (
             over > 0.0

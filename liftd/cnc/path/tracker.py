@@ -35,6 +35,7 @@ from liftd.cnc.path.constraints import (
     CAP_TOL,
     GATE_TOL,
     INF,
+    SLACK_MARGIN,
     V_ROUND,
     Constraints,
 )
@@ -44,6 +45,8 @@ from liftd.cnc.path.table import PathTable
 from liftd.cnc.path.targets import Targets
 from liftd.cnc.path.velocity import (
     projected_velocity,
+    ramp_crossing,
+    ramp_distance,
 )
 from liftd.cnc.ruckig1 import Ruckig1
 
@@ -214,6 +217,8 @@ class Tracker:
     def _replan(self, dt: float, force: int | None = None) -> None:
         self.con.recheck()
         event, self._event = self._event, False
+        if event:  # the state an input changed at (`Targets.gap_rule`)
+            self.st.changed = (self.st.s, self.st.v, self.st.a)
         forced = force is not None  # a step would lose `force` (`advance`)
         passed, self._passed = self._passed, None
         # the profile in hand, where only the window moved on (`Profiles._undip`)
@@ -254,6 +259,20 @@ class Tracker:
                 continue
             if not gate and v_p <= cap + V_ROUND and v <= cap + V_ROUND:
                 continue  # cannot bind from here
+            if (
+                not gate
+                and v_p <= cap + V_ROUND
+                and ramp_distance(v, a, j_max) > s_c - s
+                and ramp_crossing(v, a, cap, j_max) <= s_c - s - SLACK_MARGIN
+            ):
+                # nor can one the path passes below its cap braking, still ramping its
+                # deceleration out there (the ramp-out, the highest velocity any profile has,
+                # crosses the cap before b): no profile gets above the cap before b, and zero
+                # acceleration at b, its target, is out of reach (a feed cap 0.2 mm ahead at
+                # 41.4 mm/s and −2.6 m/s², ramped out at 32.8 after 0.24 mm: every target was
+                # refused and the brake to rest at the window's end that moved on was kept,
+                # the path stopped at the next boundary, drops seed 27)
+                continue
             slack = s_c - s - self.con.need(v, a, cap, gate, a_max, j_max)
             if slack < best_slack:
                 best, best_slack, best_i = c, slack, i
@@ -298,7 +317,10 @@ class Tracker:
             )
         ):
             return  # one brake through a feed drop a later cap lowers (known deviation 8)
-        target = self.tg.boundary_target(cands, best_i, cap, v, a, v_p, ceiling, a_max, j_max, w)
+        target = self.tg.boundary_target(
+            cands, best_i, cap, v, a, v_p, ceiling, a_max, j_max, w,
+            self.tg.gap_rule(b, cands[best_i][2]),
+        )  # fmt: skip
         if (
             not gate
             and not self.con.hold
@@ -475,6 +497,10 @@ class Tracker:
             self.tg.count(f"run boundary {b} reached with acceleration {a:.3g} m/s²")
         elif tb.gate[b]:
             self.st.a = a = 0.0
+        if tb.gate[b] and self.st.changed is not None:
+            # after an input change, what lies beyond a run boundary is judged from there
+            # (zero acceleration: `Targets.gap_rule`)
+            self.st.changed = (self.st.s, v, 0.0)
         self.con.seg = b if b < tb.n else tb.n
         if tb.needs_time[b]:
             out.append(Crossing(b, t, False, v, a))

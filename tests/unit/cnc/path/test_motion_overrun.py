@@ -13,7 +13,7 @@ from liftd.sim.simulate import run_cycles
 from tests.support.channel import shipped
 from tests.support.motion_check import Recorder, Sample, check_motion
 from tests.support.motion_overrun import boundary_velocity
-from tests.support.motion_rules import PathRules
+from tests.support.motion_rules import PathRules, crossing_velocity
 from tests.unit.cnc.path.test_dense_constraints import poisoned
 from tests.unit.cnc.path.test_motion_check import at, drive
 
@@ -283,3 +283,28 @@ def test_the_bound_on_a_crossing_holds_for_every_jerk_within_the_limit() -> None
                     assert v_b + moved >= 0.1 * (1.0 - 1e-8), (
                         a, j1, j2, near, before, v_b, moved,
                     )  # fmt: skip
+
+
+def test_a_crossing_s_velocity_is_exact_for_constant_jerk_through_both_samples() -> None:
+    """`crossing_velocity` (the quintic through both samples' position, velocity and
+    acceleration) reads a crossing exactly where the jerk is constant from one sample to the
+    next: crossings at 100 mm/s at −4 … +4 m/s², jerks ±J, 1 ms samples, the boundary 0.1 …
+    0.9 ms after the first. Constant jerk read from the first sample alone (the check's first
+    form) leaves the second sample's position and velocity out: 25.047 mm/s for 24.781 at
+    drops seed 1444, where a brake lay between two samples of −0.071 m/s²."""
+    task = line_task()
+    path = Recorder(task).program
+    rules = PathRules(path, task.interp.table, 30)
+    b = 1
+    s_b = task.interp.table.s[b]
+    j_lim = rules.run_jerk(b)
+    base = Sample(0.0, 0.0, 0.0, 0.0, 0, None, False, 1.0, False, frozenset(), frozenset(), True)
+    for a in (-4.0, -1.0, 0.0, 1.0, 4.0):
+        for j in (j_lim, -j_lim, 0.0):
+            for near in (1e-4, 5e-4, 9e-4):
+                states = [_state(0.1, a, j, t) for t in (-near, DT - near)]
+                last, smp = (
+                    dataclasses.replace(base, t=t, s=s_b + st[0], v=st[1], a=st[2], seg=k)
+                    for t, st, k in zip((-near, DT - near), states, (b - 1, b), strict=True)
+                )
+                assert abs(crossing_velocity(last, smp, s_b) - 0.1) <= 1e-9, (a, j, near)
