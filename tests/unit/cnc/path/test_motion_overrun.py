@@ -246,6 +246,25 @@ def test_a_brake_through_a_run_boundary_has_zero_acceleration_there_without_a_pa
     assert len(found) == 1 and "paused" in found[0], found
 
 
+def _crossing(
+    a: float, j1: float, j2: float, t0: float, t1: float
+) -> tuple[PathRules, Sample, Sample, float]:
+    """Two samples at t0 < 0 < t1 of a motion that crosses boundary 1 of `line_task` at t = 0
+    at 100 mm/s and acceleration a, under jerk j1 before and j2 after (the rules, the two
+    samples and the boundary's position)."""
+    task = line_task()
+    rules = PathRules(Recorder(task).program, task.interp.table, 30)
+    b = 1
+    s_b = task.interp.table.s[b]
+    base = Sample(0.0, 0.0, 0.0, 0.0, 0, None, False, 1.0, False, frozenset(), frozenset(), True)
+    states = [_state(0.1, a, j1 if t < 0 else j2, t) for t in (t0, t1)]
+    last, smp = (
+        dataclasses.replace(base, t=t, s=s_b + st[0], v=st[1], a=st[2], seg=k)
+        for t, st, k in zip((t0, t1), states, (b - 1, b), strict=True)
+    )
+    return rules, last, smp, s_b
+
+
 def _state(v: float, a: float, j: float, t: float) -> tuple[float, float, float]:
     """(s, v, a) t after a state at s = 0 under constant jerk j (t < 0: before it)."""
     return v * t + a * t * t / 2.0 + j * t**3 / 6.0, v + a * t + j * t * t / 2.0, a + j * t
@@ -261,24 +280,14 @@ def test_the_bound_on_a_crossing_holds_for_every_jerk_within_the_limit() -> None
     1 ms apart, the boundary 0.1 … 0.7 ms after the first: within 1e-8 (relative; one
     Newton step's rounding, 2.3e-9 at most here, the check's tolerance is 1e-6; the first
     form was off by up to 7.2e-7)."""
-    task = line_task()
-    path = Recorder(task).program
-    rules = PathRules(path, task.interp.table, 30)
-    b = 1
-    s_b = task.interp.table.s[b]
-    j_lim = rules.run_jerk(b)
-    base = Sample(0.0, 0.0, 0.0, 0.0, 0, None, False, 1.0, False, frozenset(), frozenset(), True)
+    j_lim = _crossing(0.0, 0.0, 0.0, -DT, 0.0)[0].run_jerk(1)
     for a in (-4.0, -2.8, -1.0, 0.0, 1.0, 4.0):
         for j1, j2 in ((j_lim, j_lim), (-j_lim, -j_lim), (j_lim, -j_lim), (-j_lim, j_lim)):
             for near in (1e-4, 3e-4, 5e-4, 7e-4):
                 for before in (True, False):
                     t0, t1 = (-near, DT - near) if before else (near - DT, near)
-                    states = [_state(0.1, a, j1 if t < 0 else j2, t) for t in (t0, t1)]
-                    last, smp = (
-                        dataclasses.replace(base, t=t, s=s_b + st[0], v=st[1], a=st[2], seg=k)
-                        for t, st, k in zip((t0, t1), states, (b - 1, b), strict=True)
-                    )
-                    v_b, moved = boundary_velocity(rules, last, smp, b)
+                    rules, last, smp, _ = _crossing(a, j1, j2, t0, t1)
+                    v_b, moved = boundary_velocity(rules, last, smp, 1)
                     assert v_b - moved <= 0.1 * (1.0 + 1e-8), (a, j1, j2, near, before, v_b)
                     assert v_b + moved >= 0.1 * (1.0 - 1e-8), (
                         a, j1, j2, near, before, v_b, moved,
@@ -292,19 +301,9 @@ def test_a_crossing_s_velocity_is_exact_for_constant_jerk_through_both_samples()
     0.9 ms after the first. Constant jerk read from the first sample alone (the check's first
     form) leaves the second sample's position and velocity out: 25.047 mm/s for 24.781 at
     drops seed 1444, where a brake lay between two samples of −0.071 m/s²."""
-    task = line_task()
-    path = Recorder(task).program
-    rules = PathRules(path, task.interp.table, 30)
-    b = 1
-    s_b = task.interp.table.s[b]
-    j_lim = rules.run_jerk(b)
-    base = Sample(0.0, 0.0, 0.0, 0.0, 0, None, False, 1.0, False, frozenset(), frozenset(), True)
+    j_lim = _crossing(0.0, 0.0, 0.0, -DT, 0.0)[0].run_jerk(1)
     for a in (-4.0, -1.0, 0.0, 1.0, 4.0):
         for j in (j_lim, -j_lim, 0.0):
             for near in (1e-4, 5e-4, 9e-4):
-                states = [_state(0.1, a, j, t) for t in (-near, DT - near)]
-                last, smp = (
-                    dataclasses.replace(base, t=t, s=s_b + st[0], v=st[1], a=st[2], seg=k)
-                    for t, st, k in zip((-near, DT - near), states, (b - 1, b), strict=True)
-                )
+                _, last, smp, s_b = _crossing(a, j, j, -near, DT - near)
                 assert abs(crossing_velocity(last, smp, s_b) - 0.1) <= 1e-9, (a, j, near)
