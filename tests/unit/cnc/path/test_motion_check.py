@@ -20,7 +20,7 @@ from liftd.sim.simulate import run_cycles
 from tests.support.cam_cases import cam_scenario
 from tests.support.cam_runs import check, time_limit
 from tests.support.channel import shipped
-from tests.support.feed_cases import feed_scenario, short_drop_scenario
+from tests.support.feed_cases import drop_scenario, feed_scenario, short_drop_scenario
 from tests.support.motion_check import Expected, Recorder, check_motion
 from tests.support.motion_rules import (
     PathRules,
@@ -310,6 +310,30 @@ def test_x1_is_found_where_x2_is_the_nearer_side_of_the_jerk_gap() -> None:
     assert at_b.v > at_b.held_by and at_b.gap == math.inf  # above the cap, x2's side
     slower = _slowed_at(rec, samples, 12, 18.84e-3 / at_b.v)
     assert any(f.startswith("boundary 12 ") for f in slower), slower
+
+
+def test_x2_above_a_transition_cap_is_no_side_of_the_jerk_gap() -> None:
+    """`drop_scenario(2237)` with its drop 20 ms earlier: override 10 → 100 % at 28.05 mm/s,
+    0.26 mm before a kink whose transition cap, 11.46 mm/s, lies in the jerk gap: the brake
+    to it with zero acceleration there needs 0.27 mm; x1 = 2.0, x2 = 15.9 above the cap,
+    which no override lifts. The core passes it at x1. The check took x2 for the nearer
+    side where it was within the segments' own caps alone and expected 11.46: now x1, and a
+    path slower than x1 is still found."""
+    sc = drop_scenario(2237)
+    sc = dataclasses.replace(
+        sc, schedule=Schedule(tuple((t - 0.02, o) for t, o in sc.schedule.override), ())
+    )
+    rec, samples = _recorded(sc)
+    ch = rec.task.ch
+    trace: list[Expected] = []
+    found = check_motion(rec.program, rec.table, ch.look_ahead_blocks, ch.cycle_time, samples,
+                         trace)  # fmt: skip
+    assert found == [], found
+    (at_b,) = [e for e in trace if e.b == 4]
+    assert at_b.held_by == pytest.approx(rec.program.boundaries[4].v_cap, rel=1e-6)
+    assert at_b.gap == pytest.approx(at_b.v, rel=0.01) and at_b.gap < 0.25 * at_b.held_by
+    slower = _slowed_at(rec, samples, 4, 0.5)  # found as the dip before it in the gap
+    assert any("boundary 4 " in f and "x1 2.0" in f for f in slower), slower
 
 
 def _min_velocity(v: float, a: float, length: float, v1: float, a_max: float,
