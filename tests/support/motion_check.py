@@ -23,8 +23,11 @@ The rules (docs/geo-core.md, "Which rule decides a slowdown", linked from docs/a
   (zero acceleration there) whose value lies in the jerk gap from the path's state at the
   last input change (no brake has it there with zero acceleration: the path passes at most
   at x1 below it or at least at x2 above it, `motion_rules.jerk_gap`), x1 where it is the
-  nearer side by ratio; from a run boundary passed at a side of such a gap, the gaps after
-  it open from its state there.
+  nearer side by ratio or x2 lies above the boundary's transition or axis cap; from a run
+  boundary passed at a side of such a gap (or where the gap has none), the gaps after it
+  open from its state there. A feed drop inside a run whose cap lies in such a gap, the
+  boundary after it not slower, is expected at x1 too (at its cap the path passes it
+  braking, and the ramp-out dips below the cap in its block).
 * **Between two boundaries** it never goes below the lower of its velocities at the two.
 * **Never faster** than the rules let it be (tests/support/motion_overrun.py): at most the
   ceiling of its block in every cycle, at most the transition cap and both blocks' ceilings at
