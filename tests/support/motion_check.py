@@ -25,9 +25,7 @@ The rules (docs/geo-core.md, "Which rule decides a slowdown", linked from docs/a
   at x1 below it or at least at x2 above it, `motion_rules.jerk_gap`), x1 where it is the
   nearer side by ratio or x2 lies above the boundary's transition or axis cap; from a run
   boundary passed at a side of such a gap (or where the gap has none), the gaps after it
-  open from its state there. A feed drop inside a run whose cap lies in such a gap, the
-  boundary after it not slower, is expected at x1 too (at its cap the path passes it
-  braking, and the ramp-out dips below the cap in its block).
+  open from its state there.
 * **Between two boundaries** it never goes below the lower of its velocities at the two.
 * **Never faster** than the rules let it be (tests/support/motion_overrun.py): at most the
   ceiling of its block in every cycle, at most the transition cap and both blocks' ceilings at
@@ -186,7 +184,7 @@ def _gap(
     if changed is None or changed.seg >= b:
         return INF, changed
     if not path.gate[b]:
-        return _feed_gap(path, changed, b, expect, smp), changed
+        return INF, changed
     # the limits the path brakes toward b under: the segments before b (with b's own, lower
     # ones a gap appeared that the path does not have: a cold review's tangent arc of a
     # third of the line's jerk after it, a made-up path at 2.4 mm/s for a cap of 60.8)
@@ -209,8 +207,9 @@ def _gap(
             x2 <= path.boundary_hard(b) and (x1 == 0.0 or x2 * x1 < expect * expect)
         ):
             side = expect  # x2 is the nearer (or the only) side: the cap is expected
-        # or no side at all (neither rest nor the ramp-out alone fits: b is passed inside
-        # that ramp-out, with the acceleration the rules give it), then from b's state: an
+        # or no side at all (neither rest nor the ramp-out alone fits before b: the path
+        # passes b where that ramp-out ends, at zero acceleration as at every run boundary
+        # of the core's), then from b's state: an
         # override drop to 10 % 0.1 mm before run boundary 9 at 34.5 mm/s, its ramp-out
         # ending there at 32.76, boundary 10's 2 mm/s 0.3 mm on reachable only at x1 = 0.80
         # from there, expected from the drop's state (`drop_scenario(3667)`, drop 20 ms early)
@@ -222,27 +221,6 @@ def _gap(
     if at_side:
         changed = dataclasses.replace(smp, s=path.bounds[b].s, v=v_b, a=0.0, seg=b)
     return (side if side < expect else INF), changed
-
-
-def _feed_gap(path: PathRules, changed: Sample, b: int, expect: float, smp: Sample) -> float:
-    """At boundary b inside a run (no zero acceleration needed there), where `expect` lies
-    in the jerk gap from the state at the last input change and the boundary after b does not
-    want the path slower: x1 (inf where there is no gap, or not even rest fits). The path
-    can pass b at its cap only still braking, and the ramp-out of that deceleration then
-    dips below the cap in the block after it, which the interval's rule finds; or it gets
-    down to x1 with zero acceleration at b (`Targets.pick_target`). Either is below the cap
-    somewhere; the check holds the core to x1 at b, and a path slower than that is still
-    found (override 100 → 60 % at 34.3 mm/s and −2.1 m/s², 0.22 mm before an F1200 block,
-    12 mm/s now, x1 = 6.06: expected 12, and the dip after it had the path passed it there,
-    `drop_scenario(511)` with its drop 20 ms earlier). Where the boundary after b wants the
-    path slower, the brake through b has no dip (`Aims.gap_state`): the cap is expected."""
-    if b + 1 >= path.n or path.target(b + 1, smp.override) < expect:
-        return INF
-    a_max, j_max = path.limits(changed.seg, b)
-    gap = jerk_gap(changed.v, changed.a, path.bounds[b].s - changed.s, expect, a_max, j_max)
-    if gap is None or gap[0] < 0.0 or gap[0] >= expect:
-        return INF
-    return gap[0]
 
 
 def _gap_dip(path: PathRules, b: int, x1: float, low: float, tol: float, smp: Sample) -> list[str]:

@@ -315,12 +315,14 @@ class Brakes:
         lost = self._lost(cands, a_max, j_max)
         if cands[i][0] not in lost:
             return False
-        # the ones after i the brake to rest still gets below are kept, not lost: with zero
-        # acceleration there a cap in the jerk gap reads as lost, and the brake at once went
-        # to i's cap alone (an override drop to 60 % 0.22 mm before an F1200 block at
-        # 34.3 mm/s and −2.1 m/s², its 12 mm/s reachable only below, x1 = 6.1: the brake went
-        # to 30, the lost cap before it, and entered the block at 29.4; `drop_scenario(511)`
-        # with its drop 20 ms earlier, a cold review's variant)
+        # the others the brake to rest still gets below are not lost, however their brake
+        # with zero acceleration there reads (a cap in the jerk gap): `brake_first` keeps
+        # them or, where its brake at once to i's cap cannot, declines, and the shift's
+        # target decides (x1 below such a cap). Read as lost, an override drop to 60 %
+        # 0.22 mm before an F1200 block at 34.3 mm/s and −2.1 m/s², its 12 mm/s reachable
+        # only below (x1 = 6.1), was left to the brake to 30, the lost cap before it, which
+        # entered the block at 29.4 (`drop_scenario(511)` with its drop 20 ms earlier, a
+        # cold review's variant; now x1)
         s, v, a = self.st.s, self.st.v, self.st.a
         lost = [
             c[0] for c in cands
