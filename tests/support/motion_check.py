@@ -203,9 +203,7 @@ def _gap(
         side = x1
         # (b's transition cap too: a kink's 11.46 mm/s, x2 15.9 above it, was expected
         # at the cap, where only x1 = 2.0 keeps it, drops seed 2237 with its drop 20 ms early)
-        if x1 < 0.0 or (
-            x2 <= path.boundary_hard(b) and (x1 == 0.0 or x2 * x1 < expect * expect)
-        ):
+        if x1 < 0.0 or (x2 <= path.boundary_hard(b) and (x1 == 0.0 or x2 * x1 < expect * expect)):
             side = expect  # x2 is the nearer (or the only) side: the cap is expected
         # or no side at all (neither rest nor the ramp-out alone fits before b: the path
         # passes b where that ramp-out ends, at zero acceleration as at every run boundary
