@@ -16,10 +16,14 @@ Run: .venv/bin/python bench/bench_cam_motion.py [RUNS [FIRST_SEED]]
 whose feed changes block by block; drops: a cold review's random short blocks with an override
 drop as they come, `drop_scenario`)
 (--all: a line for each run with findings or problems, all of them, before the summary)
+[--shift SECONDS] moves every override step of each run by that much (−0.02: the cold
+review's variant of the drops corpus with its drop 20 ms earlier); [--no-steps] drops them
+(the same programs at 100 %).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import sys
 import time
@@ -28,6 +32,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from bench.cli import parser
+from liftd.cnc.plc import Schedule
 from tests.support.cam_cases import cam_scenario
 from tests.support.cam_runs import check
 from tests.support.feed_cases import drop_scenario, feed_scenario
@@ -45,6 +50,8 @@ def main() -> None:
     ap.add_argument("first_seed", nargs="?", type=int, default=0)
     ap.add_argument("--kind", choices=sorted(KINDS), default="cam")
     ap.add_argument("--all", action="store_true", help="a JSON line for every run with findings")
+    ap.add_argument("--shift", type=float, default=0.0, help="move every override step (s)")
+    ap.add_argument("--no-steps", action="store_true", help="no override steps (100 %%)")
     args = ap.parse_args()
     make = KINDS[args.kind]
     cycles = failed = slowed = findings = 0
@@ -53,6 +60,10 @@ def main() -> None:
     t0 = time.perf_counter()
     for seed in range(args.first_seed, args.first_seed + args.runs):
         sc = make(seed)
+        if args.shift or args.no_steps:
+            steps = () if args.no_steps else sc.schedule.override
+            moved = tuple((t + args.shift, ov) for t, ov in steps)
+            sc = dataclasses.replace(sc, schedule=Schedule(moved, sc.schedule.feed_hold))
         try:
             n, hard, slow, _ = check(sc)
         except Exception as exc:  # a crash is a failure to report, not the end of the bench
@@ -75,6 +86,8 @@ def main() -> None:
         "bench": f"cam_motion_{args.kind}",
         "runs": args.runs,
         "first_seed": args.first_seed,
+        "override_shift": args.shift,
+        "override_steps": not args.no_steps,
         "cycles": cycles,
         "failed_runs": failed,
         "runs_with_unexplained_slowdowns": slowed,

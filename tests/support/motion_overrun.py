@@ -108,7 +108,7 @@ def _boundaries(
     after them: at a run boundary (zero acceleration) what lies beyond is reachable from it."""
     out: list[str] = []
     for b in range(last.seg + 1, min(smp.seg, path.n - 1) + 1):
-        cap = min(path.bounds[b].v_cap, path.hard(b - 1), path.hard(b))
+        cap = path.boundary_hard(b)
         feed = min(input_ceiling(path, b - 1, smp), input_ceiling(path, b, smp))
         if brake is None or _reachable(path, brake, b, feed):
             cap = min(cap, feed)

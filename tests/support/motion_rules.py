@@ -310,6 +310,11 @@ class PathRules:
         seg = self.segs[min(k, self.n - 1)]
         return min(seg.v_phys, seg.v_lift)
 
+    def boundary_hard(self, b: int) -> float:
+        """Boundary b's own caps no override scales: its transition cap and both segments'
+        axis and lift caps."""
+        return min(self.bounds[b].v_cap, self.hard(b - 1), self.hard(b))
+
     def run_jerk(self, k: int) -> float:
         """The jerk limit of segment k's run (the lowest of its segments')."""
         return self.run_j[min(k, self.n - 1)]

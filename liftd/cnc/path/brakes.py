@@ -313,7 +313,25 @@ class Brakes:
         an F3000 block of 0.4 mm: 50 mm/s at its start, 35.3 at its end for 30; feeds seed
         230). The lost caps are the plan's to pass as well as it can (`_brake_past`)."""
         lost = self._lost(cands, a_max, j_max)
-        return cands[i][0] in lost and self._brake_past(cands, lost, cands[i][2], a_max, j_max, w)
+        if cands[i][0] not in lost:
+            return False
+        # the others the brake to rest still gets below are not lost, however their brake
+        # with zero acceleration there reads (a cap in the jerk gap): `brake_first` keeps
+        # them or, where its brake at once to i's cap cannot, declines, and the shift's
+        # target decides (x1 below such a cap). Read as lost, an override drop to 60 %
+        # 0.22 mm before an F1200 block at 34.3 mm/s and −2.1 m/s², its 12 mm/s reachable
+        # only below (x1 = 6.1), was left to the brake to 30, the lost cap before it, which
+        # entered the block at 29.4 (`drop_scenario(511)` with its drop 20 ms earlier, a
+        # cold review's variant; now x1)
+        s, v, a = self.st.s, self.st.v, self.st.a
+        lost = [
+            c[0] for c in cands
+            if c[0] in lost and (
+                c[0] == cands[i][0]
+                or brake_crossing(v, a, 0.0, c[2], a_max, j_max) > c[1] - s + SLACK_TOL
+            )
+        ]  # fmt: skip
+        return self._brake_past(cands, lost, cands[i][2], a_max, j_max, w)
 
     def brake_down(
         self, cands: list[tuple[int, float, float, bool]], ceiling: float, a_max: float,

@@ -20,7 +20,7 @@ from liftd.sim.simulate import run_cycles
 from tests.support.cam_cases import cam_scenario
 from tests.support.cam_runs import check, time_limit
 from tests.support.channel import shipped
-from tests.support.feed_cases import feed_scenario, short_drop_scenario
+from tests.support.feed_cases import drop_scenario, feed_scenario, short_drop_scenario
 from tests.support.motion_check import Expected, Recorder, check_motion
 from tests.support.motion_rules import (
     PathRules,
@@ -310,6 +310,42 @@ def test_x1_is_found_where_x2_is_the_nearer_side_of_the_jerk_gap() -> None:
     assert at_b.v > at_b.held_by and at_b.gap == math.inf  # above the cap, x2's side
     slower = _slowed_at(rec, samples, 12, 18.84e-3 / at_b.v)
     assert any(f.startswith("boundary 12 ") for f in slower), slower
+
+
+@pytest.mark.parametrize(("seed", "b"), [(2237, 4), (3667, 10)])
+def test_a_boundary_reachable_only_at_x1_from_the_change_is_expected_there(
+    seed: int, b: int
+) -> None:
+    """Two programs of the drops corpus with their override drop 20 ms earlier (a cold
+    review's variant), each run boundary's cap in the jerk gap from the state the gaps open
+    from, and only x1 below it kept by the rules; the core passes it at x1, and a path
+    slower than x1 is still found.
+    2237: override 10 → 100 % at 28.05 mm/s, 0.26 mm before a kink whose transition cap,
+    11.46 mm/s, no override lifts: x1 = 2.0, x2 = 15.9 above it. The check took x2 for the
+    nearer side (within the segments' own caps alone) and expected 11.46.
+    3667: override 100 → 10 % 0.1 mm before run boundary 9 at 34.5 mm/s, passed at the end
+    of the drop's ramp-out, 32.76 (neither rest nor that ramp-out fits before it in the
+    check's arithmetic: no side of its gap); from there boundary 10's 2 mm/s, 0.3 mm on, is
+    reachable only at x1 = 0.80. The check read boundary 10 from the drop's state. (A
+    slower made-up path is not built there: at 1 µm a cycle the crossing the check reads
+    follows the samples' positions, not their scaled velocities.)"""
+    sc = drop_scenario(seed)
+    sc = dataclasses.replace(
+        sc, schedule=Schedule(tuple((t - 0.02, o) for t, o in sc.schedule.override), ())
+    )
+    rec, samples = _recorded(sc)
+    ch = rec.task.ch
+    trace: list[Expected] = []
+    found = check_motion(rec.program, rec.table, ch.look_ahead_blocks, ch.cycle_time, samples,
+                         trace)  # fmt: skip
+    assert found == [], found
+    (at_b,) = [e for e in trace if e.b == b]
+    assert at_b.gap == pytest.approx(at_b.v, rel=0.01) and at_b.gap < 0.6 * at_b.held_by
+    if seed == 2237:
+        assert at_b.held_by == pytest.approx(rec.program.boundaries[b].v_cap, rel=1e-6)
+    if seed != 3667:  # (there 1 µm a cycle: the crossing is read from the positions)
+        slower = _slowed_at(rec, samples, b, 0.5)  # at b, or the dip before it in the gap
+        assert any(f"boundary {b} " in f for f in slower), slower
 
 
 def _min_velocity(v: float, a: float, length: float, v1: float, a_max: float,
