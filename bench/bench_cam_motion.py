@@ -23,7 +23,6 @@ review's variant of the drops corpus with its drop 20 ms earlier); [--no-steps] 
 
 from __future__ import annotations
 
-import dataclasses
 import json
 import sys
 import time
@@ -32,10 +31,9 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from bench.cli import parser
-from liftd.cnc.plc import Schedule
 from tests.support.cam_cases import cam_scenario
 from tests.support.cam_runs import check
-from tests.support.feed_cases import drop_scenario, feed_scenario
+from tests.support.feed_cases import drop_scenario, feed_scenario, moved_steps
 from tests.support.scenarios import scenario, wide_scenario
 
 KINDS = {
@@ -61,9 +59,7 @@ def main() -> None:
     for seed in range(args.first_seed, args.first_seed + args.runs):
         sc = make(seed)
         if args.shift or args.no_steps:
-            steps = () if args.no_steps else sc.schedule.override
-            moved = tuple((t + args.shift, ov) for t, ov in steps)
-            sc = dataclasses.replace(sc, schedule=Schedule(moved, sc.schedule.feed_hold))
+            sc = moved_steps(sc, args.shift, keep=not args.no_steps)
         try:
             n, hard, slow, _ = check(sc)
         except Exception as exc:  # a crash is a failure to report, not the end of the bench

@@ -154,6 +154,15 @@ def short_drop_scenario(
     return Scenario(short, ch, text, Schedule(((t_drop, low),), ()))
 
 
+def moved_steps(sc: Scenario, shift: float, keep: bool = True) -> Scenario:
+    """`sc` with every override step moved by `shift` seconds (−0.02: a cold review's variant
+    of the drops corpus, its drop 20 ms earlier), or without them (`keep` false); feed holds
+    as they were."""
+    steps = sc.schedule.override if keep else ()
+    moved = tuple((t + shift, ov) for t, ov in steps)
+    return dataclasses.replace(sc, schedule=Schedule(moved, sc.schedule.feed_hold))
+
+
 def drop_scenario(seed: int) -> Scenario:
     """A cold review's random programs (eighteenth round): 20 mm at F3000, then 8–16 blocks
     of 0.05–0.5 mm at F1200–F60000, each bending by 0°, 0.1° or 2°, and a 2 mm corner

@@ -26,7 +26,7 @@ from liftd.sim.simulate import run_cycles
 from tests.support.cam_cases import X_RANGE, Y_RANGE, cam_scenario
 from tests.support.cam_runs import check, core_time, time_limit
 from tests.support.channel import shipped
-from tests.support.feed_cases import drop_scenario, feed_scenario
+from tests.support.feed_cases import drop_scenario, feed_scenario, moved_steps
 from tests.support.motion_check import reach_from as check_reach_from
 from tests.support.scenarios import Scenario, describe, scenario, wide_scenario
 
@@ -769,10 +769,7 @@ def test_x2_above_a_feed_cap_only_for_one_out_of_reach_since_the_change() -> Non
     moved on, the shift took x2 of the jerk gap above that cap: 32.2 mm/s, an overrun. x2
     above a feed cap only where the cap was out of reach from the state at the change or at
     the last run boundary since (`Targets.gap_rule`)."""
-    sc = drop_scenario(411)
-    sc = dataclasses.replace(
-        sc, schedule=Schedule(tuple((t - 0.02, o) for t, o in sc.schedule.override), ())
-    )
+    sc = moved_steps(drop_scenario(411), -0.02)
     _, hard, slow, errors = check(sc)
     assert (hard, errors) == ([], 0), describe(sc)
 
@@ -783,10 +780,7 @@ def test_a_target_beyond_a_lowered_ceiling_keeps_the_ceilings_between() -> None:
     target beyond the lowered ceiling's block, held to b's own cap only, left the next
     block's ceiling out (the list leaves out a cap at the ceiling itself): the path held
     50 mm/s above a ceiling of 10, an overrun."""
-    sc = drop_scenario(981)
-    sc = dataclasses.replace(
-        sc, schedule=Schedule(tuple((t - 0.02, o) for t, o in sc.schedule.override), ())
-    )
+    sc = moved_steps(drop_scenario(981), -0.02)
     _, hard, slow, errors = check(sc)
     assert (hard, slow, errors) == ([], [], 0), describe(sc)
 
@@ -800,9 +794,6 @@ def test_a_cap_in_the_jerk_gap_is_not_lost_to_a_brake_at_once() -> None:
     an overrun. Not lost, it is kept (`Brakes.brake_lost` declines the brake at once, which
     cannot keep it): the block is entered below 12 (at x1, 6.1: a slowdown the check
     reports, not asserted here)."""
-    sc = drop_scenario(511)
-    sc = dataclasses.replace(
-        sc, schedule=Schedule(tuple((t - 0.02, o) for t, o in sc.schedule.override), ())
-    )
+    sc = moved_steps(drop_scenario(511), -0.02)
     _, hard, _, errors = check(sc)
     assert (hard, errors) == ([], 0), describe(sc)

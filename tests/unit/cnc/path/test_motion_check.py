@@ -20,7 +20,7 @@ from liftd.sim.simulate import run_cycles
 from tests.support.cam_cases import cam_scenario
 from tests.support.cam_runs import check, time_limit
 from tests.support.channel import shipped
-from tests.support.feed_cases import drop_scenario, feed_scenario, short_drop_scenario
+from tests.support.feed_cases import drop_scenario, feed_scenario, moved_steps, short_drop_scenario
 from tests.support.motion_check import Expected, Recorder, check_motion
 from tests.support.motion_rules import (
     PathRules,
@@ -243,6 +243,18 @@ def _recorded(sc: Scenario) -> tuple[Recorder, list[Sample]]:
     return rec, rec.samples
 
 
+def _expected_at(sc: Scenario, b: int) -> tuple[Recorder, list[Sample], Expected]:
+    """A scenario's run, which the check passes, and what the check expected at boundary b."""
+    rec, samples = _recorded(sc)
+    ch = rec.task.ch
+    trace: list[Expected] = []
+    found = check_motion(rec.program, rec.table, ch.look_ahead_blocks, ch.cycle_time, samples,
+                         trace)  # fmt: skip
+    assert found == [], found
+    (at_b,) = [e for e in trace if e.b == b]
+    return rec, samples, at_b
+
+
 def _scaled(
     rec: Recorder, samples: list[Sample], b: int, offsets: Sequence[int], factor: float
 ) -> list[str]:
@@ -281,13 +293,7 @@ def test_a_run_boundary_in_the_jerk_gap_is_expected_at_x1_where_x1_is_nearer(
     boundary 16 (its cap 12.6 mm/s out of reach, passed at its x2 of 115.3), from where
     boundary 17's cap of 16.6 lies in the gap (x1 = 5.75). A path that goes below x1
     before the boundary and comes back is found too."""
-    rec, samples = _recorded(feed_scenario(seed))
-    ch = rec.task.ch
-    trace: list[Expected] = []
-    found = check_motion(rec.program, rec.table, ch.look_ahead_blocks, ch.cycle_time, samples,
-                         trace)  # fmt: skip
-    assert found == [], found
-    (at_b,) = [e for e in trace if e.b == b]
+    rec, samples, at_b = _expected_at(feed_scenario(seed), b)
     assert at_b.held_by == pytest.approx(cap, rel=1e-5)
     assert at_b.gap == pytest.approx(at_b.v, rel=0.01) and at_b.gap < 0.5 * cap
     slower = _slowed_at(rec, samples, b, 0.5)
@@ -301,12 +307,7 @@ def test_x1_is_found_where_x2_is_the_nearer_side_of_the_jerk_gap() -> None:
     gap, where x2 above it is the nearer by ratio, and the core passes it above (no finding).
     A path that passes it at x1, 18.84 mm/s (what the core did before the fourth round), is
     found: the check holds the core to the nearer side, not to either."""
-    rec, samples = _recorded(cam_scenario(465))
-    ch = rec.task.ch
-    trace: list[Expected] = []
-    assert check_motion(rec.program, rec.table, ch.look_ahead_blocks, ch.cycle_time, samples,
-                        trace) == []  # fmt: skip
-    (at_b,) = [e for e in trace if e.b == 12]
+    rec, samples, at_b = _expected_at(cam_scenario(465), 12)
     assert at_b.v > at_b.held_by and at_b.gap == math.inf  # above the cap, x2's side
     slower = _slowed_at(rec, samples, 12, 18.84e-3 / at_b.v)
     assert any(f.startswith("boundary 12 ") for f in slower), slower
@@ -329,17 +330,7 @@ def test_a_boundary_reachable_only_at_x1_from_the_change_is_expected_there(
     reachable only at x1 = 0.80. The check read boundary 10 from the drop's state. (A
     slower made-up path is not built there: at 1 µm a cycle the crossing the check reads
     follows the samples' positions, not their scaled velocities.)"""
-    sc = drop_scenario(seed)
-    sc = dataclasses.replace(
-        sc, schedule=Schedule(tuple((t - 0.02, o) for t, o in sc.schedule.override), ())
-    )
-    rec, samples = _recorded(sc)
-    ch = rec.task.ch
-    trace: list[Expected] = []
-    found = check_motion(rec.program, rec.table, ch.look_ahead_blocks, ch.cycle_time, samples,
-                         trace)  # fmt: skip
-    assert found == [], found
-    (at_b,) = [e for e in trace if e.b == b]
+    rec, samples, at_b = _expected_at(moved_steps(drop_scenario(seed), -0.02), b)
     assert at_b.gap == pytest.approx(at_b.v, rel=0.01) and at_b.gap < 0.6 * at_b.held_by
     if seed == 2237:
         assert at_b.held_by == pytest.approx(rec.program.boundaries[b].v_cap, rel=1e-6)
